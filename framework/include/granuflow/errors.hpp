@@ -1,0 +1,45 @@
+// Typed errors of granuflow: one channel (exceptions) at the API boundary.
+// ConfigError -> Python ValueError, SolverError -> Python granuflow.SolverError (RuntimeError).
+#pragma once
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+namespace granuflow {
+
+// Bad input: a scene key, a parameter value, an unknown name. The message names where, what, value, rule.
+class ConfigError : public std::invalid_argument {
+ public:
+  explicit ConfigError(const std::string& msg) : std::invalid_argument(msg) {}
+};
+
+// The integrator or nonlinear solver gave up. Carries the time, the unit with the worst residual and its value.
+class SolverError : public std::runtime_error {
+ public:
+  SolverError(const std::string& msg, double t, std::string unit, double worst_residual)
+      : std::runtime_error(msg), t_(t), unit_(std::move(unit)), worst_residual_(worst_residual) {}
+  double t() const { return t_; }
+  const std::string& unit() const { return unit_; }
+  double worst_residual() const { return worst_residual_; }
+
+ private:
+  double t_;
+  std::string unit_;
+  double worst_residual_;
+};
+
+class CalibrationError : public std::runtime_error {
+ public:
+  explicit CalibrationError(const std::string& msg) : std::runtime_error(msg) {}
+};
+
+// Message template "where = value unit: violates rule" (Ceres OPTION_GE style).
+inline std::string violation(const std::string& where, double value, const std::string& unit,
+                             const std::string& rule) {
+  std::ostringstream os;
+  os.precision(12);
+  os << where << " = " << value << (unit.empty() || unit == "-" ? "" : " " + unit) << ": violates " << rule;
+  return os.str();
+}
+
+}  // namespace granuflow

@@ -1,0 +1,109 @@
+// The flowsheet graph: named unit instances, connections between their ports, parameters addressed as
+// "unit.param" and time-dependent inputs. finalize() lays out the global state vector (each unit a contiguous
+// block) and resolves every port field to the global index of the state that provides it.
+#pragma once
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "granuflow/input.hpp"
+#include "granuflow/param.hpp"
+#include "granuflow/unit.hpp"
+
+namespace granuflow {
+
+// Settings given to one unit in a scene. A unit reads each one while declaring, with its type, default and
+// allowed range; reading declares it. Settings the unit never reads are reported as unknown keys.
+class Settings {
+ public:
+  Settings() = default;
+  // `where` prefixes messages, e.g. "scene.yaml: units.bed.settings".
+  Settings(std::string where, std::map<std::string, std::string> given);
+
+  long get_int(const std::string& name, long def, long lower, long upper, const std::string& description);
+  double get_real(const std::string& name, double def, double lower, double upper, const std::string& description);
+  bool get_bool(const std::string& name, bool def, const std::string& description);
+  std::string get_choice(const std::string& name, const std::string& def, const std::vector<std::string>& choices,
+                         const std::string& description);
+  // Throws ConfigError naming the first setting that was given but never read, with the valid names.
+  void check_all_used() const;
+  const std::vector<SettingSpec>& declared() const { return declared_; }
+  const std::string& where() const { return where_; }
+
+ private:
+  const std::string* given(const std::string& name);
+  std::string where_;
+  std::map<std::string, std::string> given_;
+  std::vector<std::string> used_;
+  std::vector<SettingSpec> declared_;
+};
+
+struct UnitInstance {
+  std::string name;
+  std::unique_ptr<Unit> unit;
+  UnitSpec spec;
+  std::vector<SettingSpec> settings;
+  int offset = 0;                                 // global index of own state 0
+  std::vector<double> params;                     // current constant values (SI)
+  std::vector<std::optional<PiecewiseLinear>> inputs;  // per param: time-dependent override
+  std::vector<std::vector<int>> port_index;       // per port, per field: global state index
+  std::vector<std::pair<int, int>> peers;         // per port: (unit index, port index) of the connected port
+};
+
+class Flowsheet {
+ public:
+  explicit Flowsheet(std::string name = "flowsheet") : name_(std::move(name)) {}
+  Flowsheet(const Flowsheet&) = delete;
+  Flowsheet& operator=(const Flowsheet&) = delete;
+
+  const std::string& name() const { return name_; }
+
+  // Building. add_unit calls unit->declare(); connect takes "unit.port" on both sides, out -> in.
+  void add_unit(const std::string& name, std::unique_ptr<Unit> unit, Settings settings);
+  void connect(const std::string& from, const std::string& to);
+  // Resolves ports (every port connected once, matching kinds and class counts, every field provided by
+  // exactly one side) and lays out the state vector. Throws ConfigError naming the port.
+  void finalize();
+  bool finalized() const { return finalized_; }
+
+  // Parameters, by "unit.param". set_param validates against the declared bounds.
+  std::vector<std::string> param_names() const;
+  int param_id(const std::string& qualified) const;  // global id; throws ConfigError listing valid names
+  double param(const std::string& qualified) const;
+  void set_param(const std::string& qualified, double value_si);
+  const ParamSpec& param_spec(int id) const;
+  double param_value(int id) const;
+  void set_param_value(int id, double value_si);
+  std::pair<int, int> param_location(int id) const;  // (unit index, local param index)
+  void set_input(const std::string& qualified, PiecewiseLinear input);
+  bool has_input(int id) const;
+  // Breakpoints of all inputs inside (0, t_end).
+  std::vector<double> breakpoints(double t_end) const;
+
+  // Layout (after finalize).
+  int n_states() const { return n_states_; }
+  std::vector<std::string> state_names() const;  // "unit.state"
+  const StateSpec& state_spec(int global) const;
+  int state_unit(int global) const;              // unit index owning a state
+  int state_id(const std::string& qualified) const;
+  std::vector<std::string> output_names() const;  // "unit.output"
+  int n_outputs() const;
+
+  std::vector<UnitInstance>& units() { return units_; }
+  const std::vector<UnitInstance>& units() const { return units_; }
+  int unit_index(const std::string& name) const;  // throws ConfigError listing valid names
+
+ private:
+  std::pair<int, int> split_port(const std::string& qualified) const;
+  std::string name_;
+  std::vector<UnitInstance> units_;
+  std::vector<std::pair<std::pair<int, int>, std::pair<int, int>>> connections_;
+  std::vector<std::pair<int, int>> param_table_;  // global param id -> (unit, local)
+  std::vector<int> state_owner_;
+  int n_states_ = 0;
+  bool finalized_ = false;
+};
+
+}  // namespace granuflow

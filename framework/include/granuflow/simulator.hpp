@@ -1,0 +1,74 @@
+// The IDAS simulator: consistent initial conditions, exact Jacobians, stops and re-initialization at input
+// breakpoints, output at requested times, forward sensitivities w.r.t. named parameters, and a KINSOL
+// steady-state solve. Failures throw SolverError naming the time, the unit and the worst residual.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "granuflow/dae_system.hpp"
+#include "granuflow/flowsheet.hpp"
+
+namespace granuflow {
+
+struct SimOptions {
+  double t_end = 0.0;                     // s, > 0
+  std::vector<double> t_out;              // output times in [0, t_end], increasing; empty: n_out equispaced
+  int n_out = 101;                        // used when t_out is empty
+  double rtol = 1e-6;                     // relative tolerance
+  double atol = 1e-8;                     // absolute tolerance, multiplied by each state's declared scale
+  long max_steps = 200000;                // per segment between breakpoints
+  double max_step = 0.0;                  // s; 0 = no limit
+  std::vector<std::string> sensitivities; // "unit.param" names for forward sensitivities
+  std::string linear_solver = "auto";     // auto | dense | sparse (auto: dense up to dense_limit states)
+  int dense_limit = 400;
+  // Throws ConfigError naming the field, the value and the rule.
+  void validate() const;
+};
+
+struct SolverStats {
+  long steps = 0;
+  long residuals = 0;      // residual evaluations (including those inside consistent initialization)
+  long jacobians = 0;
+  long linear_setups = 0;
+  long nonlinear_iterations = 0;
+  long error_test_failures = 0;
+  long nonlinear_failures = 0;
+  long reinits = 0;        // restarts at input breakpoints
+  long states = 0;
+  std::string linear_solver;
+};
+
+struct SimResult {
+  std::vector<double> t;
+  std::vector<std::string> state_names;
+  std::vector<double> y;   // row-major [time][state]
+  std::vector<double> yp;  // row-major [time][state]
+  std::vector<std::string> output_names;
+  std::vector<double> outputs;  // row-major [time][output]
+  std::vector<std::string> sens_params;
+  std::vector<double> sens;  // row-major [time][param][state]
+  SolverStats stats;
+  double wall_time_s = 0.0;
+  int n_states() const { return static_cast<int>(state_names.size()); }
+  double state(size_t time_index, int state) const { return y[time_index * state_names.size() + state]; }
+};
+
+SimResult simulate(Flowsheet& fs, const SimOptions& options);
+
+struct SteadyOptions {
+  double t = 0.0;          // time at which inputs are evaluated
+  double ftol = 1e-10;     // scaled residual tolerance
+  long max_iterations = 200;
+  void validate() const;
+};
+
+struct SteadyResult {
+  std::vector<double> y;
+  long iterations = 0;
+  double residual_norm = 0.0;
+};
+
+// Solves F(y, y' = 0) = 0 from the initial values (or from `guess` when given) with KINSOL (line search).
+SteadyResult solve_steady_state(Flowsheet& fs, const SteadyOptions& options, const std::vector<double>* guess = nullptr);
+
+}  // namespace granuflow

@@ -1,0 +1,144 @@
+// The unit-model interface.
+//
+// A unit declares, once, its states (differential or algebraic, SI unit, typical scale), its parameters
+// (ParamSpec), its ports and its reported outputs (declare). Its residual is written once as a template on the
+// scalar type T:
+//
+//     F_k(t, x, xdot, p) = 0   for every own state k (one equation per state, written to res(k)),
+//
+// where x holds the unit's own states and, through its ports, the fields provided by connected units. The
+// framework owns the solver: Jacobians (forward AD over the unit's local variables, or an analytic Jacobian
+// the unit supplies), sparsity, linear solves, consistent initialization and input breakpoints.
+// Contract: eval() writes every res(k) for k < number of own states; it returns Status::kRecoverable to make
+// the integrator cut the step (e.g. a mass went negative), kFatal to stop.
+#pragma once
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "granuflow/ad.hpp"
+#include "granuflow/param.hpp"
+#include "granuflow/stream.hpp"
+
+namespace granuflow {
+
+enum class StateKind { Differential, Algebraic };
+enum class Status { kOk = 0, kRecoverable = 1, kFatal = -1 };
+
+struct StateSpec {
+  std::string name;
+  StateKind kind;
+  std::string unit;
+  double scale;  // typical magnitude: absolute tolerance = atol * scale
+};
+
+struct PortSpec {
+  std::string name;
+  StreamKind kind;
+  PortDir dir;
+  int classes = 0;               // solids: number of size classes
+  std::vector<int> provided;     // per field: own state index providing it, or -1 (read from the peer)
+};
+
+struct OutputSpec {
+  std::string name;
+  std::string unit;
+};
+
+class Settings;  // scene settings of one unit (flowsheet.hpp)
+
+// What a unit declares. Indices returned are the unit's local indices used in eval().
+class UnitSpec {
+ public:
+  int add_state(std::string name, StateKind kind, std::string unit, double scale);
+  int add_param(ParamSpec spec);
+  int add_port(std::string name, StreamKind kind, PortDir dir, int classes = 0);
+  // Makes own state `state` the provider of field `field` of port `port`.
+  void provide(int port, int field, int state);
+  // Provides fields [0, n) of `port` by consecutive own states starting at `first_state`.
+  void provide_all(int port, int first_state);
+  int add_output(std::string name, std::string unit);
+
+  const std::vector<StateSpec>& states() const { return states_; }
+  const std::vector<ParamSpec>& params() const { return params_; }
+  const std::vector<PortSpec>& ports() const { return ports_; }
+  const std::vector<OutputSpec>& outputs() const { return outputs_; }
+  int state_index(const std::string& name) const;  // -1 if absent
+  int param_index(const std::string& name) const;  // -1 if absent
+
+ private:
+  std::vector<StateSpec> states_;
+  std::vector<ParamSpec> params_;
+  std::vector<PortSpec> ports_;
+  std::vector<OutputSpec> outputs_;
+};
+
+// The view of the global system a unit's residual sees.
+template <class T>
+struct Ctx {
+  double t;
+  const T* x;            // global states
+  const T* xdot;         // global state derivatives
+  const T* p;            // this unit's parameters (value at time t for inputs)
+  T* r;                  // this unit's residual rows
+  int offset;            // global index of own state 0
+  const std::vector<std::vector<int>>* port_index;  // per port, per field: global state index
+
+  const T& x_(int k) const { return x[offset + k]; }
+  const T& xd(int k) const { return xdot[offset + k]; }
+  const T& par(int k) const { return p[k]; }
+  const T& port(int port_id, int field) const { return x[(*port_index)[port_id][field]]; }
+  const T& port_dot(int port_id, int field) const { return xdot[(*port_index)[port_id][field]]; }
+  T& res(int k) const { return r[k]; }
+};
+
+// Initial values of own states (differential: the initial condition; algebraic: a guess that consistent
+// initialization corrects). Written as a template so sensitivities of initial states to parameters are exact.
+template <class T>
+struct InitCtx {
+  const T* p;
+  T* x0;  // own states
+};
+
+// Receives analytic Jacobian entries dF_row/dx_col + cj dF_row/dxdot_col (row local, col global).
+class JacobianSink {
+ public:
+  virtual ~JacobianSink() = default;
+  virtual void add(int local_row, int global_col, double value) = 0;
+};
+
+class Unit {
+ public:
+  virtual ~Unit() = default;
+  virtual std::string type() const = 0;
+  // Declares states, params, ports and outputs; settings shape the structure.
+  virtual void declare(UnitSpec& spec, Settings& settings) = 0;
+  // Called before each run with current parameter values (at t = 0): precompute what does not change
+  // with the state. Throws ConfigError for combinations the bounds alone cannot catch.
+  virtual void configure(const UnitSpec& /*spec*/, const double* /*params*/) {}
+
+  virtual Status residual(const Ctx<double>& c) const = 0;
+  virtual Status residual(const Ctx<Jet>& c) const = 0;
+  virtual void initial(InitCtx<double>& c) const = 0;
+  virtual void initial(InitCtx<Jet>& c) const = 0;
+  // Optional analytic Jacobian of the whole unit; returns false to let the framework use AD.
+  virtual bool jacobian(const Ctx<double>& /*c*/, double /*cj*/, JacobianSink& /*sink*/) const { return false; }
+  // Reported outputs (declared with add_output), evaluated at output times.
+  virtual void report(const Ctx<double>& /*c*/, double* /*out*/) const {}
+};
+
+// Instantiates the residual and initial values for double and Jet from the derived unit's templates
+//   template <class T> Status eval(const Ctx<T>&) const;   template <class T> void init(InitCtx<T>&) const;
+template <class Derived>
+class UnitBase : public Unit {
+ public:
+  Status residual(const Ctx<double>& c) const override { return self().eval(c); }
+  Status residual(const Ctx<Jet>& c) const override { return self().eval(c); }
+  void initial(InitCtx<double>& c) const override { self().init(c); }
+  void initial(InitCtx<Jet>& c) const override { self().init(c); }
+
+ private:
+  const Derived& self() const { return static_cast<const Derived&>(*this); }
+};
+
+}  // namespace granuflow

@@ -1,0 +1,311 @@
+#include "granuflow/flowsheet.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <set>
+
+#include "granuflow/errors.hpp"
+
+namespace granuflow {
+
+// ---------------------------------------------------------------- Settings
+Settings::Settings(std::string where, std::map<std::string, std::string> given)
+    : where_(std::move(where)), given_(std::move(given)) {}
+
+const std::string* Settings::given(const std::string& name) {
+  used_.push_back(name);
+  auto it = given_.find(name);
+  return it == given_.end() ? nullptr : &it->second;
+}
+
+long Settings::get_int(const std::string& name, long def, long lower, long upper, const std::string& description) {
+  declared_.push_back({name, SettingType::Int, def, {}, double(lower), double(upper), description});
+  const std::string* s = given(name);
+  if (!s) return def;
+  char* end = nullptr;
+  const long v = std::strtol(s->c_str(), &end, 10);
+  if (end == s->c_str() || *end != '\0')
+    throw ConfigError(where_ + "." + name + " = '" + *s + "': expected an integer in [" + std::to_string(lower) +
+                      ", " + std::to_string(upper) + "]");
+  if (v < lower || v > upper)
+    throw ConfigError(violation(where_ + "." + name, double(v), "",
+                                std::to_string(lower) + " <= " + name + " <= " + std::to_string(upper)));
+  return v;
+}
+
+double Settings::get_real(const std::string& name, double def, double lower, double upper,
+                          const std::string& description) {
+  declared_.push_back({name, SettingType::Real, def, {}, lower, upper, description});
+  const std::string* s = given(name);
+  if (!s) return def;
+  char* end = nullptr;
+  const double v = std::strtod(s->c_str(), &end);
+  if (end == s->c_str() || *end != '\0' || !std::isfinite(v))
+    throw ConfigError(where_ + "." + name + " = '" + *s + "': expected a finite number");
+  if (v < lower || v > upper)
+    throw ConfigError(violation(where_ + "." + name, v, "",
+                                std::to_string(lower) + " <= " + name + " <= " + std::to_string(upper)));
+  return v;
+}
+
+bool Settings::get_bool(const std::string& name, bool def, const std::string& description) {
+  declared_.push_back({name, SettingType::Bool, def, {}, 0, 1, description});
+  const std::string* s = given(name);
+  if (!s) return def;
+  if (*s == "true" || *s == "on" || *s == "yes") return true;
+  if (*s == "false" || *s == "off" || *s == "no") return false;
+  throw ConfigError(where_ + "." + name + " = '" + *s + "': expected true or false");
+}
+
+std::string Settings::get_choice(const std::string& name, const std::string& def,
+                                 const std::vector<std::string>& choices, const std::string& description) {
+  declared_.push_back({name, SettingType::String, def, choices, 0, 0, description});
+  const std::string* s = given(name);
+  if (!s) return def;
+  if (std::find(choices.begin(), choices.end(), *s) == choices.end()) {
+    std::string allowed;
+    for (const auto& c : choices) allowed += (allowed.empty() ? "" : ", ") + c;
+    throw ConfigError(where_ + "." + name + " = '" + *s + "': not one of the allowed values (" + allowed + ")");
+  }
+  return *s;
+}
+
+void Settings::check_all_used() const {
+  for (const auto& [k, v] : given_) {
+    if (std::find(used_.begin(), used_.end(), k) != used_.end()) continue;
+    std::string allowed;
+    for (const auto& d : declared_) allowed += (allowed.empty() ? "" : ", ") + d.name;
+    throw ConfigError(where_ + "." + k + ": unknown setting (allowed: " + (allowed.empty() ? "none" : allowed) + ")");
+  }
+}
+
+// ---------------------------------------------------------------- Flowsheet
+void Flowsheet::add_unit(const std::string& name, std::unique_ptr<Unit> unit, Settings settings) {
+  if (finalized_) throw std::logic_error("add_unit after finalize");
+  if (name.empty() || name.find('.') != std::string::npos)
+    throw ConfigError("unit name '" + name + "': must be non-empty and contain no '.'");
+  for (const auto& u : units_)
+    if (u.name == name) throw ConfigError("unit '" + name + "' is defined twice");
+  UnitInstance inst;
+  inst.name = name;
+  inst.unit = std::move(unit);
+  inst.unit->declare(inst.spec, settings);
+  settings.check_all_used();
+  inst.settings = settings.declared();
+  for (const auto& p : inst.spec.params()) inst.params.push_back(p.value);
+  inst.inputs.resize(inst.params.size());
+  inst.peers.assign(inst.spec.ports().size(), {-1, -1});
+  units_.push_back(std::move(inst));
+}
+
+int Flowsheet::unit_index(const std::string& name) const {
+  for (size_t i = 0; i < units_.size(); ++i)
+    if (units_[i].name == name) return static_cast<int>(i);
+  std::string allowed;
+  for (const auto& u : units_) allowed += (allowed.empty() ? "" : ", ") + u.name;
+  throw ConfigError("unknown unit '" + name + "' (units: " + allowed + ")");
+}
+
+std::pair<int, int> Flowsheet::split_port(const std::string& qualified) const {
+  const auto dot = qualified.find('.');
+  if (dot == std::string::npos)
+    throw ConfigError("port '" + qualified + "': expected 'unit.port'");
+  const int u = unit_index(qualified.substr(0, dot));
+  const std::string port = qualified.substr(dot + 1);
+  const auto& ports = units_[u].spec.ports();
+  for (size_t p = 0; p < ports.size(); ++p)
+    if (ports[p].name == port) return {u, static_cast<int>(p)};
+  std::string allowed;
+  for (const auto& p : ports) allowed += (allowed.empty() ? "" : ", ") + p.name;
+  throw ConfigError("unit '" + units_[u].name + "' has no port '" + port + "' (ports: " +
+                    (allowed.empty() ? "none" : allowed) + ")");
+}
+
+void Flowsheet::connect(const std::string& from, const std::string& to) {
+  if (finalized_) throw std::logic_error("connect after finalize");
+  const auto a = split_port(from), b = split_port(to);
+  const PortSpec& pa = units_[a.first].spec.ports()[a.second];
+  const PortSpec& pb = units_[b.first].spec.ports()[b.second];
+  if (pa.dir != PortDir::Out)
+    throw ConfigError("connection " + from + " -> " + to + ": '" + from + "' is an inlet; a connection goes out -> in");
+  if (pb.dir != PortDir::In)
+    throw ConfigError("connection " + from + " -> " + to + ": '" + to + "' is an outlet; a connection goes out -> in");
+  if (pa.kind != pb.kind)
+    throw ConfigError("connection " + from + " -> " + to + ": stream kinds differ (" + to_string(pa.kind) + " vs " +
+                      to_string(pb.kind) + ")");
+  if (pa.classes != pb.classes)
+    throw ConfigError("connection " + from + " -> " + to + ": size-class counts differ (" +
+                      std::to_string(pa.classes) + " vs " + std::to_string(pb.classes) + ")");
+  for (auto [u, p, q] : {std::tuple{a.first, a.second, from}, std::tuple{b.first, b.second, to}})
+    if (units_[u].peers[p].first >= 0) throw ConfigError("port " + q + " is connected twice");
+  units_[a.first].peers[a.second] = b;
+  units_[b.first].peers[b.second] = a;
+  connections_.push_back({a, b});
+}
+
+void Flowsheet::finalize() {
+  if (finalized_) return;
+  n_states_ = 0;
+  state_owner_.clear();
+  param_table_.clear();
+  for (size_t u = 0; u < units_.size(); ++u) {
+    units_[u].offset = n_states_;
+    n_states_ += static_cast<int>(units_[u].spec.states().size());
+    state_owner_.insert(state_owner_.end(), units_[u].spec.states().size(), static_cast<int>(u));
+    for (size_t k = 0; k < units_[u].params.size(); ++k) param_table_.push_back({int(u), int(k)});
+  }
+  for (auto& inst : units_) {
+    const auto& ports = inst.spec.ports();
+    inst.port_index.assign(ports.size(), {});
+    for (size_t p = 0; p < ports.size(); ++p) {
+      const std::string where = "port " + inst.name + "." + ports[p].name;
+      if (inst.peers[p].first < 0)
+        throw ConfigError(where + " (" + to_string(ports[p].kind) + ", " + to_string(ports[p].dir) +
+                          ") is not connected");
+      const UnitInstance& peer = units_[inst.peers[p].first];
+      const PortSpec& pp = peer.spec.ports()[inst.peers[p].second];
+      const auto fields = stream_fields(ports[p].kind, ports[p].classes);
+      for (size_t f = 0; f < fields.size(); ++f) {
+        const int mine = ports[p].provided[f], theirs = pp.provided[f];
+        if (mine >= 0 && theirs >= 0)
+          throw ConfigError(where + ": field '" + fields[f].name + "' is provided by both " + inst.name + " and " +
+                            peer.name);
+        if (mine < 0 && theirs < 0)
+          throw ConfigError(where + ": field '" + fields[f].name + "' is provided by neither " + inst.name +
+                            " nor " + peer.name);
+        inst.port_index[p].push_back(mine >= 0 ? inst.offset + mine : peer.offset + theirs);
+      }
+    }
+  }
+  finalized_ = true;
+}
+
+std::vector<std::string> Flowsheet::param_names() const {
+  std::vector<std::string> v;
+  for (const auto& u : units_)
+    for (const auto& p : u.spec.params()) v.push_back(u.name + "." + p.name);
+  return v;
+}
+
+int Flowsheet::param_id(const std::string& qualified) const {
+  int id = 0;
+  for (const auto& u : units_)
+    for (const auto& p : u.spec.params()) {
+      if (u.name + "." + p.name == qualified) return id;
+      ++id;
+    }
+  // Name the unit's parameters when the unit exists, else all units.
+  const auto dot = qualified.find('.');
+  std::string allowed;
+  for (const auto& u : units_)
+    if (dot != std::string::npos && u.name == qualified.substr(0, dot))
+      for (const auto& p : u.spec.params()) allowed += (allowed.empty() ? "" : ", ") + p.name;
+  if (!allowed.empty())
+    throw ConfigError("unknown parameter '" + qualified + "' (parameters of " + qualified.substr(0, dot) + ": " +
+                      allowed + ")");
+  std::string units;
+  for (const auto& u : units_) units += (units.empty() ? "" : ", ") + u.name;
+  throw ConfigError("unknown parameter '" + qualified + "': expected 'unit.param' with unit one of " + units);
+}
+
+std::pair<int, int> Flowsheet::param_location(int id) const {
+  if (!param_table_.empty()) return param_table_.at(id);
+  int k = id;
+  for (size_t u = 0; u < units_.size(); ++u) {
+    const int n = static_cast<int>(units_[u].params.size());
+    if (k < n) return {int(u), k};
+    k -= n;
+  }
+  throw std::out_of_range("parameter id");
+}
+
+const ParamSpec& Flowsheet::param_spec(int id) const {
+  auto [u, k] = param_location(id);
+  return units_[u].spec.params()[k];
+}
+
+double Flowsheet::param_value(int id) const {
+  auto [u, k] = param_location(id);
+  return units_[u].params[k];
+}
+
+void Flowsheet::set_param_value(int id, double v) {
+  auto [u, k] = param_location(id);
+  const ParamSpec& s = units_[u].spec.params()[k];
+  const std::string where = units_[u].name + "." + s.name;
+  if (!std::isfinite(v)) throw ConfigError(violation(where, v, s.unit, "a finite value"));
+  if (v < s.lower || v > s.upper) {
+    std::ostringstream rule;
+    rule.precision(10);
+    rule << s.lower << " <= " << s.name << " <= " << s.upper << (s.source.empty() ? "" : " (" + s.source + ")");
+    throw ConfigError(violation(where, v, s.unit, rule.str()));
+  }
+  units_[u].params[k] = v;
+}
+
+double Flowsheet::param(const std::string& qualified) const { return param_value(param_id(qualified)); }
+void Flowsheet::set_param(const std::string& qualified, double v) { set_param_value(param_id(qualified), v); }
+
+void Flowsheet::set_input(const std::string& qualified, PiecewiseLinear input) {
+  const int id = param_id(qualified);
+  auto [u, k] = param_location(id);
+  const ParamSpec& s = units_[u].spec.params()[k];
+  for (size_t i = 0; i < input.values().size(); ++i) {
+    const double v = input.values()[i];
+    if (v < s.lower || v > s.upper) {
+      std::ostringstream rule;
+      rule.precision(10);
+      rule << s.lower << " <= " << s.name << " <= " << s.upper;
+      throw ConfigError(violation("input " + qualified + ".values[" + std::to_string(i) + "]", v, s.unit, rule.str()));
+    }
+  }
+  units_[u].inputs[k] = std::move(input);
+}
+
+bool Flowsheet::has_input(int id) const {
+  auto [u, k] = param_location(id);
+  return units_[u].inputs[k].has_value();
+}
+
+std::vector<double> Flowsheet::breakpoints(double t_end) const {
+  std::set<double> bp;
+  for (const auto& u : units_)
+    for (const auto& in : u.inputs)
+      if (in)
+        for (double t : in->times())
+          if (t > 0 && t < t_end) bp.insert(t);
+  return {bp.begin(), bp.end()};
+}
+
+std::vector<std::string> Flowsheet::state_names() const {
+  std::vector<std::string> v;
+  for (const auto& u : units_)
+    for (const auto& s : u.spec.states()) v.push_back(u.name + "." + s.name);
+  return v;
+}
+
+const StateSpec& Flowsheet::state_spec(int global) const {
+  const auto& u = units_.at(state_owner_.at(global));
+  return u.spec.states()[global - u.offset];
+}
+
+int Flowsheet::state_unit(int global) const { return state_owner_.at(global); }
+
+int Flowsheet::state_id(const std::string& qualified) const {
+  const auto names = state_names();
+  for (size_t i = 0; i < names.size(); ++i)
+    if (names[i] == qualified) return static_cast<int>(i);
+  throw ConfigError("unknown state '" + qualified + "'");
+}
+
+std::vector<std::string> Flowsheet::output_names() const {
+  std::vector<std::string> v;
+  for (const auto& u : units_)
+    for (const auto& o : u.spec.outputs()) v.push_back(u.name + "." + o.name);
+  return v;
+}
+
+int Flowsheet::n_outputs() const { return static_cast<int>(output_names().size()); }
+
+}  // namespace granuflow

@@ -1,0 +1,506 @@
+#include "granuflow/simulator.hpp"
+
+#include <idas/idas.h>
+#include <kinsol/kinsol.h>
+#include <nvector/nvector_serial.h>
+#include <sundials/sundials_context.h>
+#include <sunlinsol/sunlinsol_klu.h>
+#include <sunmatrix/sunmatrix_dense.h>
+#include <sunmatrix/sunmatrix_sparse.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <sstream>
+
+#include "eigen_linear_solver.hpp"
+#include "granuflow/errors.hpp"
+
+namespace granuflow {
+
+void SimOptions::validate() const {
+  auto fail = [](const std::string& field, double v, const std::string& rule) {
+    throw ConfigError(violation("SimOptions." + field, v, "", rule));
+  };
+  if (!(t_end > 0) || !std::isfinite(t_end)) fail("t_end", t_end, "t_end > 0");
+  if (!(rtol > 0 && rtol < 1)) fail("rtol", rtol, "0 < rtol < 1");
+  if (!(atol > 0)) fail("atol", atol, "atol > 0");
+  if (max_steps < 1) fail("max_steps", double(max_steps), "max_steps >= 1");
+  if (max_step < 0) fail("max_step", max_step, "max_step >= 0");
+  if (t_out.empty() && n_out < 2) fail("n_out", n_out, "n_out >= 2");
+  for (size_t i = 0; i < t_out.size(); ++i) {
+    if (t_out[i] < 0 || t_out[i] > t_end * (1 + 1e-12))
+      fail("t_out[" + std::to_string(i) + "]", t_out[i], "0 <= t_out <= t_end");
+    if (i > 0 && !(t_out[i] > t_out[i - 1])) fail("t_out[" + std::to_string(i) + "]", t_out[i], "t_out increasing");
+  }
+  if (linear_solver != "auto" && linear_solver != "dense" && linear_solver != "sparse")
+    throw ConfigError("SimOptions.linear_solver = '" + linear_solver + "': not one of auto, dense, sparse");
+}
+
+void SteadyOptions::validate() const {
+  if (!(ftol > 0)) throw ConfigError(violation("SteadyOptions.ftol", ftol, "", "ftol > 0"));
+  if (max_iterations < 1)
+    throw ConfigError(violation("SteadyOptions.max_iterations", double(max_iterations), "", "max_iterations >= 1"));
+}
+
+namespace {
+
+// RAII holders for the SUNDIALS objects.
+struct Context {
+  SUNContext ctx = nullptr;
+  Context() { SUNContext_Create(nullptr, &ctx); }
+  ~Context() { SUNContext_Free(&ctx); }
+};
+struct NVec {
+  N_Vector v = nullptr;
+  NVec(int n, SUNContext ctx) : v(N_VNew_Serial(n, ctx)) { N_VConst(0.0, v); }
+  ~NVec() { N_VDestroy(v); }
+  double* data() const { return N_VGetArrayPointer(v); }
+};
+struct Mat {
+  SUNMatrix m = nullptr;
+  ~Mat() { if (m) SUNMatDestroy(m); }
+};
+struct LinSol {
+  SUNLinearSolver s = nullptr;
+  ~LinSol() { if (s) SUNLinSolFree(s); }
+};
+
+std::string ida_flag_text(int flag) {
+  const char* name = IDAGetReturnFlagName(flag);
+  std::string s = name ? name : "IDA error";
+  free(const_cast<char*>(name));
+  return s;
+}
+
+void check(int flag, const char* call) {
+  if (flag < 0) throw std::runtime_error(std::string(call) + " failed with flag " + std::to_string(flag));
+}
+
+// State shared by the IDAS callbacks.
+struct IdaUser {
+  DaeSystem* sys;
+  bool dense;
+  std::vector<int> sens_params;
+  std::string last_error;
+  std::vector<const double*> yS, ypS;
+  std::vector<double*> rS;
+};
+
+int ida_res(realtype t, N_Vector y, N_Vector yp, N_Vector r, void* ud) {
+  auto* u = static_cast<IdaUser*>(ud);
+  try {
+    return static_cast<int>(u->sys->residual(t, N_VGetArrayPointer(y), N_VGetArrayPointer(yp), N_VGetArrayPointer(r)));
+  } catch (const std::exception& e) {
+    u->last_error = e.what();
+    return -1;
+  }
+}
+
+int ida_jac(realtype t, realtype cj, N_Vector y, N_Vector yp, N_Vector, SUNMatrix J, void* ud, N_Vector, N_Vector,
+            N_Vector) {
+  auto* u = static_cast<IdaUser*>(ud);
+  try {
+    if (u->dense) {
+      u->sys->jacobian(t, N_VGetArrayPointer(y), N_VGetArrayPointer(yp), cj, SUNDenseMatrix_Data(J), nullptr);
+    } else {
+      const auto& pat = u->sys->pattern();
+      sunindextype* cp = SUNSparseMatrix_IndexPointers(J);
+      sunindextype* ri = SUNSparseMatrix_IndexValues(J);
+      for (int c = 0; c <= pat.n; ++c) cp[c] = pat.col_ptr[c];
+      for (int k = 0; k < pat.nnz(); ++k) ri[k] = pat.row_idx[k];
+      u->sys->jacobian(t, N_VGetArrayPointer(y), N_VGetArrayPointer(yp), cj, nullptr, SUNSparseMatrix_Data(J));
+    }
+    return 0;
+  } catch (const std::exception& e) {
+    u->last_error = e.what();
+    return -1;
+  }
+}
+
+int ida_sens_res(int ns, realtype t, N_Vector y, N_Vector yp, N_Vector, N_Vector* yS, N_Vector* ypS, N_Vector* rS,
+                 void* ud, N_Vector, N_Vector, N_Vector) {
+  auto* u = static_cast<IdaUser*>(ud);
+  u->yS.resize(ns);
+  u->ypS.resize(ns);
+  u->rS.resize(ns);
+  for (int k = 0; k < ns; ++k) {
+    u->yS[k] = N_VGetArrayPointer(yS[k]);
+    u->ypS[k] = N_VGetArrayPointer(ypS[k]);
+    u->rS[k] = N_VGetArrayPointer(rS[k]);
+  }
+  try {
+    return static_cast<int>(u->sys->sens_residual(t, N_VGetArrayPointer(y), N_VGetArrayPointer(yp), u->sens_params,
+                                                  u->yS.data(), u->ypS.data(), u->rS.data()));
+  } catch (const std::exception& e) {
+    u->last_error = e.what();
+    return -1;
+  }
+}
+
+void ida_err(int code, const char* module, const char* function, char* msg, void* ud) {
+  if (code >= 0) return;  // warnings are not errors
+  auto* u = static_cast<IdaUser*>(ud);
+  u->last_error = std::string(module) + "." + function + ": " + msg;
+}
+
+}  // namespace
+
+SimResult simulate(Flowsheet& fs, const SimOptions& opt) {
+  opt.validate();
+  const auto wall0 = std::chrono::steady_clock::now();
+  DaeSystem sys(fs);
+  const int n = sys.size();
+  if (n == 0) throw ConfigError("flowsheet '" + fs.name() + "' has no states to integrate");
+
+  std::vector<int> sens_ids;
+  for (const auto& name : opt.sensitivities) {
+    const int id = fs.param_id(name);
+    if (fs.has_input(id))
+      throw ConfigError("sensitivity parameter '" + name + "' is a time-dependent input; only constants can be differentiated");
+    sens_ids.push_back(id);
+  }
+  std::vector<double> t_out = opt.t_out;
+  if (t_out.empty())
+    for (int i = 0; i < opt.n_out; ++i) t_out.push_back(opt.t_end * i / (opt.n_out - 1));
+
+  Context C;
+  NVec y(n, C.ctx), yp(n, C.ctx), atol(n, C.ctx), id(n, C.ctx);
+  std::vector<double> y0;
+  sys.initial_values(y0);
+  std::copy(y0.begin(), y0.end(), y.data());
+  const auto scales = sys.scales();
+  const auto ids = sys.differential_id();
+  for (int i = 0; i < n; ++i) {
+    atol.data()[i] = opt.atol * scales[i];
+    id.data()[i] = ids[i];
+  }
+
+  IdaUser user{&sys, true, sens_ids, {}, {}, {}, {}};
+  user.dense = opt.linear_solver == "dense" || (opt.linear_solver == "auto" && n <= opt.dense_limit);
+
+  void* mem = IDACreate(C.ctx);
+  std::unique_ptr<void, void (*)(void*)> mem_guard(mem, [](void* m) { IDAFree(&m); });
+  check(IDAInit(mem, ida_res, 0.0, y.v, yp.v), "IDAInit");
+  check(IDASVtolerances(mem, opt.rtol, atol.v), "IDASVtolerances");
+  check(IDASetUserData(mem, &user), "IDASetUserData");
+  check(IDASetErrHandlerFn(mem, ida_err, &user), "IDASetErrHandlerFn");
+  check(IDASetId(mem, id.v), "IDASetId");
+  check(IDASetMaxNumSteps(mem, opt.max_steps), "IDASetMaxNumSteps");
+  if (opt.max_step > 0) check(IDASetMaxStep(mem, opt.max_step), "IDASetMaxStep");
+
+  Mat A;
+  LinSol LS;
+  if (user.dense) {
+    A.m = SUNDenseMatrix(n, n, C.ctx);
+    LS.s = detail::make_eigen_dense_solver(C.ctx);
+  } else {
+    A.m = SUNSparseMatrix(n, n, sys.pattern().nnz(), CSC_MAT, C.ctx);
+    LS.s = SUNLinSol_KLU(y.v, A.m, C.ctx);
+  }
+  check(IDASetLinearSolver(mem, LS.s, A.m), "IDASetLinearSolver");
+  check(IDASetJacFn(mem, ida_jac), "IDASetJacFn");
+
+  const int ns = static_cast<int>(sens_ids.size());
+  N_Vector* yS = nullptr;
+  N_Vector* ypS = nullptr;
+  if (ns > 0) {
+    yS = N_VCloneVectorArray(ns, y.v);
+    ypS = N_VCloneVectorArray(ns, y.v);
+    std::vector<std::vector<double>> yS0;
+    sys.initial_sensitivities(sens_ids, yS0);
+    for (int k = 0; k < ns; ++k) {
+      std::copy(yS0[k].begin(), yS0[k].end(), N_VGetArrayPointer(yS[k]));
+      N_VConst(0.0, ypS[k]);
+    }
+    check(IDASensInit(mem, ns, IDA_STAGGERED, ida_sens_res, yS, ypS), "IDASensInit");
+    check(IDASensEEtolerances(mem), "IDASensEEtolerances");
+    check(IDASetSensErrCon(mem, SUNTRUE), "IDASetSensErrCon");
+  }
+  struct SensGuard {
+    N_Vector* a;
+    N_Vector* b;
+    int n;
+    ~SensGuard() {
+      if (a) N_VDestroyVectorArray(a, n);
+      if (b) N_VDestroyVectorArray(b, n);
+    }
+  } sens_guard{yS, ypS, ns};
+
+  SimResult res;
+  res.state_names = fs.state_names();
+  res.output_names = fs.output_names();
+  res.sens_params = opt.sensitivities;
+  const int no = static_cast<int>(res.output_names.size());
+  res.stats.states = n;
+  res.stats.linear_solver = user.dense ? "dense (Eigen LU)" : "sparse (KLU)";
+
+  auto fail = [&](int flag, const char* what) {
+    realtype tcur = 0;
+    IDAGetCurrentTime(mem, &tcur);
+    // Locate the worst weighted residual at the last accepted state.
+    NVec r(n, C.ctx), w(n, C.ctx);
+    IDAGetErrWeights(mem, w.v);
+    std::string where = "unknown unit", uname = "?";
+    double worst = 0;
+    try {
+      sys.residual(tcur, y.data(), yp.data(), r.data());
+      int iw = 0;
+      for (int i = 0; i < n; ++i) {
+        const double v = std::isfinite(r.data()[i]) ? std::abs(r.data()[i] * w.data()[i]) : HUGE_VAL;
+        if (v > worst) worst = v, iw = i;
+      }
+      where = sys.describe_row(iw);
+      uname = fs.units()[fs.state_unit(iw)].name;
+    } catch (...) {
+    }
+    std::ostringstream os;
+    os << what << " failed at t = " << tcur << " s in " << where << ": " << ida_flag_text(flag)
+       << (user.last_error.empty() ? "" : " (" + user.last_error + ")") << "; worst weighted residual " << worst;
+    throw SolverError(os.str(), tcur, uname, worst);
+  };
+
+  auto add_stats = [&]() {
+    long v = 0;
+    IDAGetNumSteps(mem, &v), res.stats.steps += v;
+    IDAGetNumLinSolvSetups(mem, &v), res.stats.linear_setups += v;
+    IDAGetNumNonlinSolvIters(mem, &v), res.stats.nonlinear_iterations += v;
+    IDAGetNumErrTestFails(mem, &v), res.stats.error_test_failures += v;
+    IDAGetNumNonlinSolvConvFails(mem, &v), res.stats.nonlinear_failures += v;
+  };
+
+  auto record = [&](double t) {
+    res.t.push_back(t);
+    res.y.insert(res.y.end(), y.data(), y.data() + n);
+    res.yp.insert(res.yp.end(), yp.data(), yp.data() + n);
+    std::vector<double> out(no);
+    if (no > 0) sys.report(t, y.data(), yp.data(), out.data());
+    for (double& v : out)
+      if (!std::isfinite(v)) v = std::nan("");
+    res.outputs.insert(res.outputs.end(), out.begin(), out.end());
+    if (ns > 0) {
+      realtype tret;
+      if (t > 0) IDAGetSens(mem, &tret, yS);
+      for (int k = 0; k < ns; ++k)
+        res.sens.insert(res.sens.end(), N_VGetArrayPointer(yS[k]), N_VGetArrayPointer(yS[k]) + n);
+    }
+  };
+
+  // Segments between breakpoints; each starts with consistent initialization.
+  std::vector<double> ends = fs.breakpoints(opt.t_end);
+  ends.push_back(opt.t_end);
+  double t0 = 0.0;
+  size_t iout = 0;
+  for (size_t seg = 0; seg < ends.size(); ++seg) {
+    const double t1 = ends[seg];
+    sys.set_segment_start(t0);
+    if (seg > 0) {
+      add_stats();
+      check(IDAReInit(mem, t0, y.v, yp.v), "IDAReInit");
+      if (ns > 0) {
+        check(IDASensReInit(mem, IDA_STAGGERED, yS, ypS), "IDASensReInit");
+        check(IDASensEEtolerances(mem), "IDASensEEtolerances");
+      }
+      ++res.stats.reinits;
+    }
+    int flag = IDACalcIC(mem, IDA_YA_YDP_INIT, t1);
+    if (flag < 0) fail(flag, "consistent initialization (IDACalcIC)");
+    check(IDAGetConsistentIC(mem, y.v, yp.v), "IDAGetConsistentIC");
+    if (ns > 0) check(IDAGetSensConsistentIC(mem, yS, ypS), "IDAGetSensConsistentIC");
+    while (iout < t_out.size() && t_out[iout] <= t0 + 1e-12 * std::max(1.0, t0)) {
+      if (seg == 0) record(t_out[iout]);
+      ++iout;
+    }
+    check(IDASetStopTime(mem, t1), "IDASetStopTime");
+    double t = t0;
+    while (t < t1) {
+      const bool to_output = iout < t_out.size() && t_out[iout] <= t1;
+      const double target = to_output ? t_out[iout] : t1;
+      realtype tret = t;
+      flag = IDASolve(mem, target, &tret, y.v, yp.v, IDA_NORMAL);
+      if (flag < 0) fail(flag, "IDASolve");
+      t = tret;
+      if (to_output && tret >= t_out[iout] * (1 - 1e-14)) {
+        record(t_out[iout]);
+        ++iout;
+      }
+      if (flag == IDA_TSTOP_RETURN) break;
+    }
+    if (ns > 0) {
+      realtype tret;
+      IDAGetSens(mem, &tret, yS);
+      IDAGetSensDky(mem, t1, 1, ypS);
+    }
+    t0 = t1;
+  }
+  add_stats();
+  res.stats.residuals = sys.residual_count();
+  res.stats.jacobians = sys.jacobian_count();
+  res.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  return res;
+}
+
+// ---------------------------------------------------------------- steady state (KINSOL)
+namespace {
+struct KinUser {
+  DaeSystem* sys;
+  double t;
+  bool dense;
+  std::vector<double> zeros;
+  std::string last_error;
+  std::vector<int> pinned;
+  std::vector<double> pinned_value;
+};
+
+int kin_res(N_Vector u, N_Vector f, void* ud) {
+  auto* k = static_cast<KinUser*>(ud);
+  try {
+    const int s = static_cast<int>(k->sys->residual(k->t, N_VGetArrayPointer(u), k->zeros.data(), N_VGetArrayPointer(f)));
+    for (size_t i = 0; i < k->pinned.size(); ++i)
+      N_VGetArrayPointer(f)[k->pinned[i]] = N_VGetArrayPointer(u)[k->pinned[i]] - k->pinned_value[i];
+    return s;
+  } catch (const std::exception& e) {
+    k->last_error = e.what();
+    return -1;
+  }
+}
+
+int kin_jac(N_Vector u, N_Vector, SUNMatrix J, void* ud, N_Vector, N_Vector) {
+  auto* k = static_cast<KinUser*>(ud);
+  if (k->dense) {
+    k->sys->jacobian(k->t, N_VGetArrayPointer(u), k->zeros.data(), 0.0, SUNDenseMatrix_Data(J), nullptr);
+    const auto n = SUNDenseMatrix_Rows(J);
+    for (int p : k->pinned) {
+      for (sunindextype c = 0; c < n; ++c) SUNDenseMatrix_Data(J)[c * n + p] = 0.0;
+      SUNDenseMatrix_Data(J)[sunindextype(p) * n + p] = 1.0;
+    }
+  } else {
+    const auto& pat = k->sys->pattern();
+    for (int c = 0; c <= pat.n; ++c) SUNSparseMatrix_IndexPointers(J)[c] = pat.col_ptr[c];
+    for (int i = 0; i < pat.nnz(); ++i) SUNSparseMatrix_IndexValues(J)[i] = pat.row_idx[i];
+    k->sys->jacobian(k->t, N_VGetArrayPointer(u), k->zeros.data(), 0.0, nullptr, SUNSparseMatrix_Data(J));
+    // The diagonal is in the pattern (a unit depends on its own states), so pinning stays inside it.
+    for (int p : k->pinned)
+      for (int c = 0; c < pat.n; ++c)
+        for (int i = pat.col_ptr[c]; i < pat.col_ptr[c + 1]; ++i)
+          if (pat.row_idx[i] == p) SUNSparseMatrix_Data(J)[i] = (c == p) ? 1.0 : 0.0;
+  }
+  return 0;
+}
+
+void kin_err(int code, const char* module, const char* function, char* msg, void* ud) {
+  if (code >= 0) return;
+  static_cast<KinUser*>(ud)->last_error = std::string(module) + "." + function + ": " + msg;
+}
+}  // namespace
+
+// Algebraic states solved for the given differential states (IDACalcIC), used to start Newton from a point
+// where recycle flows are consistent rather than from structurally singular guesses.
+void consistent_initial_values(DaeSystem& sys, double t, std::vector<double>& y0) {
+  const int n = sys.size();
+  Context C;
+  NVec y(n, C.ctx), yp(n, C.ctx), id(n, C.ctx);
+  std::copy(y0.begin(), y0.end(), y.data());
+  const auto ids = sys.differential_id();
+  std::copy(ids.begin(), ids.end(), id.data());
+  IdaUser user{&sys, n <= 400, {}, {}, {}, {}, {}};
+  void* mem = IDACreate(C.ctx);
+  std::unique_ptr<void, void (*)(void*)> guard(mem, [](void* m) { IDAFree(&m); });
+  check(IDAInit(mem, ida_res, t, y.v, yp.v), "IDAInit");
+  check(IDASStolerances(mem, 1e-8, 1e-10), "IDASStolerances");
+  check(IDASetUserData(mem, &user), "IDASetUserData");
+  check(IDASetErrHandlerFn(mem, ida_err, &user), "IDASetErrHandlerFn");
+  check(IDASetId(mem, id.v), "IDASetId");
+  Mat A;
+  LinSol LS;
+  if (user.dense) {
+    A.m = SUNDenseMatrix(n, n, C.ctx);
+    LS.s = detail::make_eigen_dense_solver(C.ctx);
+  } else {
+    A.m = SUNSparseMatrix(n, n, sys.pattern().nnz(), CSC_MAT, C.ctx);
+    LS.s = SUNLinSol_KLU(y.v, A.m, C.ctx);
+  }
+  check(IDASetLinearSolver(mem, LS.s, A.m), "IDASetLinearSolver");
+  check(IDASetJacFn(mem, ida_jac), "IDASetJacFn");
+  // Failure here is not fatal: Newton then starts from the unit guesses.
+  if (IDACalcIC(mem, IDA_YA_YDP_INIT, t + 1.0) >= 0 && IDAGetConsistentIC(mem, y.v, yp.v) >= 0)
+    y0.assign(y.data(), y.data() + n);
+}
+
+SteadyResult solve_steady_state(Flowsheet& fs, const SteadyOptions& opt, const std::vector<double>* guess) {
+  opt.validate();
+  DaeSystem sys(fs);
+  const int n = sys.size();
+  sys.set_segment_start(opt.t);
+  Context C;
+  NVec u(n, C.ctx), su(n, C.ctx), sf(n, C.ctx);
+  std::vector<double> y0;
+  sys.initial_values(y0);
+  if (!guess) consistent_initial_values(sys, opt.t, y0);
+  if (guess) {
+    if (static_cast<int>(guess->size()) != n)
+      throw ConfigError("steady-state guess has " + std::to_string(guess->size()) + " values, the flowsheet " +
+                        std::to_string(n) + " states");
+    y0 = *guess;
+  }
+  std::copy(y0.begin(), y0.end(), u.data());
+  const auto sc = sys.scales();
+  for (int i = 0; i < n; ++i) su.data()[i] = 1.0 / sc[i];
+  N_VConst(1.0, sf.v);
+  KinUser user{&sys, opt.t, n <= 400, std::vector<double>(n, 0.0), {}, {}, {}};
+  // Pure accumulators (a differential state no equation depends on, e.g. the mass collected by a product sink)
+  // have no steady state: hold them at their initial value and drop their own equation.
+  {
+    std::vector<double> jac(size_t(n) * n);
+    sys.jacobian(opt.t, y0.data(), user.zeros.data(), 0.0, jac.data(), nullptr);
+    const auto id = sys.differential_id();
+    for (int c = 0; c < n; ++c) {
+      bool zero = id[c] > 0;
+      for (int r = 0; r < n && zero; ++r) zero = jac[size_t(c) * n + r] == 0.0;
+      if (zero) user.pinned.push_back(c), user.pinned_value.push_back(y0[c]);
+    }
+  }
+  void* mem = KINCreate(C.ctx);
+  std::unique_ptr<void, void (*)(void*)> guard(mem, [](void* m) { KINFree(&m); });
+  check(KINInit(mem, kin_res, u.v), "KINInit");
+  check(KINSetUserData(mem, &user), "KINSetUserData");
+  check(KINSetErrHandlerFn(mem, kin_err, &user), "KINSetErrHandlerFn");
+  check(KINSetFuncNormTol(mem, opt.ftol), "KINSetFuncNormTol");
+  check(KINSetNumMaxIters(mem, opt.max_iterations), "KINSetNumMaxIters");
+  check(KINSetMaxSetupCalls(mem, 1), "KINSetMaxSetupCalls");  // exact Newton: the Jacobian is cheap and exact
+  Mat A;
+  LinSol LS;
+  if (user.dense) {
+    A.m = SUNDenseMatrix(n, n, C.ctx);
+    LS.s = detail::make_eigen_dense_solver(C.ctx);
+  } else {
+    A.m = SUNSparseMatrix(n, n, sys.pattern().nnz(), CSC_MAT, C.ctx);
+    LS.s = SUNLinSol_KLU(u.v, A.m, C.ctx);
+  }
+  check(KINSetLinearSolver(mem, LS.s, A.m), "KINSetLinearSolver");
+  check(KINSetJacFn(mem, kin_jac), "KINSetJacFn");
+  const int flag = KINSol(mem, u.v, KIN_LINESEARCH, su.v, sf.v);
+  SteadyResult r;
+  long it = 0;
+  KINGetNumNonlinSolvIters(mem, &it);
+  KINGetFuncNorm(mem, &r.residual_norm);
+  r.iterations = it;
+  if (flag < 0) {
+    char* name = KINGetReturnFlagName(flag);
+    std::string msg = std::string("steady-state solve (KINSOL) failed after ") + std::to_string(it) +
+                      " iterations: " + (name ? name : "") + (user.last_error.empty() ? "" : " (" + user.last_error + ")");
+    free(name);
+    // Name the unit with the largest scaled residual at the last iterate.
+    std::vector<double> rr(n);
+    sys.residual(opt.t, u.data(), user.zeros.data(), rr.data());
+    int iw = 0;
+    for (int i = 1; i < n; ++i)
+      if (std::abs(rr[i]) > std::abs(rr[iw])) iw = i;
+    throw SolverError(msg + " at " + sys.describe_row(iw), opt.t, fs.units()[fs.state_unit(iw)].name, std::abs(rr[iw]));
+  }
+  r.y.assign(u.data(), u.data() + n);
+  return r;
+}
+
+}  // namespace granuflow

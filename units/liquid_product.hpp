@@ -1,0 +1,7 @@
+#pragma once
+#include "granuflow/registry.hpp"
+#include "granuflow/unit.hpp"
+namespace granuflow::units {
+// Liquid sink that accumulates the mass, solute and sensible enthalpy (above 0 K, constant cp) that leave.
+void register_liquid_product(Registry<Unit>& r);
+}
