@@ -14,15 +14,30 @@ class LiquidFeed : public UnitBase<LiquidFeed> {
     s.add_state("T", StateKind::Algebraic, "K", 300.0);
     s.add_state("w", StateKind::Algebraic, "kg/kg", 1.0);
     s.provide_all(s.add_port("out", StreamKind::Liquid, PortDir::Out), 0);
+    s.add_param({"cp", "J/(kg K)", 4180.0, 1.0, 1e5, "heat capacity for the enthalpy account (above 0 K)", ""});
+    // Cumulative amounts fed, so balances close from states rather than from quadrature of outputs.
+    s.add_state("mass_in", StateKind::Differential, "kg", 100.0);
+    s.add_state("solute_in", StateKind::Differential, "kg", 1.0);
+    s.add_state("enthalpy_in", StateKind::Differential, "J", 1e8);
+    s.add_output("balance_water_in", "kg");
+    s.add_output("balance_solids_in", "kg");
+    s.add_output("balance_energy_in", "J");
   }
   template <class T>
   Status eval(const Ctx<T>& c) const {
     for (int k = 0; k < 3; ++k) c.res(k) = c.x_(k) - c.par(k);
+    c.res(3) = c.xd(3) - c.x_(0);
+    c.res(4) = c.xd(4) - c.x_(0) * c.x_(2);
+    c.res(5) = c.xd(5) - c.x_(0) * c.par(3) * c.x_(1);
     return Status::kOk;
   }
   template <class T>
   void init(InitCtx<T>& c) const {
     for (int k = 0; k < 3; ++k) c.x0[k] = c.p[k];
+    for (int k = 3; k < 6; ++k) c.x0[k] = T(0.0);
+  }
+  void report(const Ctx<double>& c, double* out) const override {
+    for (int k = 0; k < 3; ++k) out[k] = c.x_(3 + k);
   }
 };
 

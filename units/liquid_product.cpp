@@ -12,6 +12,9 @@ class LiquidProduct : public UnitBase<LiquidProduct> {
     s.add_state("solute", StateKind::Differential, "kg", 1.0);
     s.add_state("enthalpy", StateKind::Differential, "J", 1e8);
     s.add_port("in", StreamKind::Liquid, PortDir::In);
+    s.add_output("balance_water_out", "kg");
+    s.add_output("balance_solids_out", "kg");
+    s.add_output("balance_energy_out", "J");
   }
   template <class T>
   Status eval(const Ctx<T>& c) const {
@@ -24,6 +27,9 @@ class LiquidProduct : public UnitBase<LiquidProduct> {
   template <class T>
   void init(InitCtx<T>& c) const {
     for (int k = 0; k < 3; ++k) c.x0[k] = T(0.0);
+  }
+  void report(const Ctx<double>& c, double* out) const override {
+    for (int k = 0; k < 3; ++k) out[k] = c.x_(k);
   }
 };
 

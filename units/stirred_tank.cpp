@@ -20,7 +20,11 @@ class StirredTank : public UnitBase<StirredTank> {
     s.provide(out, liquid::kMdot, m);
     s.provide(out, liquid::kT, t);
     s.provide(out, liquid::kW, w);
-    s.add_output("holdup_enthalpy", "J");
+    s.add_state("heat_in", StateKind::Differential, "J", 1e8);
+    s.add_output("balance_water_hold", "kg");
+    s.add_output("balance_solids_hold", "kg");
+    s.add_output("balance_energy_hold", "J");
+    s.add_output("balance_energy_in", "J");
   }
   template <class T>
   Status eval(const Ctx<T>& c) const {
@@ -31,6 +35,7 @@ class StirredTank : public UnitBase<StirredTank> {
     // M cp dT/dt = m_in cp (T_in - T) + Q, divided by M cp for scaling
     c.res(1) = c.xd(1) - (m_in * (c.port(0, liquid::kT) - c.x_(1)) + c.par(2) / cp) / mass;
     c.res(2) = c.xd(2) - m_in * (c.port(0, liquid::kW) - c.x_(2)) / mass;
+    c.res(3) = c.xd(3) - c.par(2);
     return Status::kOk;
   }
   template <class T>
@@ -38,8 +43,14 @@ class StirredTank : public UnitBase<StirredTank> {
     c.x0[0] = T(0.1);
     c.x0[1] = c.p[3];
     c.x0[2] = c.p[4];
+    c.x0[3] = T(0.0);
   }
-  void report(const Ctx<double>& c, double* out) const override { out[0] = c.par(0) * c.par(1) * c.x_(1); }
+  void report(const Ctx<double>& c, double* out) const override {
+    out[0] = c.par(0);
+    out[1] = c.par(0) * c.x_(2);
+    out[2] = c.par(0) * c.par(1) * c.x_(1);
+    out[3] = c.x_(3);
+  }
 };
 
 }  // namespace

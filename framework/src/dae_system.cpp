@@ -15,7 +15,6 @@ DaeSystem::DaeSystem(Flowsheet& fs) : fs_(fs) {
   const auto& units = fs_.units();
   pvals_.resize(units.size());
   local_cols_.resize(units.size());
-  analytic_.assign(units.size(), false);
   // Columns each unit's rows can depend on: own states and every field its ports read.
   std::vector<std::set<int>> col_rows(n_);
   for (size_t u = 0; u < units.size(); ++u) {
@@ -48,6 +47,9 @@ DaeSystem::DaeSystem(Flowsheet& fs) : fs_(fs) {
       }
     }
   }
+  col_map_.resize(units.size());
+  for (size_t u = 0; u < units.size(); ++u)
+    for (size_t j = 0; j < local_cols_[u].size(); ++j) col_map_[u][local_cols_[u][j]] = static_cast<int>(j);
   xj_.resize(n_);
   xdj_.resize(n_);
   rbuf_.resize(n_);
@@ -147,9 +149,7 @@ void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj,
       DenseSink sink(dense, n_, units[u].offset);
       if (units[u].unit->jacobian(cd, cj, sink)) continue;
     } else {
-      std::unordered_map<int, int> col_map;
-      for (size_t j = 0; j < cols.size(); ++j) col_map[cols[j]] = static_cast<int>(j);
-      SparseSink sink(sparse, block_pos_[u], col_map, static_cast<int>(cols.size()), units[u].name);
+      SparseSink sink(sparse, block_pos_[u], col_map_[u], static_cast<int>(cols.size()), units[u].name);
       if (units[u].unit->jacobian(cd, cj, sink)) continue;
     }
     params_as(static_cast<int>(u), pj);

@@ -3,6 +3,7 @@
 // sensitivity residuals for named parameters, initial values, and per-state metadata for the solvers.
 #pragma once
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "granuflow/flowsheet.hpp"
@@ -62,7 +63,7 @@ class DaeSystem {
   std::vector<std::vector<double>> pvals_;   // per unit, at the last fill time
   std::vector<std::vector<int>> local_cols_; // per unit: global columns its rows depend on
   std::vector<std::vector<int>> block_pos_;  // per unit: row-major [local row][local col] -> position in sparse values
-  std::vector<bool> analytic_;               // per unit: supplies its own Jacobian
+  std::vector<std::unordered_map<int, int>> col_map_;  // per unit: global column -> local column
   SparsityPattern pattern_;
   std::vector<Jet> xj_, xdj_, rj_;
   std::vector<double> rbuf_;

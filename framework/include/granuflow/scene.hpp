@@ -1,0 +1,51 @@
+// Scene files (YAML): units, connections, parameters, time-dependent inputs, solver options, outputs and the
+// summary mapping. Every unknown key, wrong type, unknown unit or out-of-bound value is a ConfigError whose
+// message names the file, the key path, the value and what is allowed. The file is only read.
+//
+//   scene: demo_tanks                 # name (required)
+//   description: ...                  # optional text
+//   t_end: 2000 s                     # required; "value unit" or a number in SI
+//   output: {n: 201}                  # or {times: [0 s, 10 s, ...]}
+//   solver: {rtol: 1e-6, atol: 1e-8, max_steps: 100000, linear_solver: auto}
+//   units:
+//     tank1: {type: stirred_tank, settings: {...}, params: {mass: 100 kg, Q: 20 kW}}
+//   connections: ["feed.out -> mixer.in1", ...]
+//   inputs:
+//     feed.T: {interp: step, times: [0 s, 100 s], values: [300 K, 350 K]}
+//   summary: {T_gas_out_K: chamber.T}  # summary key -> state or reported output
+//   plots: [...]                      # free-form, read by the Python layer
+#pragma once
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "granuflow/flowsheet.hpp"
+#include "granuflow/registry.hpp"
+#include "granuflow/simulator.hpp"
+
+namespace granuflow {
+
+struct Scene {
+  std::string path;
+  std::string name;
+  std::string description;
+  std::unique_ptr<Flowsheet> flowsheet;
+  SimOptions options;
+  std::map<std::string, std::string> summary;  // summary key -> "unit.state" or "unit.output"
+  std::string extra_yaml;                      // the keys the C++ core does not interpret (plots, sweep), as YAML
+  std::string text;                            // the scene file as read, so a scene can be cloned for threads
+};
+
+// An independent copy (own flowsheet) with the same current parameter values and inputs.
+Scene clone_scene(const Scene& s, const Registry<Unit>& units);
+
+Scene load_scene(const std::string& path, const Registry<Unit>& units);
+Scene load_scene_text(const std::string& yaml_text, const std::string& label, const Registry<Unit>& units);
+
+// Parses "60 degC", "0.5", "700 m3/h" for parameter `qualified` and converts to its SI unit. Throws
+// ConfigError naming `where`.
+double parse_param_value(const Flowsheet& fs, const std::string& qualified, const std::string& text,
+                         const std::string& where);
+
+}  // namespace granuflow

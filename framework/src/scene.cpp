@@ -1,0 +1,283 @@
+#include "granuflow/scene.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include "granuflow/errors.hpp"
+#include "granuflow/quantity.hpp"
+
+namespace granuflow {
+namespace {
+
+std::string kind_name(const YAML::Node& n) {
+  switch (n.Type()) {
+    case YAML::NodeType::Map: return "a mapping";
+    case YAML::NodeType::Sequence: return "a list";
+    case YAML::NodeType::Scalar: return "'" + n.Scalar() + "'";
+    case YAML::NodeType::Null: return "empty";
+    default: return "undefined";
+  }
+}
+
+class Loader {
+ public:
+  Loader(std::string label, const Registry<Unit>& units) : label_(std::move(label)), units_(units) {}
+
+  Scene load(const YAML::Node& root) {
+    if (!root.IsMap()) fail("", "the file must be a mapping of scene keys, got " + kind_name(root));
+    check_keys(root, "", {"scene", "description", "t_end", "output", "solver", "units", "connections", "inputs",
+                          "summary", "plots", "sweep", "notes"});
+    Scene s;
+    s.path = label_;
+    s.name = scalar(required(root, "scene", ""), "scene");
+    if (root["description"]) s.description = scalar(root["description"], "description");
+    s.flowsheet = std::make_unique<Flowsheet>(s.name);
+    Flowsheet& fs = *s.flowsheet;
+
+    const YAML::Node units = required(root, "units", "");
+    if (!units.IsMap() || units.size() == 0) fail("units", "expected a non-empty mapping of unit name -> {type, ...}");
+    std::vector<std::pair<std::string, YAML::Node>> params;
+    for (const auto& kv : units) {
+      const std::string name = kv.first.as<std::string>();
+      const std::string at = "units." + name;
+      const YAML::Node u = kv.second;
+      if (!u.IsMap()) fail(at, "expected a mapping with 'type', got " + kind_name(u));
+      check_keys(u, at, {"type", "settings", "params"});
+      const std::string type = scalar(required(u, "type", at), at + ".type");
+      std::map<std::string, std::string> settings;
+      if (u["settings"]) {
+        if (!u["settings"].IsMap()) fail(at + ".settings", "expected a mapping, got " + kind_name(u["settings"]));
+        for (const auto& st : u["settings"]) settings[st.first.as<std::string>()] = scalar(st.second, at + ".settings." + st.first.as<std::string>());
+      }
+      try {
+        fs.add_unit(name, units_.create(type, label_ + ": " + at + ".type"), Settings(label_ + ": " + at + ".settings", settings));
+      } catch (const ConfigError& e) {
+        rethrow(e);
+      }
+      if (u["params"]) params.emplace_back(name, u["params"]);
+    }
+
+    if (root["connections"]) {
+      const YAML::Node c = root["connections"];
+      if (!c.IsSequence()) fail("connections", "expected a list of \"unit.port -> unit.port\"");
+      for (size_t i = 0; i < c.size(); ++i) {
+        const std::string at = "connections[" + std::to_string(i) + "]";
+        const std::string text = scalar(c[i], at);
+        const auto arrow = text.find("->");
+        if (arrow == std::string::npos) fail(at, "'" + text + "': expected \"unit.port -> unit.port\"");
+        try {
+          fs.connect(trim(text.substr(0, arrow)), trim(text.substr(arrow + 2)));
+        } catch (const ConfigError& e) {
+          fail(at, e.what());
+        }
+      }
+    }
+    try {
+      fs.finalize();
+    } catch (const ConfigError& e) {
+      fail("connections", e.what());
+    }
+
+    for (const auto& [unit, node] : params) {
+      const std::string at = "units." + unit + ".params";
+      if (!node.IsMap()) fail(at, "expected a mapping of parameter -> value, got " + kind_name(node));
+      for (const auto& p : node) {
+        const std::string key = p.first.as<std::string>();
+        const std::string q = unit + "." + key;
+        try {
+          fs.param_id(q);
+        } catch (const ConfigError& e) {
+          fail(at + "." + key, e.what());
+        }
+        const double v = parse_param_value(fs, q, scalar(p.second, at + "." + key), label_ + ": " + at + "." + key);
+        try {
+          fs.set_param(q, v);
+        } catch (const ConfigError& e) {
+          fail(at + "." + key, e.what());
+        }
+      }
+    }
+
+    if (root["inputs"]) load_inputs(root["inputs"], fs);
+    s.options.t_end = quantity(required(root, "t_end", ""), "t_end", "s");
+    if (root["output"]) load_output(root["output"], s.options);
+    if (root["solver"]) load_solver(root["solver"], s.options);
+    try {
+      s.options.validate();
+    } catch (const ConfigError& e) {
+      rethrow(e);
+    }
+    if (root["summary"]) {
+      const YAML::Node sm = root["summary"];
+      if (!sm.IsMap()) fail("summary", "expected a mapping of summary key -> unit.state or unit.output");
+      const auto states = fs.state_names();
+      const auto outputs = fs.output_names();
+      for (const auto& kv : sm) {
+        const std::string key = kv.first.as<std::string>(), src = scalar(kv.second, "summary." + key);
+        if (std::find(states.begin(), states.end(), src) == states.end() &&
+            std::find(outputs.begin(), outputs.end(), src) == outputs.end())
+          fail("summary." + key, "'" + src + "' is neither a state nor a reported output of the flowsheet");
+        s.summary[key] = src;
+      }
+    }
+    YAML::Node extra;
+    for (const char* k : {"plots", "sweep", "notes"})
+      if (root[k]) extra[k] = root[k];
+    YAML::Emitter em;
+    em << extra;
+    s.extra_yaml = em.c_str();
+    return s;
+  }
+
+ private:
+  [[noreturn]] void fail(const std::string& key, const std::string& what) const {
+    throw ConfigError(label_ + ": " + (key.empty() ? "" : key + ": ") + what);
+  }
+  [[noreturn]] void rethrow(const ConfigError& e) const {
+    const std::string m = e.what();
+    if (m.rfind(label_, 0) == 0) throw e;
+    throw ConfigError(label_ + ": " + m);
+  }
+  static std::string trim(const std::string& s) {
+    const auto a = s.find_first_not_of(" \t"), b = s.find_last_not_of(" \t");
+    return a == std::string::npos ? "" : s.substr(a, b - a + 1);
+  }
+  void check_keys(const YAML::Node& m, const std::string& at, const std::set<std::string>& allowed) const {
+    for (const auto& kv : m) {
+      const std::string k = kv.first.as<std::string>();
+      if (!allowed.count(k)) {
+        std::string list;
+        for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
+        fail(at.empty() ? k : at + "." + k, "unknown key (allowed: " + list + ")");
+      }
+    }
+  }
+  YAML::Node required(const YAML::Node& m, const std::string& key, const std::string& at) const {
+    if (!m[key]) fail(at.empty() ? key : at + "." + key, "missing required key");
+    return m[key];
+  }
+  std::string scalar(const YAML::Node& n, const std::string& at) const {
+    if (!n.IsScalar()) fail(at, "expected a single value, got " + kind_name(n));
+    return n.Scalar();
+  }
+  double quantity(const YAML::Node& n, const std::string& at, const std::string& si) const {
+    double v;
+    std::string unit;
+    const std::string text = scalar(n, at);
+    if (!parse_quantity(text, &v, &unit) || !std::isfinite(v))
+      fail(at, "'" + text + "' is not a number with an optional unit (e.g. \"60 degC\")");
+    return to_si(v, unit, si, label_ + ": " + at);
+  }
+  void load_output(const YAML::Node& o, SimOptions& opt) const {
+    if (!o.IsMap()) fail("output", "expected a mapping with 'n' or 'times'");
+    check_keys(o, "output", {"n", "times"});
+    if (o["n"]) opt.n_out = static_cast<int>(number(o["n"], "output.n"));
+    if (o["times"]) {
+      if (!o["times"].IsSequence()) fail("output.times", "expected a list of times");
+      for (size_t i = 0; i < o["times"].size(); ++i)
+        opt.t_out.push_back(quantity(o["times"][i], "output.times[" + std::to_string(i) + "]", "s"));
+    }
+  }
+  double number(const YAML::Node& n, const std::string& at) const {
+    const std::string text = scalar(n, at);
+    char* end = nullptr;
+    const double v = std::strtod(text.c_str(), &end);
+    if (end == text.c_str() || *end != '\0' || !std::isfinite(v)) fail(at, "'" + text + "' is not a number");
+    return v;
+  }
+  void load_solver(const YAML::Node& s, SimOptions& opt) const {
+    if (!s.IsMap()) fail("solver", "expected a mapping");
+    check_keys(s, "solver", {"rtol", "atol", "max_steps", "max_step", "linear_solver", "dense_limit"});
+    if (s["rtol"]) opt.rtol = number(s["rtol"], "solver.rtol");
+    if (s["atol"]) opt.atol = number(s["atol"], "solver.atol");
+    if (s["max_steps"]) opt.max_steps = static_cast<long>(number(s["max_steps"], "solver.max_steps"));
+    if (s["max_step"]) opt.max_step = quantity(s["max_step"], "solver.max_step", "s");
+    if (s["linear_solver"]) opt.linear_solver = scalar(s["linear_solver"], "solver.linear_solver");
+    if (s["dense_limit"]) opt.dense_limit = static_cast<int>(number(s["dense_limit"], "solver.dense_limit"));
+  }
+  void load_inputs(const YAML::Node& in, Flowsheet& fs) const {
+    if (!in.IsMap()) fail("inputs", "expected a mapping of unit.param -> {times, values, interp}");
+    for (const auto& kv : in) {
+      const std::string q = kv.first.as<std::string>(), at = "inputs." + q;
+      try {
+        fs.param_id(q);
+      } catch (const ConfigError& e) {
+        fail(at, e.what());
+      }
+      const YAML::Node n = kv.second;
+      if (!n.IsMap()) fail(at, "expected a mapping with times and values");
+      check_keys(n, at, {"times", "values", "interp"});
+      const YAML::Node ts = required(n, "times", at), vs = required(n, "values", at);
+      if (!ts.IsSequence() || !vs.IsSequence()) fail(at, "times and values must be lists");
+      std::vector<double> t, v;
+      for (size_t i = 0; i < ts.size(); ++i) t.push_back(quantity(ts[i], at + ".times[" + std::to_string(i) + "]", "s"));
+      for (size_t i = 0; i < vs.size(); ++i)
+        v.push_back(parse_param_value(fs, q, scalar(vs[i], at + ".values[" + std::to_string(i) + "]"),
+                                      label_ + ": " + at + ".values[" + std::to_string(i) + "]"));
+      auto interp = PiecewiseLinear::Interp::kLinear;
+      if (n["interp"]) {
+        const std::string s = scalar(n["interp"], at + ".interp");
+        if (s == "step") interp = PiecewiseLinear::Interp::kStep;
+        else if (s != "linear") fail(at + ".interp", "'" + s + "': not one of linear, step");
+      }
+      try {
+        fs.set_input(q, PiecewiseLinear(t, v, interp, label_ + ": " + at));
+      } catch (const ConfigError& e) {
+        rethrow(e);
+      }
+    }
+  }
+
+  std::string label_;
+  const Registry<Unit>& units_;
+};
+
+}  // namespace
+
+double parse_param_value(const Flowsheet& fs, const std::string& qualified, const std::string& text,
+                         const std::string& where) {
+  const ParamSpec& spec = fs.param_spec(fs.param_id(qualified));
+  double v;
+  std::string unit;
+  if (!parse_quantity(text, &v, &unit) || !std::isfinite(v))
+    throw ConfigError(where + " = '" + text + "': expected a number with an optional unit (SI unit: " + spec.unit + ")");
+  return to_si(v, unit, spec.unit, where);
+}
+
+Scene load_scene_text(const std::string& text, const std::string& label, const Registry<Unit>& units) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw ConfigError(label + ": not valid YAML: " + e.what());
+  }
+  Scene s = Loader(label, units).load(root);
+  s.text = text;
+  return s;
+}
+
+Scene clone_scene(const Scene& src, const Registry<Unit>& units) {
+  Scene s = load_scene_text(src.text, src.path, units);
+  s.options = src.options;
+  auto& to = s.flowsheet->units();
+  const auto& from = src.flowsheet->units();
+  for (size_t u = 0; u < from.size(); ++u) {
+    to[u].params = from[u].params;
+    to[u].inputs = from[u].inputs;
+  }
+  return s;
+}
+
+Scene load_scene(const std::string& path, const Registry<Unit>& units) {
+  std::ifstream f(path);
+  if (!f) throw ConfigError(path + ": cannot open the scene file");
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return load_scene_text(ss.str(), path, units);
+}
+
+}  // namespace granuflow

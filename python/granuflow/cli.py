@@ -1,0 +1,137 @@
+"""Command line: ``granuflow run SCENE --out DIR [--set unit.param=value ...] [--t-end SECONDS]``.
+
+Exit codes: 0 success, 2 bad input (scene, option, parameter), 3 solver failure. A failure prints one line
+on stderr naming what went wrong.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+
+EXIT_BAD_INPUT = 2
+EXIT_SOLVER = 3
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # argparse exits 2 too, but with a usage block; keep it to one line
+        print(f"granuflow: {message}", file=sys.stderr)
+        sys.exit(EXIT_BAD_INPUT)
+
+
+def _parse_seconds(text: str) -> float:
+    from . import _core
+
+    parts = text.strip().split(None, 1)
+    try:
+        v = float(parts[0])
+    except ValueError:
+        raise _core.ConfigError(f"--t-end = '{text}': expected seconds, or a number with a time unit (e.g. '60 min')")
+    return _core.to_si(v, parts[1] if len(parts) > 1 else "", "s", "--t-end")
+
+
+def cmd_run(args) -> int:
+    from . import load, plots
+
+    fs = load(args.scene)
+    for item in args.set or []:
+        if "=" not in item:
+            raise ValueError_(f"--set '{item}': expected unit.param=value")
+        name, value = item.split("=", 1)
+        fs.set(name.strip(), value.strip())
+    t_end = _parse_seconds(args.t_end) if args.t_end else None
+    if t_end is not None:
+        fs.set_t_end(t_end)
+    res = fs.simulate()
+    os.makedirs(args.out, exist_ok=True)
+    summary = res.summary
+    with open(os.path.join(args.out, "summary.json"), "w") as f:
+        json.dump(summary, f, indent=2, allow_nan=False)
+    res.timeseries.to_csv(os.path.join(args.out, "timeseries.csv"))
+    written = ["summary.json", "timeseries.csv"]
+    for k, spec in enumerate(fs.extra.get("plots", []) or []):
+        if spec.get("kind") == "psd":
+            if res.psd_units():
+                name = spec.get("file", "psd.png")
+                times = [t * 60.0 for t in spec["times_min"]] if "times_min" in spec else None
+                plots.plot_psd(res, os.path.join(args.out, name), times)
+                written.append(name)
+            continue
+        name = spec.get("file", f"plot_{k}.png")
+        plots.plot_series(res, spec, os.path.join(args.out, name))
+        written.append(name)
+    if res.psd_units() and not any(s.get("kind") == "psd" for s in fs.extra.get("plots", []) or []):
+        plots.plot_psd(res, os.path.join(args.out, "psd.png"))
+        written.append("psd.png")
+    if not args.quiet:
+        print(f"{fs.name}: {res.t[-1]:g} s simulated in {res.wall_time_s * 1e3:.1f} ms "
+              f"({res.stats['steps']} steps); wrote {', '.join(written)} to {args.out}")
+        print(json.dumps({k: summary[k] for k in summary if k not in ("solver",)}, indent=None))
+    return 0
+
+
+class ValueError_(ValueError):
+    pass
+
+
+def cmd_units(args) -> int:
+    from . import unit_types
+
+    for name, desc in unit_types().items():
+        print(f"{name:24s} {desc}")
+    return 0
+
+
+def cmd_describe(args) -> int:
+    from . import load
+
+    import pandas as pd
+
+    with pd.option_context("display.max_rows", None, "display.width", 200, "display.max_colwidth", 60):
+        print(load(args.scene).describe())
+    return 0
+
+
+def cmd_bench(args) -> int:
+    from . import bench
+
+    return bench.main(args)
+
+
+def main(argv=None) -> int:
+    p = _Parser(prog="granuflow", description="spray fluidized-bed flowsheet simulation")
+    sub = p.add_subparsers(dest="cmd", required=True, parser_class=_Parser)
+    r = sub.add_parser("run", help="simulate a scene and write summary.json, CSV and plots")
+    r.add_argument("scene")
+    r.add_argument("--out", required=True, help="output folder (created)")
+    r.add_argument("--set", action="append", metavar="UNIT.PARAM=VALUE", help="override a parameter (unit allowed)")
+    r.add_argument("--t-end", help="end time in seconds (or with a unit, e.g. '60 min')")
+    r.add_argument("--quiet", action="store_true")
+    r.set_defaults(func=cmd_run)
+    u = sub.add_parser("units", help="list the built-in unit types")
+    u.set_defaults(func=cmd_units)
+    d = sub.add_parser("describe", help="list a scene's parameters with units, bounds and sources")
+    d.add_argument("scene")
+    d.set_defaults(func=cmd_describe)
+    b = sub.add_parser("bench", help="benchmarks: speed against error (never pass/fail on time)")
+    b.add_argument("what", choices=["core", "pbm"])
+    b.add_argument("--json", action="store_true", help="print JSON records")
+    b.add_argument("--repeats", type=int, default=7)
+    b.set_defaults(func=cmd_bench)
+    args = p.parse_args(argv)
+
+    from . import _core
+
+    try:
+        return args.func(args)
+    except (_core.ConfigError, ValueError_, FileNotFoundError) as e:
+        print(f"granuflow: bad input: {_one_line(e)}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except _core.SolverError as e:
+        print(f"granuflow: solver failure: {_one_line(e)}", file=sys.stderr)
+        return EXIT_SOLVER
+
+
+def _one_line(e: BaseException) -> str:
+    return " ".join(str(e).split())

@@ -1,0 +1,129 @@
+"""Flowsheets loaded from scene files: parameters by "unit.param", inputs, simulation."""
+from __future__ import annotations
+
+from typing import Iterable, Mapping, Sequence
+
+import numpy as np
+
+from . import _core
+from .result import Result
+
+
+class Flowsheet:
+    """A flowsheet built from a scene file.
+
+    Parameters are addressed as ``"unit.param"``; values are SI floats or strings with a unit
+    (``"60 degC"``, ``"90 g/min"``). Changing a parameter never rebuilds the flowsheet.
+    """
+
+    def __init__(self, scene: "_core.Scene"):
+        self._scene = scene
+
+    # -- identity -------------------------------------------------------------------------------
+    @property
+    def name(self) -> str:
+        return self._scene.name
+
+    @property
+    def path(self) -> str:
+        return self._scene.path
+
+    @property
+    def description(self) -> str:
+        return self._scene.description
+
+    @property
+    def t_end(self) -> float:
+        """Default end time of a run in s (from the scene file)."""
+        return self._scene.t_end
+
+    @property
+    def params(self) -> list[str]:
+        return self._scene.param_names()
+
+    @property
+    def state_names(self) -> list[str]:
+        return self._scene.state_names()
+
+    @property
+    def output_names(self) -> list[str]:
+        return self._scene.output_names()
+
+    @property
+    def extra(self) -> dict:
+        """Scene keys the core does not interpret (plots, sweep, notes)."""
+        import yaml
+
+        return yaml.safe_load(self._scene.extra_yaml) or {}
+
+    # -- parameters -----------------------------------------------------------------------------
+    def get(self, name: str) -> float:
+        """Current value of ``name`` in SI units."""
+        return self._scene.get(name)
+
+    def set(self, name: str, value: float | str) -> "Flowsheet":
+        """Set ``name`` (SI float, or string with a unit). Raises ConfigError outside the bounds."""
+        self._scene.set(name, value)
+        return self
+
+    def update(self, values: Mapping[str, float | str]) -> "Flowsheet":
+        for k, v in values.items():
+            self.set(k, v)
+        return self
+
+    def spec(self, name: str) -> dict:
+        """Declared unit, bounds, default, description and source of a parameter."""
+        return self._scene.spec(name)
+
+    def describe(self):
+        """All parameters as a pandas DataFrame (value, SI unit, bounds, source)."""
+        import pandas as pd
+
+        rows = [{"param": p, **self.spec(p)} for p in self.params]
+        return pd.DataFrame(rows).set_index("param")
+
+    def set_input(self, name: str, times: Sequence[float], values: Sequence[float | str], *,
+                  interp: str = "linear") -> "Flowsheet":
+        """Drive parameter ``name`` by a piecewise-linear (or ``interp="step"``) function of time (s)."""
+        self._scene.set_input(name, [float(t) for t in np.asarray(times, dtype=float)], list(values), interp)
+        return self
+
+    def set_t_end(self, t_end: float) -> "Flowsheet":
+        self._scene.set_t_end(float(t_end))
+        return self
+
+    def clone(self) -> "Flowsheet":
+        """An independent copy with the same parameter values (for threads and sweeps)."""
+        return Flowsheet(self._scene.clone())
+
+    def unit_settings(self) -> dict:
+        return self._scene.unit_settings()
+
+    # -- simulation -----------------------------------------------------------------------------
+    def simulate(self, t_end: float | None = None, *, t_out: Iterable[float] | None = None,
+                 n_out: int | None = None, rtol: float | None = None, atol: float | None = None,
+                 sensitivities: Sequence[str] = (), linear_solver: str | None = None,
+                 max_steps: int | None = None) -> Result:
+        """Integrate the flowsheet; the GIL is released during the solve.
+
+        Raises ``SolverError`` (with ``.t``, ``.unit``, ``.worst_residual``) if the integrator fails and
+        ``ConfigError`` for invalid options.
+        """
+        raw = self._scene.simulate(
+            t_end=None if t_end is None else float(t_end),
+            t_out=None if t_out is None else [float(x) for x in np.asarray(list(t_out), dtype=float)],
+            n_out=n_out, rtol=rtol, atol=atol, sensitivities=list(sensitivities),
+            linear_solver=linear_solver, max_steps=max_steps)
+        return Result(raw, scene_name=self.name, summary_map=dict(self._scene.summary_map))
+
+    def __repr__(self) -> str:
+        return f"<granuflow.Flowsheet {self.name!r}: {len(self.state_names)} states, {len(self.params)} parameters>"
+
+
+def load(path: str) -> Flowsheet:
+    """Load a scene file (YAML). Raises ConfigError naming the file, the key and what is allowed."""
+    return Flowsheet(_core.load_scene(str(path)))
+
+
+def load_text(text: str, label: str = "<text>") -> Flowsheet:
+    return Flowsheet(_core.load_scene_text(text, label))

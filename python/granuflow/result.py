@@ -1,0 +1,141 @@
+"""Simulation results: NumPy arrays first; pandas only when asked for (timeseries)."""
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+
+_BALANCE = re.compile(r"^(?:.*\.)?balance_(water|solids|energy)_(in|out|hold)$")
+_PSD = re.compile(r"^(.*)\.psd_(d|m)_(\d+)$")
+_STANDARD_KEYS = ("d10_um", "d50_um", "d90_um", "bed_moisture", "T_gas_out_K")
+
+
+class Result:
+    """The outcome of one simulation.
+
+    Attributes: ``t`` (s), ``y`` [time, state], ``state_names``, ``outputs`` [time, output],
+    ``output_names``, ``sens`` [time, param, state], ``sens_params``, ``stats`` (solver statistics),
+    ``wall_time_s``.
+    """
+
+    def __init__(self, raw: dict, scene_name: str = "", summary_map: dict | None = None):
+        self.t = raw["t"]
+        self.y = raw["y"]
+        self.yp = raw["yp"]
+        self.state_names = list(raw["state_names"])
+        self.outputs = raw["outputs"]
+        self.output_names = list(raw["output_names"])
+        self.sens = raw["sens"]
+        self.sens_params = list(raw["sens_params"])
+        self.stats = dict(raw["stats"])
+        self.wall_time_s = raw["wall_time_s"]
+        self.rtol = raw.get("rtol")
+        self.t_end = raw.get("t_end", float(self.t[-1]))
+        self.scene_name = scene_name
+        self.summary_map = dict(summary_map or {})
+        self._index = {n: ("y", i) for i, n in enumerate(self.state_names)}
+        self._index.update({n: ("o", i) for i, n in enumerate(self.output_names)})
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        """Time series of a state or reported output by its qualified name."""
+        try:
+            kind, i = self._index[name]
+        except KeyError:
+            raise KeyError(f"{name!r} is neither a state nor an output "
+                           f"(e.g. {', '.join(list(self._index)[:8])}, ...)") from None
+        return self.y[:, i] if kind == "y" else self.outputs[:, i]
+
+    def __contains__(self, name: str) -> bool:
+        return name in self._index
+
+    def sensitivity(self, state: str, param: str) -> np.ndarray:
+        """d state / d param over time (requires ``simulate(sensitivities=[param])``)."""
+        return self.sens[:, self.sens_params.index(param), self.state_names.index(state)]
+
+    @property
+    def timeseries(self):
+        """All states and outputs as a DataFrame indexed by time in s."""
+        import pandas as pd
+
+        data = np.hstack([self.y, self.outputs]) if self.outputs.size else self.y
+        df = pd.DataFrame(data, columns=self.state_names + self.output_names)
+        df.index = pd.Index(self.t, name="t_s")
+        return df
+
+    # -- particle size distribution -------------------------------------------------------------
+    def psd_units(self) -> list[str]:
+        return sorted({m.group(1) for n in self.output_names if (m := _PSD.match(n))})
+
+    def psd(self, t: float, unit: str | None = None):
+        """Mass-based size distribution at the output time nearest to ``t``.
+
+        Returns a DataFrame with pivot diameter (µm), class mass (kg), mass fraction and cumulative Q3.
+        """
+        import pandas as pd
+
+        units = self.psd_units()
+        if not units:
+            raise ValueError("this result has no particle size distribution (no unit reports psd_d_i / psd_m_i)")
+        unit = unit or units[0]
+        k = int(np.argmin(np.abs(self.t - t)))
+        d = [(int(m.group(3)), j) for j, n in enumerate(self.output_names)
+             if (m := _PSD.match(n)) and m.group(1) == unit and m.group(2) == "d"]
+        w = [(int(m.group(3)), j) for j, n in enumerate(self.output_names)
+             if (m := _PSD.match(n)) and m.group(1) == unit and m.group(2) == "m"]
+        d = [self.outputs[k, j] for _, j in sorted(d)]
+        w = np.array([self.outputs[k, j] for _, j in sorted(w)])
+        frac = w / w.sum() if w.sum() > 0 else w
+        return pd.DataFrame({"d_um": np.array(d) * 1e6, "mass_kg": w, "mass_fraction": frac,
+                             "Q3": np.cumsum(frac)}).rename_axis("class")
+
+    # -- summary --------------------------------------------------------------------------------
+    def balance_closure(self) -> dict:
+        """Relative closure error per conserved quantity at the final time:
+        |hold(t) - hold(0) - (in - out)| / max(|hold(0)|, |hold(t)|, |in|, |out|); None if not tracked."""
+        acc: dict = {}
+        for j, n in enumerate(self.output_names):
+            m = _BALANCE.match(n)
+            if m:
+                q, kind = m.groups()
+                acc.setdefault(q, {"in": 0.0, "out": 0.0, "hold0": 0.0, "hold": 0.0})
+                col = self.outputs[:, j]
+                if kind == "hold":
+                    acc[q]["hold0"] += col[0]
+                    acc[q]["hold"] += col[-1]
+                else:
+                    acc[q][kind] += col[-1] - col[0]
+        out = {}
+        for q in ("water", "solids", "energy"):
+            if q not in acc:
+                out[f"{q}_rel"] = None
+                continue
+            a = acc[q]
+            scale = max(abs(a["hold0"]), abs(a["hold"]), abs(a["in"]), abs(a["out"]), 1e-300)
+            out[f"{q}_rel"] = _finite(abs(a["hold"] - a["hold0"] - (a["in"] - a["out"])) / scale)
+        return out
+
+    @property
+    def summary(self) -> dict:
+        """The fields of summary.json (DESIGN.md contract); null where the scene has no such quantity."""
+        s = {"scene": self.scene_name, "t_end_s": float(self.t[-1])}
+        for key in _STANDARD_KEYS:
+            s[key] = None
+        for key, src in self.summary_map.items():
+            v = float(self[src][-1])
+            s[key] = _finite(v * 1e6 if key.endswith("_um") else v)
+        s["balance"] = self.balance_closure()
+        s["wall_time_s"] = self.wall_time_s
+        st = self.stats
+        s["solver"] = {"states": st["states"], "steps": st["steps"], "residuals": st["residuals"],
+                       "jacobians": st["jacobians"], "linear_solver": st["linear_solver"],
+                       "reinits": st["reinits"], "rtol": self.rtol}
+        return s
+
+    def __repr__(self) -> str:
+        return (f"<granuflow.Result {self.scene_name!r}: {len(self.t)} times to {self.t[-1]:g} s, "
+                f"{len(self.state_names)} states, {self.stats['steps']} steps, {self.wall_time_s * 1e3:.1f} ms>")
+
+
+def _finite(v):
+    return float(v) if v is not None and math.isfinite(v) else None

@@ -1,0 +1,34 @@
+// granuflow._core: the private compiled core. The public API is the pure-Python package granuflow.
+#include <pybind11/pybind11.h>
+
+#include "granuflow/errors.hpp"
+
+namespace py = pybind11;
+
+namespace granuflow::python {
+void register_flowsheet(py::module_& m);
+}
+
+PYBIND11_MODULE(_core, m) {
+  m.doc() = "granuflow compiled core (use the granuflow package)";
+  // ConfigError -> ValueError subclass; SolverError -> RuntimeError subclass with t, unit, worst_residual.
+  static py::exception<granuflow::ConfigError> config_error(m, "ConfigError", PyExc_ValueError);
+  static py::exception<granuflow::SolverError> solver_error(m, "SolverError", PyExc_RuntimeError);
+  static py::exception<granuflow::CalibrationError> calib_error(m, "CalibrationError", PyExc_RuntimeError);
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const granuflow::SolverError& e) {
+      py::object err = py::reinterpret_borrow<py::object>(solver_error.ptr())(e.what());
+      err.attr("t") = e.t();
+      err.attr("unit") = e.unit();
+      err.attr("worst_residual") = e.worst_residual();
+      PyErr_SetObject(solver_error.ptr(), err.ptr());
+    } catch (const granuflow::ConfigError& e) {
+      config_error(e.what());
+    } catch (const granuflow::CalibrationError& e) {
+      calib_error(e.what());
+    }
+  });
+  granuflow::python::register_flowsheet(m);
+}

@@ -1,0 +1,182 @@
+// Scenes, parameters, inputs and simulation. Arguments are converted at the edge; the GIL is released for solves.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <algorithm>
+#include <chrono>
+
+#include "granuflow/dae_system.hpp"
+#include "granuflow/errors.hpp"
+#include "granuflow/quantity.hpp"
+#include "granuflow/scene.hpp"
+#include "granuflow/simulator.hpp"
+#include "units/registry.hpp"
+
+namespace py = pybind11;
+using namespace pybind11::literals;
+
+namespace granuflow::python {
+namespace {
+
+py::array_t<double> as_array(const std::vector<double>& v, std::vector<py::ssize_t> shape) {
+  py::array_t<double> a(shape);
+  std::copy(v.begin(), v.end(), a.mutable_data());
+  return a;
+}
+
+double value_for(const Scene& s, const std::string& name, const py::handle& v) {
+  if (py::isinstance<py::str>(v))
+    return parse_param_value(*s.flowsheet, name, v.cast<std::string>(), "parameter " + name);
+  return v.cast<double>();
+}
+
+py::dict spec_dict(const ParamSpec& p, double value, bool input) {
+  return py::dict("unit"_a = p.unit, "value"_a = value, "default"_a = p.value, "lower"_a = p.lower,
+                  "upper"_a = p.upper, "description"_a = p.description, "source"_a = p.source, "input"_a = input);
+}
+
+py::dict simulate(Scene& s, std::optional<double> t_end, std::optional<std::vector<double>> t_out,
+                  std::optional<int> n_out, std::optional<double> rtol, std::optional<double> atol,
+                  std::vector<std::string> sensitivities, std::optional<std::string> linear_solver,
+                  std::optional<long> max_steps) {
+  SimOptions o = s.options;
+  if (t_end) {
+    o.t_end = *t_end;
+    if (!t_out) o.t_out.clear();
+  }
+  if (t_out) o.t_out = *t_out;
+  if (n_out) o.n_out = *n_out, o.t_out.clear();
+  if (rtol) o.rtol = *rtol;
+  if (atol) o.atol = *atol;
+  if (linear_solver) o.linear_solver = *linear_solver;
+  if (max_steps) o.max_steps = *max_steps;
+  o.sensitivities = std::move(sensitivities);
+  SimResult r;
+  {
+    py::gil_scoped_release release;
+    r = granuflow::simulate(*s.flowsheet, o);
+  }
+  const auto nt = static_cast<py::ssize_t>(r.t.size());
+  const auto ns = static_cast<py::ssize_t>(r.state_names.size());
+  const auto no = static_cast<py::ssize_t>(r.output_names.size());
+  const auto np = static_cast<py::ssize_t>(r.sens_params.size());
+  py::dict stats("steps"_a = r.stats.steps, "residuals"_a = r.stats.residuals, "jacobians"_a = r.stats.jacobians,
+                 "linear_setups"_a = r.stats.linear_setups, "nonlinear_iterations"_a = r.stats.nonlinear_iterations,
+                 "error_test_failures"_a = r.stats.error_test_failures,
+                 "nonlinear_failures"_a = r.stats.nonlinear_failures, "reinits"_a = r.stats.reinits,
+                 "states"_a = r.stats.states, "linear_solver"_a = r.stats.linear_solver);
+  return py::dict("t"_a = as_array(r.t, {nt}), "y"_a = as_array(r.y, {nt, ns}), "yp"_a = as_array(r.yp, {nt, ns}),
+                  "state_names"_a = r.state_names, "outputs"_a = as_array(r.outputs, {nt, no}),
+                  "output_names"_a = r.output_names, "sens"_a = as_array(r.sens, {nt, np, ns}),
+                  "sens_params"_a = r.sens_params, "stats"_a = stats, "wall_time_s"_a = r.wall_time_s,
+                  "rtol"_a = o.rtol, "atol"_a = o.atol, "t_end"_a = o.t_end);
+}
+
+// Median wall time of one residual and of one Jacobian (dense below dense_limit states, else sparse) at the
+// initial state, for the ns/state figures of the core benchmark.
+py::dict time_residual(Scene& s, int repeats, int dense_limit) {
+  py::gil_scoped_release release;
+  DaeSystem sys(*s.flowsheet);
+  const int n = sys.size();
+  std::vector<double> y, yp(n, 0.0), r(n);
+  sys.initial_values(y);
+  const bool dense = n <= dense_limit;
+  std::vector<double> jd(dense ? size_t(n) * n : 0), js(dense ? 0 : sys.pattern().nnz());
+  auto median = [&](auto&& f) {
+    std::vector<double> t;
+    for (int k = 0; k < repeats; ++k) {
+      const auto a = std::chrono::steady_clock::now();
+      int inner = 0;
+      double el = 0;
+      do {  // repeat fast calls until ~2 ms elapse, for timer resolution
+        f();
+        ++inner;
+        el = std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count();
+      } while (el < 2e-3);
+      t.push_back(el / inner);
+    }
+    std::sort(t.begin(), t.end());
+    return t[t.size() / 2];
+  };
+  const double tr = median([&] { sys.residual(0.0, y.data(), yp.data(), r.data()); });
+  const double tj = median([&] {
+    sys.jacobian(0.0, y.data(), yp.data(), 1.0, dense ? jd.data() : nullptr, dense ? nullptr : js.data());
+  });
+  py::gil_scoped_acquire acquire;
+  return py::dict("states"_a = n, "residual_s"_a = tr, "jacobian_s"_a = tj, "dense"_a = dense,
+                  "nnz"_a = dense ? long(n) * n : long(sys.pattern().nnz()));
+}
+
+}  // namespace
+
+void register_flowsheet(py::module_& m) {
+  const auto& reg = units::builtin();
+  m.def("unit_types", [&reg] {
+    py::dict d;
+    for (const auto& n : reg.names()) d[py::str(n)] = reg.description(n);
+    return d;
+  }, "Built-in unit types and their descriptions.");
+  m.def("to_si", &to_si, "value"_a, "unit"_a, "si_unit"_a, "where"_a = "value");
+
+  py::class_<Scene>(m, "Scene")
+      .def_readonly("path", &Scene::path)
+      .def_readonly("name", &Scene::name)
+      .def_readonly("description", &Scene::description)
+      .def_readonly("summary_map", &Scene::summary)
+      .def_readonly("extra_yaml", &Scene::extra_yaml)
+      .def_property_readonly("t_end", [](const Scene& s) { return s.options.t_end; })
+      .def_property_readonly("rtol", [](const Scene& s) { return s.options.rtol; })
+      .def_property_readonly("atol", [](const Scene& s) { return s.options.atol; })
+      .def_property_readonly("t_out", [](const Scene& s) { return s.options.t_out; })
+      .def_property_readonly("n_out", [](const Scene& s) { return s.options.n_out; })
+      .def("set_t_end", [](Scene& s, double t) {
+        SimOptions o = s.options;
+        o.t_end = t;
+        o.t_out.clear();
+        o.validate();
+        s.options = o;
+      })
+      .def("clone", [&reg](const Scene& s) { return clone_scene(s, reg); })
+      .def("param_names", [](const Scene& s) { return s.flowsheet->param_names(); })
+      .def("state_names", [](const Scene& s) { return s.flowsheet->state_names(); })
+      .def("output_names", [](const Scene& s) { return s.flowsheet->output_names(); })
+      .def("n_states", [](const Scene& s) { return s.flowsheet->n_states(); })
+      .def("get", [](const Scene& s, const std::string& name) { return s.flowsheet->param(name); }, "name"_a)
+      .def("set", [](Scene& s, const std::string& name, const py::handle& v) {
+        s.flowsheet->set_param(name, value_for(s, name, v));
+      }, "name"_a, "value"_a)
+      .def("spec", [](const Scene& s, const std::string& name) {
+        const int id = s.flowsheet->param_id(name);
+        return spec_dict(s.flowsheet->param_spec(id), s.flowsheet->param_value(id), s.flowsheet->has_input(id));
+      }, "name"_a)
+      .def("set_input", [](Scene& s, const std::string& name, std::vector<double> times, const py::list& values,
+                           const std::string& interp) {
+        std::vector<double> v;
+        for (const auto& x : values) v.push_back(value_for(s, name, x));
+        PiecewiseLinear::Interp i = PiecewiseLinear::Interp::kLinear;
+        if (interp == "step") i = PiecewiseLinear::Interp::kStep;
+        else if (interp != "linear") throw ConfigError("input " + name + ": interp '" + interp + "' is not one of linear, step");
+        s.flowsheet->set_input(name, PiecewiseLinear(std::move(times), std::move(v), i, "input " + name));
+      }, "name"_a, "times"_a, "values"_a, "interp"_a = "linear")
+      .def("unit_settings", [](const Scene& s) {
+        py::dict d;
+        for (const auto& u : s.flowsheet->units()) {
+          py::dict st;
+          for (const auto& x : u.settings) st[py::str(x.name)] = setting_to_string(x.value);
+          d[py::str(u.name)] = py::make_tuple(u.unit->type(), st);
+        }
+        return d;
+      })
+      .def("time_residual", &time_residual, "repeats"_a = 7, "dense_limit"_a = 400)
+      .def("simulate", &simulate, py::kw_only(), "t_end"_a = py::none(), "t_out"_a = py::none(),
+           "n_out"_a = py::none(), "rtol"_a = py::none(), "atol"_a = py::none(),
+           "sensitivities"_a = std::vector<std::string>{}, "linear_solver"_a = py::none(), "max_steps"_a = py::none());
+
+  m.def("load_scene", [&reg](const std::string& path) { return load_scene(path, reg); }, "path"_a);
+  m.def("load_scene_text", [&reg](const std::string& text, const std::string& label) {
+    return load_scene_text(text, label, reg);
+  }, "text"_a, "label"_a = "<text>");
+}
+
+}  // namespace granuflow::python

@@ -1,0 +1,48 @@
+#!/usr/bin/env bash
+# granuflow's two entry points for a fresh Debian 12 / Ubuntu machine (see README.md):
+#   ./run.sh main   install what is missing (apt-get), build (CMake, Release), run the main job into out/main
+#   ./run.sh test   same setup, then every test: GoogleTest (ctest), pytest, notebooks
+# Also: ./run.sh setup | build | bench
+set -euo pipefail
+cd "$(dirname "$0")"
+
+PACKAGES=(cmake ninja-build g++ pkg-config
+  libsundials-dev libeigen3-dev libceres-dev libnlopt-cxx-dev pybind11-dev libgtest-dev
+  libyaml-cpp-dev nlohmann-json3-dev
+  python3-dev python3-numpy python3-scipy python3-matplotlib python3-pandas python3-yaml python3-pytest
+  python3-nbclient python3-nbformat python3-ipykernel jupyter-nbconvert python3-distributed python3-tqdm)
+MAIN_SCENE=flowsheets/demo_tanks.yaml
+
+setup() {
+  local missing=()
+  for p in "${PACKAGES[@]}"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+  done
+  if ((${#missing[@]})); then
+    echo "run.sh: installing ${missing[*]}"
+    local sudo=""
+    [ "$(id -u)" -eq 0 ] || sudo="sudo"
+    $sudo apt-get update -q
+    DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -q --no-install-recommends "${missing[@]}"
+  fi
+}
+
+build() {
+  cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DGRANUFLOW_BUILD_PYTHON=ON \
+    -DPython_EXECUTABLE=/usr/bin/python3 >/dev/null
+  cmake --build build -j "$(nproc)"
+}
+
+run_tests() {
+  (cd build && ctest --output-on-failure -j "$(nproc)" -L fast)
+  PYTHONPATH="$PWD/build/python" /usr/bin/python3 -m pytest -q tests/python
+}
+
+case "${1:-}" in
+  setup) setup ;;
+  build) setup && build ;;
+  main) setup && build && ./build/granuflow run "$MAIN_SCENE" --out out/main ;;
+  test) setup && build && run_tests ;;
+  bench) setup && build && ./build/granuflow bench core && ./build/granuflow bench pbm ;;
+  *) echo "usage: ./run.sh main|test|setup|build|bench" >&2; exit 2 ;;
+esac

@@ -1,0 +1,134 @@
+"""The Python API and the command line on the demo flowsheet, which has an exact answer."""
+import hashlib
+import json
+import math
+import os
+import subprocess
+
+import numpy as np
+import pytest
+from scipy.linalg import expm
+
+import granuflow as gf
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+DEMO = os.path.join(ROOT, "flowsheets", "demo_tanks.yaml")
+CLI = os.path.join(ROOT, "build", "granuflow")
+
+
+def exact_tank_temperatures(t, F=0.5, split=0.6, M1=100.0, M2=200.0, Q1=2e4, cp=4180.0, Ta=300.0, Tb=350.0, ts=100.0):
+    r = 1 - split
+    m = F / split
+    A = np.array([[-m / M1, m * r / M1], [m / M2, -m / M2]])
+
+    def advance(x, dt, tf):
+        b = np.array([m * (1 - r) * tf / M1 + Q1 / (M1 * cp), 0.0])
+        xs = -np.linalg.solve(A, b)
+        return expm(A * dt) @ (x - xs) + xs
+
+    x0 = np.array([Ta, Ta])
+    return advance(x0, t, Ta) if t <= ts else advance(advance(x0, ts, Ta), t - ts, Tb)
+
+
+def test_python_simulation_matches_analytic_solution():
+    fs = gf.load(DEMO)
+    res = fs.simulate(rtol=1e-10, atol=1e-12)
+    for k in range(0, len(res.t), 20):
+        T1, T2 = exact_tank_temperatures(res.t[k])
+        assert res["tank1.T"][k] == pytest.approx(T1, rel=1e-6)
+        assert res["tank2.T"][k] == pytest.approx(T2, rel=1e-6)
+    df = res.timeseries
+    assert df.shape == (len(res.t), len(res.state_names) + len(res.output_names))
+    assert res.summary["balance"]["energy_rel"] < 1e-9
+
+
+def test_parameter_change_without_reload_and_units_at_the_edge():
+    fs = gf.load(DEMO)
+    fs.set("tank1.Q", "30 kW")
+    assert fs.get("tank1.Q") == 30000.0
+    hot = fs.simulate()["tank2.T"][-1]
+    fs.set("tank1.Q", 0.0)
+    cold = fs.simulate()["tank2.T"][-1]
+    t_end = fs.t_end
+    assert hot == pytest.approx(exact_tank_temperatures(t_end, Q1=3e4)[1], rel=1e-6)
+    assert cold == pytest.approx(exact_tank_temperatures(t_end, Q1=0.0)[1], rel=1e-6)
+
+
+def test_sensitivity_from_python_equals_finite_difference():
+    fs = gf.load(DEMO)
+    res = fs.simulate(t_end=500, sensitivities=["tank1.Q"], rtol=1e-10, atol=1e-12)
+    s = res.sensitivity("tank2.T", "tank1.Q")[-1]
+    h = 50.0
+    up = fs.clone().set("tank1.Q", 2e4 + h).simulate(t_end=500, rtol=1e-10, atol=1e-12)["tank2.T"][-1]
+    dn = fs.clone().set("tank1.Q", 2e4 - h).simulate(t_end=500, rtol=1e-10, atol=1e-12)["tank2.T"][-1]
+    assert s == pytest.approx((up - dn) / (2 * h), rel=1e-5)
+
+
+def test_errors_are_typed_and_name_the_thing():
+    fs = gf.load(DEMO)
+    with pytest.raises(gf.ConfigError, match=r"tank1\.mass = -3 kg: violates"):
+        fs.set("tank1.mass", -3)
+    with pytest.raises(ValueError, match="parameters of tank1"):
+        fs.set("tank1.volume", 1.0)
+    with pytest.raises(gf.ConfigError, match="unknown unit 'furlong'"):
+        fs.set("tank1.mass", "3 furlong")
+    fs._scene  # noqa: B018 - the flowsheet stays usable after errors
+    assert fs.simulate(t_end=10).t[-1] == 10
+
+
+def _scene_with(tmp_path, old, new, name="bad.yaml"):
+    text = open(DEMO).read()
+    assert old in text
+    p = tmp_path / name
+    p.write_text(text.replace(old, new))
+    return str(p)
+
+
+@pytest.mark.parametrize("old,new,needle", [
+    ("t_end: 2000 s\n", "", "t_end: missing required key"),                       # missing
+    ("    params: {split: 0.6}", "    params: {splitt: 0.6}", "splitter.params.splitt"),  # misspelt
+    ("    params: {split: 0.6}", "    params: {split: [0.6]}", "expected a single value"),  # mistyped
+    ("    params: {split: 0.6}", "    params: {split: 1.6}", "split = 1.6: violates 0 <= split <= 1"),  # range
+    ("scene: demo_tanks", "scene: demo_tanks\nspeed: 3", "speed: unknown key"),   # unknown key
+    ("type: liquid_splitter", "type: liquid_spliter", "unknown unit type 'liquid_spliter'"),
+    ("  - splitter.out2 -> mixer.in2\n", "", "mixer.in2 (liquid, in) is not connected"),
+    ("mass: 100 kg", "mass: 100 degC", "unit 'degC' is K, but the value must be in kg"),
+])
+def test_cli_bad_input_exits_2_with_one_line(tmp_path, old, new, needle):
+    path = _scene_with(tmp_path, old, new)
+    before = hashlib.sha256(open(path, "rb").read()).hexdigest()
+    p = subprocess.run([CLI, "run", path, "--out", str(tmp_path / "out")], capture_output=True, text=True, timeout=60)
+    assert p.returncode == 2, p.stderr
+    assert needle in p.stderr
+    assert len(p.stderr.strip().splitlines()) == 1
+    assert path in p.stderr or "bad input" in p.stderr
+    assert hashlib.sha256(open(path, "rb").read()).hexdigest() == before  # the input is never modified
+
+
+def test_cli_solver_failure_exits_3_naming_time_and_unit(tmp_path):
+    path = _scene_with(tmp_path, "solver: {rtol: 1e-8, atol: 1e-10}", "solver: {rtol: 1e-8, atol: 1e-10, max_steps: 5}")
+    p = subprocess.run([CLI, "run", path, "--out", str(tmp_path / "out")], capture_output=True, text=True, timeout=60)
+    assert p.returncode == 3, p.stderr
+    assert "failed at t = " in p.stderr and "unit '" in p.stderr
+    assert not (tmp_path / "out" / "summary.json").exists()
+    with pytest.raises(gf.SolverError) as e:
+        gf.load(path).simulate()
+    assert e.value.t > 0 and e.value.unit
+
+
+def test_cli_run_writes_summary_csv_and_plots(tmp_path):
+    out = tmp_path / "out"
+    p = subprocess.run([CLI, "run", DEMO, "--out", str(out), "--set", "tank1.Q=25 kW", "--t-end", "10 min"],
+                       capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0, p.stderr
+    s = json.loads((out / "summary.json").read_text())
+    for key in ("scene", "t_end_s", "d10_um", "d50_um", "d90_um", "bed_moisture", "T_gas_out_K", "balance",
+                "wall_time_s", "solver"):
+        assert key in s
+    assert s["t_end_s"] == 600.0
+    assert set(s["balance"]) == {"water_rel", "solids_rel", "energy_rel"}
+    assert all(v is not None and v < 1e-9 for v in s["balance"].values())
+    assert set(s["solver"]) >= {"states", "steps", "residuals", "jacobians"}
+    assert math.isfinite(s["T_out_K"])
+    assert (out / "timeseries.csv").stat().st_size > 1000
+    assert (out / "plot_0.png").read_bytes()[:4] == b"\x89PNG"
