@@ -87,7 +87,7 @@ Status DaeSystem::residual(double t, const double* y, const double* yp, double* 
   fill_params(t);
   const auto& units = fs_.units();
   for (size_t u = 0; u < units.size(); ++u) {
-    Ctx<double> c{t, y, yp, pvals_[u].data(), r + units[u].offset, units[u].offset, &units[u].port_index};
+    Ctx<double> c{t, y, yp, pvals_[u].data(), r + units[u].offset, units[u].offset, &units[u].port_index, segment_start_};
     const Status s = units[u].unit->residual(c);
     if (s != Status::kOk) return s;
   }
@@ -144,7 +144,7 @@ void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj,
     if (ns == 0) continue;
     const auto& cols = local_cols_[u];
     // Analytic Jacobian when the unit supplies one.
-    Ctx<double> cd{t, y, yp, pvals_[u].data(), rbuf_.data(), units[u].offset, &units[u].port_index};
+    Ctx<double> cd{t, y, yp, pvals_[u].data(), rbuf_.data(), units[u].offset, &units[u].port_index, segment_start_};
     if (dense) {
       DenseSink sink(dense, n_, units[u].offset);
       if (units[u].unit->jacobian(cd, cj, sink)) continue;
@@ -161,7 +161,7 @@ void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj,
         xj_[cols[j]].v[j - c0] = 1.0;
         xdj_[cols[j]].v[j - c0] = cj;
       }
-      Ctx<Jet> c{t, xj_.data(), xdj_.data(), pj.data(), rj_.data(), units[u].offset, &units[u].port_index};
+      Ctx<Jet> c{t, xj_.data(), xdj_.data(), pj.data(), rj_.data(), units[u].offset, &units[u].port_index, segment_start_};
       units[u].unit->residual(c);
       for (size_t j = c0; j < c1; ++j) {
         xj_[cols[j]].v[j - c0] = 0.0;
@@ -201,7 +201,7 @@ Status DaeSystem::sens_residual(double t, const double* y, const double* yp, con
         if (pu == static_cast<int>(u)) pj[pk].v[d - d0] = 1.0;
       }
       Ctx<Jet> c{t, xj_.data(), xdj_.data(), pj.data(), rj_.data() + units[u].offset, units[u].offset,
-                 &units[u].port_index};
+                 &units[u].port_index, segment_start_};
       const Status s = units[u].unit->residual(c);
       if (s != Status::kOk) return s;
     }
@@ -262,7 +262,7 @@ void DaeSystem::report(double t, const double* y, const double* yp, double* out)
   for (size_t u = 0; u < units.size(); ++u) {
     const int no = static_cast<int>(units[u].spec.outputs().size());
     if (no == 0) continue;
-    Ctx<double> c{t, y, yp, pvals_[u].data(), rbuf_.data(), units[u].offset, &units[u].port_index};
+    Ctx<double> c{t, y, yp, pvals_[u].data(), rbuf_.data(), units[u].offset, &units[u].port_index, segment_start_};
     units[u].unit->report(c, out + k);
     k += no;
   }

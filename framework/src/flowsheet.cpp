@@ -127,7 +127,7 @@ void Flowsheet::connect(const std::string& from, const std::string& to) {
   const auto a = split_port(from), b = split_port(to);
   const PortSpec& pa = units_[a.first].spec.ports()[a.second];
   const PortSpec& pb = units_[b.first].spec.ports()[b.second];
-  if (pa.dir != PortDir::Out)
+  if (pa.dir == PortDir::In)
     throw ConfigError("connection " + from + " -> " + to + ": '" + from + "' is an inlet; a connection goes out -> in");
   if (pb.dir != PortDir::In)
     throw ConfigError("connection " + from + " -> " + to + ": '" + to + "' is an outlet; a connection goes out -> in");
@@ -137,8 +137,13 @@ void Flowsheet::connect(const std::string& from, const std::string& to) {
   if (pa.classes != pb.classes)
     throw ConfigError("connection " + from + " -> " + to + ": size-class counts differ (" +
                       std::to_string(pa.classes) + " vs " + std::to_string(pb.classes) + ")");
-  for (auto [u, p, q] : {std::tuple{a.first, a.second, from}, std::tuple{b.first, b.second, to}})
-    if (units_[u].peers[p].first >= 0) throw ConfigError("port " + q + " is connected twice");
+  if (units_[b.first].peers[b.second].first >= 0) throw ConfigError("port " + to + " is connected twice");
+  if (pa.dir == PortDir::Out && units_[a.first].peers[a.second].first >= 0)
+    throw ConfigError("port " + from + " is connected twice (only a probe port may feed several inlets)");
+  if (pa.dir == PortDir::Probe) {
+    for (int f : pa.provided)
+      if (f < 0) throw std::logic_error("probe port " + from + " must provide every field");
+  }
   units_[a.first].peers[a.second] = b;
   units_[b.first].peers[b.second] = a;
   connections_.push_back({a, b});
@@ -160,6 +165,10 @@ void Flowsheet::finalize() {
     inst.port_index.assign(ports.size(), {});
     for (size_t p = 0; p < ports.size(); ++p) {
       const std::string where = "port " + inst.name + "." + ports[p].name;
+      if (ports[p].dir == PortDir::Probe) {  // provides everything, read by zero or more units
+        for (int f : ports[p].provided) inst.port_index[p].push_back(inst.offset + f);
+        continue;
+      }
       if (inst.peers[p].first < 0)
         throw ConfigError(where + " (" + to_string(ports[p].kind) + ", " + to_string(ports[p].dir) +
                           ") is not connected");
@@ -270,6 +279,9 @@ bool Flowsheet::has_input(int id) const {
 
 std::vector<double> Flowsheet::breakpoints(double t_end) const {
   std::set<double> bp;
+  for (const auto& u : units_)
+    for (double t : u.unit->breakpoints(u.params.data()))
+      if (t > 0 && t < t_end) bp.insert(t);
   for (const auto& u : units_)
     for (const auto& in : u.inputs)
       if (in)

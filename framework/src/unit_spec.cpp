@@ -69,23 +69,44 @@ std::string to_string(StreamKind k) {
     case StreamKind::Liquid: return "liquid";
     case StreamKind::Solids: return "solids";
     case StreamKind::Heat: return "heat";
+    case StreamKind::Vapour: return "vapour";
+    case StreamKind::Holdup: return "holdup";
+    case StreamKind::Wetting: return "wetting";
   }
   return "?";
 }
 
 StreamKind stream_kind_from_string(const std::string& s) {
-  for (auto k : {StreamKind::Gas, StreamKind::Liquid, StreamKind::Solids, StreamKind::Heat})
+  for (auto k : {StreamKind::Gas, StreamKind::Liquid, StreamKind::Solids, StreamKind::Heat, StreamKind::Vapour,
+                 StreamKind::Holdup, StreamKind::Wetting})
     if (to_string(k) == s) return k;
-  throw ConfigError("unknown stream kind '" + s + "' (allowed: gas, liquid, solids, heat)");
+  throw ConfigError("unknown stream kind '" + s + "' (allowed: gas, liquid, solids, heat, vapour, holdup, wetting)");
 }
 
-std::string to_string(PortDir d) { return d == PortDir::In ? "in" : "out"; }
+std::string to_string(PortDir d) { return d == PortDir::In ? "in" : d == PortDir::Out ? "out" : "probe"; }
 
 std::vector<FieldSpec> stream_fields(StreamKind kind, int classes) {
   switch (kind) {
     case StreamKind::Gas: return {{"mdot", "kg/s"}, {"Y", "kg/kg"}, {"T", "K"}, {"p", "Pa"}};
     case StreamKind::Liquid: return {{"mdot", "kg/s"}, {"T", "K"}, {"w", "kg/kg"}};
     case StreamKind::Heat: return {{"Q", "W"}, {"T", "K"}};
+    case StreamKind::Vapour: return {{"mdot", "kg/s"}, {"T", "K"}};
+    case StreamKind::Holdup: {
+      std::vector<FieldSpec> f;
+      for (int i = 0; i < classes; ++i) f.push_back({"mass_" + std::to_string(i), "kg"});
+      for (int i = 0; i < classes; ++i) f.push_back({"X_" + std::to_string(i), "kg/kg"});
+      f.push_back({"T", "K"});
+      f.push_back({"u0", "m/s"});
+      return f;
+    }
+    case StreamKind::Wetting: {
+      std::vector<FieldSpec> f;
+      for (int i = 0; i < classes; ++i) f.push_back({"mdot_" + std::to_string(i), "kg/s"});
+      for (int i = 0; i < classes; ++i) f.push_back({"fwet_" + std::to_string(i), "-"});
+      for (int i = 0; i < classes; ++i) f.push_back({"Xwet_" + std::to_string(i), "kg/kg"});
+      f.push_back({"T", "K"});
+      return f;
+    }
     case StreamKind::Solids: {
       std::vector<FieldSpec> f;
       for (int i = 0; i < classes; ++i) f.push_back({"mdot_" + std::to_string(i), "kg/s"});

@@ -8,8 +8,10 @@
 
 namespace granuflow {
 
-enum class StreamKind { Gas, Liquid, Solids, Heat };
-enum class PortDir { In, Out };
+enum class StreamKind { Gas, Liquid, Solids, Heat, Vapour, Holdup, Wetting };
+// Out and In ports join exactly one peer. A Probe is an outlet whose fields are all provided by its unit and
+// which carries no material: any number of In ports may read it (a unit exposing its state to closures).
+enum class PortDir { In, Out, Probe };
 
 std::string to_string(StreamKind k);
 StreamKind stream_kind_from_string(const std::string& s);
@@ -21,7 +23,10 @@ struct FieldSpec {
 };
 
 // Field layout of a stream. Solids carry `classes` per-class dry-solid mass flows, then `classes` moistures,
-// then one temperature.
+// then one temperature. Vapour: water-vapour mass flow and its temperature. Holdup (a bed's state, read through
+// a probe): `classes` dry-solid masses, `classes` moistures, bed temperature, superficial gas velocity.
+// Wetting (spray zone -> bed, per class): deposited liquid flows, wetted surface fractions, wet-spot moistures,
+// then the liquid temperature.
 std::vector<FieldSpec> stream_fields(StreamKind kind, int classes);
 
 namespace gas {  // dry-gas mass flow, absolute humidity (kg water / kg dry gas), temperature, pressure
@@ -33,6 +38,21 @@ enum Field { kMdot = 0, kT = 1, kW = 2 };
 namespace heat {  // heat flow from the Out side to the In side, temperature of the providing side
 enum Field { kQ = 0, kT = 1 };
 }
+namespace vapour {
+enum Field { kMdot = 0, kT = 1 };
+}
+namespace holdup {
+inline int mass(int i) { return i; }
+inline int X(int classes, int i) { return classes + i; }
+inline int T(int classes) { return 2 * classes; }
+inline int u0(int classes) { return 2 * classes + 1; }
+}  // namespace holdup
+namespace wetting {
+inline int mdot(int i) { return i; }
+inline int fwet(int classes, int i) { return classes + i; }
+inline int Xwet(int classes, int i) { return 2 * classes + i; }
+inline int T(int classes) { return 3 * classes; }
+}  // namespace wetting
 namespace solids {
 inline int mdot(int i) { return i; }
 inline int X(int classes, int i) { return classes + i; }

@@ -83,6 +83,7 @@ struct Ctx {
   T* r;                  // this unit's residual rows
   int offset;            // global index of own state 0
   const std::vector<std::vector<int>>* port_index;  // per port, per field: global state index
+  double t_seg = 0.0;    // start of the current integration segment (between breakpoints)
 
   const T& x_(int k) const { return x[offset + k]; }
   const T& xd(int k) const { return xdot[offset + k]; }
@@ -123,6 +124,10 @@ class Unit {
   virtual void initial(InitCtx<Jet>& c) const = 0;
   // Optional analytic Jacobian of the whole unit; returns false to let the framework use AD.
   virtual bool jacobian(const Ctx<double>& /*c*/, double /*cj*/, JacobianSink& /*sink*/) const { return false; }
+  // Times where the unit's equations change discontinuously (spray start/stop) for the current parameters;
+  // the simulator stops and re-initializes there. Inside eval(), use Ctx::t_seg (the start of the current
+  // segment) to decide which side of such a time the solver is on.
+  virtual std::vector<double> breakpoints(const double* /*params*/) const { return {}; }
   // Reported outputs (declared with add_output), evaluated at output times.
   virtual void report(const Ctx<double>& /*c*/, double* /*out*/) const {}
 };
