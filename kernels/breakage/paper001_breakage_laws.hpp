@@ -42,7 +42,7 @@ T vogel_peukert_rate(const T& d, const T& e_kin, const T& e_min, const T& k_brea
 }
 
 // Eq. (92), paper 001 (Eqs. (90) and (91) combined), d and d_min in m; Table 10 defaults.
-// With um, K = k' for every d above ~60 um; with mm the rate still grows up to ~1 mm.
+// With um, K is within 3 % of k' for every d >= 60 um; with mm it still grows up to ~1 mm.
 template <class T>
 T breakage_rate(const T& d, BreakageSizeUnit unit = BreakageSizeUnit::kMicrometre,
                 const T& k_break = T(defaults::kBreakageRate), const T& d_min = T(defaults::kBreakageDiameterMin),

@@ -142,6 +142,13 @@ Limited<T> wetted_volume_fraction(const T& f_wet, const T& d, const T& h_pen = T
   return cap_at(T(h_pen * sphere_surface(d) * f_wet / sphere_volume(d)), cap);
 }
 
+// Eq. (57), paper 001, as a volume (m^3), capped at the particle volume like wetted_volume_fraction().
+template <class T>
+Limited<T> wetted_volume(const T& f_wet, const T& d, const T& h_pen = T(defaults::kPenetrationDepth)) {
+  const Limited<T> frac = wetted_volume_fraction(f_wet, d, h_pen);
+  return {frac.value * sphere_volume(d), frac.active};
+}
+
 // Eq. (56), paper 001: solids flow whose wetted volume receives the deposited liquid, kg/s.
 template <class T>
 T exposed_solids_flow(const T& m_solids_flow, const T& wet_volume_fraction) {
