@@ -1,5 +1,7 @@
 #include "liquid_feed.hpp"
 
+#include "granuflow/properties.hpp"
+
 namespace granuflow::units {
 namespace {
 
@@ -14,7 +16,7 @@ class LiquidFeed : public UnitBase<LiquidFeed> {
     s.add_state("T", StateKind::Algebraic, "K", 300.0);
     s.add_state("w", StateKind::Algebraic, "kg/kg", 1.0);
     s.provide_all(s.add_port("out", StreamKind::Liquid, PortDir::Out), 0);
-    s.add_param({"cp", "J/(kg K)", 4180.0, 1.0, 1e5, "heat capacity for the enthalpy account (above 0 K)", ""});
+    s.add_param({"cp", "J/(kg K)", 4180.0, 1.0, 1e5, "heat capacity for the enthalpy account (above 0 degC)", ""});
     // Cumulative amounts fed, so balances close from states rather than from quadrature of outputs.
     s.add_state("mass_in", StateKind::Differential, "kg", 100.0);
     s.add_state("solute_in", StateKind::Differential, "kg", 1.0);
@@ -28,7 +30,7 @@ class LiquidFeed : public UnitBase<LiquidFeed> {
     for (int k = 0; k < 3; ++k) c.res(k) = c.x_(k) - c.par(k);
     c.res(3) = c.xd(3) - c.x_(0);
     c.res(4) = c.xd(4) - c.x_(0) * c.x_(2);
-    c.res(5) = c.xd(5) - c.x_(0) * c.par(3) * c.x_(1);
+    c.res(5) = c.xd(5) - c.x_(0) * props::liquid_water_enthalpy(c.x_(1), c.par(3));
     return Status::kOk;
   }
   template <class T>

@@ -1,5 +1,7 @@
 #include "liquid_product.hpp"
 
+#include "granuflow/properties.hpp"
+
 namespace granuflow::units {
 namespace {
 
@@ -21,7 +23,7 @@ class LiquidProduct : public UnitBase<LiquidProduct> {
     const T& m = c.port(0, liquid::kMdot);
     c.res(0) = c.xd(0) - m;
     c.res(1) = c.xd(1) - m * c.port(0, liquid::kW);
-    c.res(2) = c.xd(2) - m * c.par(0) * c.port(0, liquid::kT);
+    c.res(2) = c.xd(2) - m * props::liquid_water_enthalpy(c.port(0, liquid::kT), c.par(0));
     return Status::kOk;
   }
   template <class T>

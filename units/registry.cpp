@@ -1,9 +1,18 @@
 #include "registry.hpp"
 
+#include "chamber_gas.hpp"
+#include "droplet_evaporation.hpp"
+#include "fluid_bed.hpp"
+#include "gas_inlet.hpp"
+#include "gas_outlet.hpp"
+#include "spray_nozzle.hpp"
+#include "spray_zone.hpp"
+#include "wall_heat_loss.hpp"
 #include "liquid_feed.hpp"
 #include "liquid_mixer.hpp"
 #include "liquid_product.hpp"
 #include "liquid_splitter.hpp"
+#include "pbm_batch.hpp"
 #include "stirred_tank.hpp"
 
 namespace granuflow::units {
@@ -14,6 +23,15 @@ void register_all(Registry<Unit>& r) {
   register_liquid_splitter(r);
   register_liquid_product(r);
   register_stirred_tank(r);
+  register_pbm_batch(r);
+  register_chamber_gas(r);
+  register_droplet_evaporation(r);
+  register_fluid_bed(r);
+  register_gas_inlet(r);
+  register_gas_outlet(r);
+  register_spray_nozzle(r);
+  register_spray_zone(r);
+  register_wall_heat_loss(r);
 }
 
 const Registry<Unit>& builtin() {

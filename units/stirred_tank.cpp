@@ -1,5 +1,7 @@
 #include "stirred_tank.hpp"
 
+#include "granuflow/properties.hpp"
+
 namespace granuflow::units {
 namespace {
 
@@ -48,7 +50,7 @@ class StirredTank : public UnitBase<StirredTank> {
   void report(const Ctx<double>& c, double* out) const override {
     out[0] = c.par(0);
     out[1] = c.par(0) * c.x_(2);
-    out[2] = c.par(0) * c.par(1) * c.x_(1);
+    out[2] = c.par(0) * props::liquid_water_enthalpy(c.x_(1), c.par(1));
     out[3] = c.x_(3);
   }
 };

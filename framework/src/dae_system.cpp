@@ -21,7 +21,9 @@ DaeSystem::DaeSystem(Flowsheet& fs) : fs_(fs) {
     std::set<int> cols;
     const int ns = static_cast<int>(units[u].spec.states().size());
     for (int k = 0; k < ns; ++k) cols.insert(units[u].offset + k);
-    for (const auto& port : units[u].port_index) cols.insert(port.begin(), port.end());
+    for (const auto& port : units[u].port_index)
+      for (int c : port)
+        if (c >= 0) cols.insert(c);
     local_cols_[u].assign(cols.begin(), cols.end());
     for (int c : cols)
       for (int k = 0; k < ns; ++k) col_rows[c].insert(units[u].offset + k);
@@ -57,6 +59,7 @@ DaeSystem::DaeSystem(Flowsheet& fs) : fs_(fs) {
 }
 
 void DaeSystem::reconfigure() {
+  fs_.apply_links();
   auto& units = fs_.units();
   for (size_t u = 0; u < units.size(); ++u) {
     pvals_[u] = units[u].params;
@@ -145,12 +148,15 @@ void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj,
     const auto& cols = local_cols_[u];
     // Analytic Jacobian when the unit supplies one.
     Ctx<double> cd{t, y, yp, pvals_[u].data(), rbuf_.data(), units[u].offset, &units[u].port_index, segment_start_};
+    bool partial = false;
     if (dense) {
       DenseSink sink(dense, n_, units[u].offset);
       if (units[u].unit->jacobian(cd, cj, sink)) continue;
+      partial = units[u].unit->jacobian_part(cd, cj, sink);
     } else {
       SparseSink sink(sparse, block_pos_[u], col_map_[u], static_cast<int>(cols.size()), units[u].name);
       if (units[u].unit->jacobian(cd, cj, sink)) continue;
+      partial = units[u].unit->jacobian_part(cd, cj, sink);
     }
     params_as(static_cast<int>(u), pj);
     rj_.assign(ns, Jet(0.0));
@@ -161,7 +167,8 @@ void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj,
         xj_[cols[j]].v[j - c0] = 1.0;
         xdj_[cols[j]].v[j - c0] = cj;
       }
-      Ctx<Jet> c{t, xj_.data(), xdj_.data(), pj.data(), rj_.data(), units[u].offset, &units[u].port_index, segment_start_};
+      Ctx<Jet> c{t, xj_.data(), xdj_.data(), pj.data(), rj_.data(), units[u].offset, &units[u].port_index, segment_start_,
+                 partial};
       units[u].unit->residual(c);
       for (size_t j = c0; j < c1; ++j) {
         xj_[cols[j]].v[j - c0] = 0.0;
@@ -175,6 +182,16 @@ void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj,
         }
       }
     }
+  }
+}
+
+// Seeds direction `slot` for parameter `id` and the parameters linked to it, where they belong to unit `u`.
+void DaeSystem::seed(int id, int u, size_t slot, std::vector<Jet>& pj) const {
+  auto [pu, pk] = fs_.param_location(id);
+  if (pu == u) pj[pk].v[slot] = 1.0;
+  for (int t : fs_.linked_targets(id)) {
+    auto [tu, tk] = fs_.param_location(t);
+    if (tu == u) pj[tk].v[slot] = 1.0;
   }
 }
 
@@ -196,10 +213,7 @@ Status DaeSystem::sens_residual(double t, const double* y, const double* yp, con
     }
     for (size_t u = 0; u < units.size(); ++u) {
       params_as(static_cast<int>(u), pj);
-      for (size_t d = d0; d < d1; ++d) {
-        auto [pu, pk] = fs_.param_location(params[d]);
-        if (pu == static_cast<int>(u)) pj[pk].v[d - d0] = 1.0;
-      }
+      for (size_t d = d0; d < d1; ++d) seed(params[d], static_cast<int>(u), d - d0, pj);
       Ctx<Jet> c{t, xj_.data(), xdj_.data(), pj.data(), rj_.data() + units[u].offset, units[u].offset,
                  &units[u].port_index, segment_start_};
       const Status s = units[u].unit->residual(c);
@@ -231,10 +245,7 @@ void DaeSystem::initial_sensitivities(const std::vector<int>& params, std::vecto
     const size_t d1 = std::min(params.size(), d0 + kAdChunk);
     for (size_t u = 0; u < units.size(); ++u) {
       params_as(static_cast<int>(u), pj);
-      for (size_t d = d0; d < d1; ++d) {
-        auto [pu, pk] = fs_.param_location(params[d]);
-        if (pu == static_cast<int>(u)) pj[pk].v[d - d0] = 1.0;
-      }
+      for (size_t d = d0; d < d1; ++d) seed(params[d], static_cast<int>(u), d - d0, pj);
       InitCtx<Jet> c{pj.data(), x0.data() + units[u].offset};
       units[u].unit->initial(c);
     }

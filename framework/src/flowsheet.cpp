@@ -137,6 +137,13 @@ void Flowsheet::connect(const std::string& from, const std::string& to) {
   if (pa.classes != pb.classes)
     throw ConfigError("connection " + from + " -> " + to + ": size-class counts differ (" +
                       std::to_string(pa.classes) + " vs " + std::to_string(pb.classes) + ")");
+  if (!pa.grid.empty() && !pb.grid.empty()) {
+    for (size_t i = 0; i < pa.grid.size(); ++i)
+      if (std::abs(pa.grid[i] - pb.grid[i]) > 1e-9 * pa.grid[i])
+        throw ConfigError("connection " + from + " -> " + to + ": size grids differ (pivot " + std::to_string(i) +
+                          ": " + std::to_string(pa.grid[i] * 1e6) + " um vs " + std::to_string(pb.grid[i] * 1e6) +
+                          " um); give both units the same classes, d_min and d_max");
+  }
   if (units_[b.first].peers[b.second].first >= 0) throw ConfigError("port " + to + " is connected twice");
   if (pa.dir == PortDir::Out && units_[a.first].peers[a.second].first >= 0)
     throw ConfigError("port " + from + " is connected twice (only a probe port may feed several inlets)");
@@ -167,6 +174,10 @@ void Flowsheet::finalize() {
       const std::string where = "port " + inst.name + "." + ports[p].name;
       if (ports[p].dir == PortDir::Probe) {  // provides everything, read by zero or more units
         for (int f : ports[p].provided) inst.port_index[p].push_back(inst.offset + f);
+        continue;
+      }
+      if (inst.peers[p].first < 0 && ports[p].optional) {
+        for (int f : ports[p].provided) inst.port_index[p].push_back(f >= 0 ? inst.offset + f : -1);
         continue;
       }
       if (inst.peers[p].first < 0)
@@ -270,6 +281,32 @@ void Flowsheet::set_input(const std::string& qualified, PiecewiseLinear input) {
     }
   }
   units_[u].inputs[k] = std::move(input);
+}
+
+void Flowsheet::link(const std::string& target, const std::string& source) {
+  const int t = param_id(target), s = param_id(source);
+  if (t == s) throw ConfigError("link " + target + ": a parameter cannot follow itself");
+  if (param_spec(t).unit != param_spec(s).unit)
+    throw ConfigError("link " + target + " -> " + source + ": units differ (" + param_spec(t).unit + " vs " +
+                      param_spec(s).unit + ")");
+  for (const auto& [tt, ss] : links_)
+    if (tt == t) throw ConfigError("link " + target + ": linked twice");
+  links_.push_back({t, s});
+}
+
+void Flowsheet::apply_links() {
+  for (const auto& [t, s] : links_) {
+    auto [su, sk] = param_location(s);
+    const auto& in = units_[su].inputs[sk];
+    set_param_value(t, in ? (*in)(0.0) : units_[su].params[sk]);
+  }
+}
+
+std::vector<int> Flowsheet::linked_targets(int source) const {
+  std::vector<int> v;
+  for (const auto& [t, s] : links_)
+    if (s == source) v.push_back(t);
+  return v;
 }
 
 bool Flowsheet::has_input(int id) const {

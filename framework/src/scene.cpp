@@ -30,7 +30,7 @@ class Loader {
   Scene load(const YAML::Node& root) {
     if (!root.IsMap()) fail("", "the file must be a mapping of scene keys, got " + kind_name(root));
     check_keys(root, "", {"scene", "description", "t_end", "output", "solver", "units", "connections", "inputs",
-                          "summary", "plots", "sweep", "notes"});
+                          "summary", "plots", "sweep", "notes", "links"});
     Scene s;
     s.path = label_;
     s.name = scalar(required(root, "scene", ""), "scene");
@@ -103,6 +103,18 @@ class Loader {
     }
 
     if (root["inputs"]) load_inputs(root["inputs"], fs);
+    if (root["links"]) {
+      const YAML::Node l = root["links"];
+      if (!l.IsMap()) fail("links", "expected a mapping of unit.param -> unit.param it follows");
+      for (const auto& kv : l) {
+        const std::string target = kv.first.as<std::string>();
+        try {
+          fs.link(target, scalar(kv.second, "links." + target));
+        } catch (const ConfigError& e) {
+          fail("links." + target, e.what());
+        }
+      }
+    }
     s.options.t_end = quantity(required(root, "t_end", ""), "t_end", "s");
     if (root["output"]) load_output(root["output"], s.options);
     if (root["solver"]) load_solver(root["solver"], s.options);

@@ -24,13 +24,19 @@ int UnitSpec::add_param(ParamSpec spec) {
   return static_cast<int>(params_.size()) - 1;
 }
 
-int UnitSpec::add_port(std::string name, StreamKind kind, PortDir dir, int classes) {
+int UnitSpec::add_port(std::string name, StreamKind kind, PortDir dir, int classes, bool optional) {
   for (const auto& p : ports_)
     if (p.name == name) throw std::logic_error("port '" + name + "' declared twice");
-  PortSpec p{std::move(name), kind, dir, classes, {}};
+  PortSpec p{std::move(name), kind, dir, classes, optional, {}, {}};
   p.provided.assign(stream_fields(kind, classes).size(), -1);
   ports_.push_back(std::move(p));
   return static_cast<int>(ports_.size()) - 1;
+}
+
+void UnitSpec::set_port_grid(int port, std::vector<double> diameters) {
+  if (static_cast<int>(diameters.size()) != ports_.at(port).classes)
+    throw std::logic_error("port '" + ports_.at(port).name + "': grid size differs from its class count");
+  ports_.at(port).grid = std::move(diameters);
 }
 
 void UnitSpec::provide(int port, int field, int state) {
@@ -94,7 +100,7 @@ std::vector<FieldSpec> stream_fields(StreamKind kind, int classes) {
     case StreamKind::Holdup: {
       std::vector<FieldSpec> f;
       for (int i = 0; i < classes; ++i) f.push_back({"mass_" + std::to_string(i), "kg"});
-      for (int i = 0; i < classes; ++i) f.push_back({"X_" + std::to_string(i), "kg/kg"});
+      for (int i = 0; i < classes; ++i) f.push_back({"water_" + std::to_string(i), "kg"});
       f.push_back({"T", "K"});
       f.push_back({"u0", "m/s"});
       return f;

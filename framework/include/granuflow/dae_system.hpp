@@ -54,6 +54,7 @@ class DaeSystem {
 
  private:
   void fill_params(double t);
+  void seed(int id, int u, size_t slot, std::vector<Jet>& pj) const;
   template <class T>
   void params_as(int unit, std::vector<T>& out) const;
 

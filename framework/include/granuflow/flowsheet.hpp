@@ -79,6 +79,13 @@ class Flowsheet {
   std::pair<int, int> param_location(int id) const;  // (unit index, local param index)
   void set_input(const std::string& qualified, PiecewiseLinear input);
   bool has_input(int id) const;
+  // Links: parameter `target` takes the value of `source` (its value at t = 0 if `source` is an input) at
+  // the start of every run, e.g. the initial bed temperature follows the inlet temperature (a value set on a
+  // linked target is overwritten then); a sensitivity with respect to `source` includes the path through
+  // `target`.
+  void link(const std::string& target, const std::string& source);
+  void apply_links();
+  std::vector<int> linked_targets(int source) const;
   // Breakpoints of all inputs inside (0, t_end).
   std::vector<double> breakpoints(double t_end) const;
 
@@ -102,6 +109,7 @@ class Flowsheet {
   std::vector<std::pair<std::pair<int, int>, std::pair<int, int>>> connections_;
   std::vector<std::pair<int, int>> param_table_;  // global param id -> (unit, local)
   std::vector<int> state_owner_;
+  std::vector<std::pair<int, int>> links_;  // (target, source) parameter ids
   int n_states_ = 0;
   bool finalized_ = false;
 };

@@ -12,6 +12,7 @@
 //   connections: ["feed.out -> mixer.in1", ...]
 //   inputs:
 //     feed.T: {interp: step, times: [0 s, 100 s], values: [300 K, 350 K]}
+//   links: {bed.T0: inlet.T}          # a parameter that follows another (initial state at inlet state)
 //   summary: {T_gas_out_K: chamber.T}  # summary key -> state or reported output
 //   plots: [...]                      # free-form, read by the Python layer
 #pragma once

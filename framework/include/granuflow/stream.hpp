@@ -24,7 +24,8 @@ struct FieldSpec {
 
 // Field layout of a stream. Solids carry `classes` per-class dry-solid mass flows, then `classes` moistures,
 // then one temperature. Vapour: water-vapour mass flow and its temperature. Holdup (a bed's state, read through
-// a probe): `classes` dry-solid masses, `classes` moistures, bed temperature, superficial gas velocity.
+// a probe): `classes` dry-solid masses, `classes` water masses, bed temperature, superficial gas velocity.
+// Per-class streams carry the pivot diameters of their grid as port metadata, checked equal on connection.
 // Wetting (spray zone -> bed, per class): deposited liquid flows, wetted surface fractions, wet-spot moistures,
 // then the liquid temperature.
 std::vector<FieldSpec> stream_fields(StreamKind kind, int classes);
@@ -43,7 +44,7 @@ enum Field { kMdot = 0, kT = 1 };
 }
 namespace holdup {
 inline int mass(int i) { return i; }
-inline int X(int classes, int i) { return classes + i; }
+inline int water(int classes, int i) { return classes + i; }
 inline int T(int classes) { return 2 * classes; }
 inline int u0(int classes) { return 2 * classes + 1; }
 }  // namespace holdup

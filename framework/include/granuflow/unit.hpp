@@ -37,6 +37,8 @@ struct PortSpec {
   StreamKind kind;
   PortDir dir;
   int classes = 0;               // solids: number of size classes
+  bool optional = false;         // may stay unconnected: its read fields are then zero (a mechanism left out)
+  std::vector<double> grid;      // per-class streams: pivot diameters (m); connected ports must agree
   std::vector<int> provided;     // per field: own state index providing it, or -1 (read from the peer)
 };
 
@@ -52,7 +54,9 @@ class UnitSpec {
  public:
   int add_state(std::string name, StateKind kind, std::string unit, double scale);
   int add_param(ParamSpec spec);
-  int add_port(std::string name, StreamKind kind, PortDir dir, int classes = 0);
+  int add_port(std::string name, StreamKind kind, PortDir dir, int classes = 0, bool optional = false);
+  // Declares the size grid (pivot diameters, m) a per-class port refers to.
+  void set_port_grid(int port, std::vector<double> diameters);
   // Makes own state `state` the provider of field `field` of port `port`.
   void provide(int port, int field, int state);
   // Provides fields [0, n) of `port` by consecutive own states starting at `first_state`.
@@ -84,12 +88,30 @@ struct Ctx {
   int offset;            // global index of own state 0
   const std::vector<std::vector<int>>* port_index;  // per port, per field: global state index
   double t_seg = 0.0;    // start of the current integration segment (between breakpoints)
+  bool skip_analytic = false;  // true while the framework differentiates by AD the part a unit's
+                               // jacobian_part() does not cover: eval() then leaves that part out
 
   const T& x_(int k) const { return x[offset + k]; }
   const T& xd(int k) const { return xdot[offset + k]; }
   const T& par(int k) const { return p[k]; }
-  const T& port(int port_id, int field) const { return x[(*port_index)[port_id][field]]; }
-  const T& port_dot(int port_id, int field) const { return xdot[(*port_index)[port_id][field]]; }
+  // A field of an optional port left unconnected reads as zero.
+  const T& port(int port_id, int field) const {
+    const int i = (*port_index)[port_id][field];
+    return i >= 0 ? x[i] : zero();
+  }
+  const T& port_dot(int port_id, int field) const {
+    const int i = (*port_index)[port_id][field];
+    return i >= 0 ? xdot[i] : zero();
+  }
+  bool connected(int port_id) const {
+    for (int i : (*port_index)[port_id])
+      if (i < 0) return false;
+    return true;
+  }
+  static const T& zero() {
+    static const T z(0.0);
+    return z;
+  }
   T& res(int k) const { return r[k]; }
 };
 
@@ -124,6 +146,10 @@ class Unit {
   virtual void initial(InitCtx<Jet>& c) const = 0;
   // Optional analytic Jacobian of the whole unit; returns false to let the framework use AD.
   virtual bool jacobian(const Ctx<double>& /*c*/, double /*cj*/, JacobianSink& /*sink*/) const { return false; }
+  // Optional analytic Jacobian of part of the residual (e.g. a dense O(N^2) population-balance term whose
+  // derivatives are cheap pair by pair). Returns true if it wrote that part; the framework then adds the AD
+  // Jacobian of eval() run with Ctx::skip_analytic = true.
+  virtual bool jacobian_part(const Ctx<double>& /*c*/, double /*cj*/, JacobianSink& /*sink*/) const { return false; }
   // Times where the unit's equations change discontinuously (spray start/stop) for the current parameters;
   // the simulator stops and re-initializes there. Inside eval(), use Ctx::t_seg (the start of the current
   // segment) to decide which side of such a time the solver is on.

@@ -1,0 +1,36 @@
+// A kernel given as a callable returning the n x n matrix beta (1/s), for prototyping (e.g. from Python through
+// the bindings). Slower than a compiled kernel: the callable runs in double only, so the Jet evaluation
+// returns its values with zero derivatives: Jacobians treat beta as constant in the state (exact only when
+// needs().number is false) and parameter sensitivities through it are zero. State-independent callables are
+// still evaluated once per run.
+#pragma once
+#include <functional>
+#include <string>
+
+#include "aggregation/aggregation_kernel.hpp"
+#include "granuflow/registry.hpp"
+
+namespace granuflow::kernels {
+
+using BetaCallback = std::function<void(const ClassState<double>& s, const double* p, double* beta)>;
+
+class CallbackKernel : public AggregationKernel {
+ public:
+  CallbackKernel(std::vector<ParamSpec> specs, ClassNeeds needs, BetaCallback fn)
+      : specs_(std::move(specs)), needs_(needs), fn_(std::move(fn)) {}
+  std::vector<ParamSpec> params() const override { return specs_; }
+  ClassNeeds needs() const override { return needs_; }
+  void evaluate(const ClassState<double>& s, const double* p, double* beta) const override { fn_(s, p, beta); }
+  void evaluate(const ClassState<Jet>& s, const Jet* p, Jet* beta) const override;
+
+ private:
+  std::vector<ParamSpec> specs_;
+  ClassNeeds needs_;
+  BetaCallback fn_;
+};
+
+// Registers `fn` under `name` (a duplicate name throws, as for every registration).
+void register_callback_kernel(Registry<AggregationKernel>& r, const std::string& name, const std::string& description,
+                              std::vector<ParamSpec> params, ClassNeeds needs, BetaCallback fn);
+
+}  // namespace granuflow::kernels

@@ -1,0 +1,23 @@
+// Sum kernel beta = beta0 (u + v) / v_ref (Golovin 1963; analytic solution in VERIFY.md). The reference volume
+// keeps beta0 in 1/s; beta0 = v_ref = 1 is Golovin's beta = u + v.
+#pragma once
+#include "aggregation/aggregation_kernel.hpp"
+#include "granuflow/registry.hpp"
+
+namespace granuflow::kernels {
+
+class SumKernel : public PairKernel<SumKernel> {
+ public:
+  std::vector<ParamSpec> params() const override {
+    return {{"beta0", "1/s", 1.0, 0.0, 1e6, "rate coefficient at u + v = v_ref", "Golovin 1963"},
+            {"v_ref", "m3", 1.0, 1e-30, 1e6, "reference volume", ""}};
+  }
+  template <class T>
+  T pair(const ClassState<T>& s, int i, int j, const T* p) const {
+    return p[0] * (s.volume[i] + s.volume[j]) / p[1];
+  }
+};
+
+void register_sum(Registry<AggregationKernel>& r);
+
+}  // namespace granuflow::kernels

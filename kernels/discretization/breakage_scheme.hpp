@@ -1,0 +1,39 @@
+// Breakage on the grid: selection rate S_k times the fragments of one parent, redistributed with the same
+// moment-preserving split as aggregation (redistribution.hpp). Fragments depend on the parent size only, so
+// the scheme builds once per run the matrix A, (n + kOutsideRows) x n row-major, whose column k is the
+// net change of the rows when one particle of class k breaks (fragments placed, parent removed):
+//     dN/dt = A (S o N)     (paper 001, Eqs. (23), (25); Kumar & Ramkrishna 1996 for fixed_pivot,
+//                            Kumar et al. 2008 (cell average for breakage) for cell_average).
+// Volume is conserved to round-off for any fragment law: the fragment volumes are differences of the
+// cumulative volume fraction B(v|u) divided by B(u|u), which telescope to the parent volume.
+#pragma once
+#include <vector>
+
+#include "breakage/fragment_distribution.hpp"
+#include "discretization/grid.hpp"
+#include "discretization/redistribution.hpp"
+
+namespace granuflow::kernels {
+
+class BreakageScheme {
+ public:
+  virtual ~BreakageScheme() = default;
+  virtual void build(const Grid& g, const FragmentDistribution& f, const double* p, double* A) const = 0;
+  virtual void build(const Grid& g, const FragmentDistribution& f, const Jet* p, Jet* A) const = 0;
+};
+
+// Fragments between neighbouring pivots, split linearly (fixed pivot).
+class FixedPivotBreakage : public BreakageScheme {
+ public:
+  void build(const Grid& g, const FragmentDistribution& f, const double* p, double* A) const override;
+  void build(const Grid& g, const FragmentDistribution& f, const Jet* p, Jet* A) const override;
+};
+
+// Fragments per cell as a packet, split on the side of its mean volume (cell average).
+class CellAverageBreakage : public BreakageScheme {
+ public:
+  void build(const Grid& g, const FragmentDistribution& f, const double* p, double* A) const override;
+  void build(const Grid& g, const FragmentDistribution& f, const Jet* p, Jet* A) const override;
+};
+
+}  // namespace granuflow::kernels

@@ -1,0 +1,177 @@
+#include "discretization/fv_growth.hpp"
+
+#include <cmath>
+
+namespace granuflow::kernels {
+namespace {
+
+// Koren's limited slope from the downwind jump a and the upwind jump b (both scaled to the cell width):
+// min(2|b|, (|a| + 2|b|)/3, 2|a|) with the common sign, 0 at extrema; da, db its derivatives.
+template <class T>
+T koren(const T& a, const T& b, double& da, double& db) {
+  da = db = 0.0;
+  if (!(a * b > 0.0)) return T(0.0);
+  const double s = a > 0.0 ? 1.0 : -1.0;
+  const T abs_a = s * a, abs_b = s * b;
+  const T third = (abs_a + 2.0 * abs_b) / 3.0;
+  if (2.0 * abs_b <= third && 2.0 * abs_b <= 2.0 * abs_a) {
+    db = 2.0;
+    return 2.0 * b;
+  }
+  if (third <= 2.0 * abs_a) {
+    da = 1.0 / 3.0, db = 2.0 / 3.0;
+    return (a + 2.0 * b) / 3.0;
+  }
+  da = 2.0;
+  return 2.0 * a;
+}
+
+}  // namespace
+
+void FvGrowth::setup(const Grid& g) {
+  grid_ = &g;
+  n_ = g.size();
+  const auto& de = g.diameter_edges();
+  d_face_ = de;
+  width_.resize(n_), cplus_.assign(n_, 0.0), cminus_.assign(n_, 0.0);
+  std::vector<double> centre(n_);
+  for (int i = 0; i < n_; ++i) width_[i] = de[i + 1] - de[i], centre[i] = 0.5 * (de[i] + de[i + 1]);
+  for (int i = 0; i < n_; ++i) {
+    if (i + 1 < n_) cplus_[i] = width_[i] / (centre[i + 1] - centre[i]);
+    if (i > 0) cminus_[i] = width_[i] / (centre[i] - centre[i - 1]);
+  }
+  dx_face_.resize(n_ + 1);
+  for (int f = 0; f <= n_; ++f) dx_face_[f] = g.pivot_ext(f) - g.pivot_ext(f - 1);
+}
+
+template <class T>
+FvGrowth::Face<T> FvGrowth::face(const T* N, int f, bool upward) const {
+  Face<T> r{T(0.0), {-1, -1, -1}, {0, 0, 0}};
+  // Donor cell and the neighbours downwind (towards the face) and upwind; mirrored for downward growth.
+  const int donor = upward ? f - 1 : f;
+  if (donor < 0 || donor >= n_) return r;  // inflow through the boundary: none
+  const int down = upward ? donor + 1 : donor - 1, up = upward ? donor - 1 : donor + 1;
+  const T nd = N[donor] / width_[donor];
+  r.phi = nd;
+  r.cols[0] = donor;
+  r.d[0] = 1.0 / width_[donor];
+  if (limiter_ == Limiter::kNone || down < 0 || down >= n_ || up < 0 || up >= n_) return r;
+  const double cd = upward ? cplus_[donor] : cminus_[donor], cu = upward ? cminus_[donor] : cplus_[donor];
+  const T a = (N[down] / width_[down] - nd) * cd, b = (nd - N[up] / width_[up]) * cu;
+  double da, db;
+  r.phi += 0.5 * koren(a, b, da, db);
+  // phi = nd + sigma(a, b)/2, a = (n_down - nd) cd, b = (nd - n_up) cu
+  r.cols[1] = down, r.cols[2] = up;
+  r.d[0] += 0.5 * (-da * cd + db * cu) / width_[donor];
+  r.d[1] = 0.5 * da * cd / width_[down];
+  r.d[2] = -0.5 * db * cu / width_[up];
+  return r;
+}
+
+template <class T>
+void FvGrowth::growth_at_faces(const std::vector<Face<T>>& fc, const GrowthTerms<T>& g, std::vector<T>& G,
+                               std::vector<T>& inv_integral) const {
+  const int nf = n_ + 1;
+  G.assign(nf, T(0.0));
+  inv_integral.assign(g.terms, T(0.0));
+  for (int k = 0; k < g.terms; ++k) {
+    const T* s = g.shape + size_t(k) * nf;
+    T scale = g.amount[k];
+    if (g.normalized) {
+      T integral(0.0);
+      for (int f = 0; f < nf; ++f) integral += s[f] * fc[f].phi * dx_face_[f];
+      if (!(integral > 0.0)) continue;  // no particles to grow on
+      inv_integral[k] = 1.0 / integral;
+      scale = g.amount[k] * inv_integral[k];
+    }
+    for (int f = 0; f < nf; ++f) G[f] += scale * s[f];
+  }
+}
+
+template <class T>
+void FvGrowth::face_rates(const T* G, const std::vector<Face<T>>& fc, T* out) const {
+  for (int f = 0; f <= n_; ++f) {
+    const T F = G[f] * fc[f].phi;
+    if (f > 0) out[f - 1] -= F; else out[n_ + kVolumeBelow] -= F * grid_->lower_virtual();
+    if (f < n_) out[f] += F;
+    else out[n_ + kNumberAbove] += F, out[n_ + kVolumeAbove] += F * grid_->upper_virtual();
+  }
+}
+
+template <class T>
+T FvGrowth::rates(const T* N, const GrowthTerms<T>& g, T* out) const {
+  const int nf = n_ + 1;
+  std::vector<Face<T>> fc(nf);
+  std::vector<T> G, inv;
+  if (g.normalized) {
+    // Volume-normalized laws grow (a_k >= 0, s_k >= 0): upwind from below.
+    for (int f = 0; f < nf; ++f) fc[f] = face(N, f, true);
+    growth_at_faces(fc, g, G, inv);
+  } else {
+    growth_at_faces(fc, g, G, inv);  // phi is not needed for absolute laws
+    for (int f = 0; f < nf; ++f) fc[f] = face(N, f, !(G[f] < 0.0));
+  }
+  face_rates(G.data(), fc, out);
+  T W(0.0);
+  for (int f = 0; f < nf; ++f) W += G[f] * fc[f].phi * dx_face_[f];
+  return W;
+}
+
+double FvGrowth::add_rates(const double* N, const GrowthTerms<double>& g, double* out) const {
+  return rates(N, g, out);
+}
+Jet FvGrowth::add_rates(const Jet* N, const GrowthTerms<Jet>& g, Jet* out) const { return rates(N, g, out); }
+
+void FvGrowth::add_jacobian(const double* N, const GrowthTerms<double>& g, double* J, double* dW) const {
+  const int n = n_, nf = n_ + 1;
+  std::vector<Face<double>> fc(nf);
+  std::vector<double> G, inv;
+  if (g.normalized) {
+    for (int f = 0; f < nf; ++f) fc[f] = face(N, f, true);
+    growth_at_faces(fc, g, G, inv);
+  } else {
+    growth_at_faces(fc, g, G, inv);
+    for (int f = 0; f < nf; ++f) fc[f] = face(N, f, !(G[f] < 0.0));
+  }
+  // dF_f/dN_l = G_f dphi_f/dN_l + phi_f dG_f/dN_l; the second term only for normalized laws, where
+  // dG_f/dN_l = -sum_k a_k s_kf / I_k^2 dI_k/dN_l and dI_k/dN_l = sum_f' s_kf' dx_f' dphi_f'/dN_l.
+  std::vector<double> dF(size_t(nf) * n, 0.0);
+  for (int f = 0; f < nf; ++f)
+    for (int c = 0; c < 3; ++c)
+      if (fc[f].cols[c] >= 0) dF[size_t(f) * n + fc[f].cols[c]] += G[f] * fc[f].d[c];
+  if (g.normalized) {
+    std::vector<double> dI(n);
+    for (int k = 0; k < g.terms; ++k) {
+      if (inv[k] == 0.0) continue;
+      const double* s = g.shape + size_t(k) * nf;
+      std::fill(dI.begin(), dI.end(), 0.0);
+      for (int f = 0; f < nf; ++f)
+        for (int c = 0; c < 3; ++c)
+          if (fc[f].cols[c] >= 0) dI[fc[f].cols[c]] += s[f] * dx_face_[f] * fc[f].d[c];
+      const double coef = -g.amount[k] * inv[k] * inv[k];
+      for (int f = 0; f < nf; ++f) {
+        const double w = coef * s[f] * fc[f].phi;
+        if (w == 0.0) continue;
+        double* row = &dF[size_t(f) * n];
+        for (int l = 0; l < n; ++l) row[l] += w * dI[l];
+      }
+    }
+  }
+  for (int l = 0; l < n; ++l) dW[l] = 0.0;
+  for (int f = 0; f < nf; ++f) {
+    const double* row = &dF[size_t(f) * n];
+    for (int l = 0; l < n; ++l) {
+      if (row[l] == 0.0) continue;
+      if (f > 0) J[size_t(f - 1) * n + l] -= row[l];
+      else J[size_t(n + kVolumeBelow) * n + l] -= row[l] * grid_->lower_virtual();
+      if (f < n) J[size_t(f) * n + l] += row[l];
+      else {
+        J[size_t(n + kNumberAbove) * n + l] += row[l];
+        J[size_t(n + kVolumeAbove) * n + l] += row[l] * grid_->upper_virtual();
+      }
+      dW[l] += row[l] * dx_face_[f];
+    }
+  }
+}
+
+}  // namespace granuflow::kernels

@@ -1,0 +1,49 @@
+#include "discretization/psd.hpp"
+
+#include <cmath>
+#include <vector>
+
+#include "granuflow/errors.hpp"
+
+namespace granuflow::kernels {
+
+double volume_moment(const Grid& g, const double* N, int k) {
+  double s = 0;
+  for (int i = 0; i < g.size(); ++i) s += N[i] * std::pow(g.pivot(i), k);
+  return s;
+}
+
+double diameter_moment(const Grid& g, const double* N, int k) {
+  double s = 0;
+  for (int i = 0; i < g.size(); ++i) s += N[i] * std::pow(g.diameter_pivots()[i], k);
+  return s;
+}
+
+void number_density(const Grid& g, const double* N, double* out) {
+  for (int i = 0; i < g.size(); ++i) out[i] = N[i] / g.width(i);
+}
+
+void volume_density(const Grid& g, const double* N, double* out) {
+  for (int i = 0; i < g.size(); ++i) out[i] = N[i] * g.pivot(i) / g.width(i);
+}
+
+void mass_density(const Grid& g, const double* N, double rho, double* out) {
+  volume_density(g, N, out);
+  for (int i = 0; i < g.size(); ++i) out[i] *= rho;
+}
+
+double characteristic_diameter(const Grid& g, const double* N, double x) {
+  if (!(x > 0 && x < 1)) throw ConfigError(violation("characteristic diameter fraction", x, "", "0 < x < 1"));
+  const int n = g.size();
+  std::vector<double> q(n + 1, 0.0);
+  for (int i = 0; i < n; ++i) q[i + 1] = q[i] + std::max(0.0, N[i]) * g.pivot(i);
+  if (!(q[n] > 0)) return std::nan("");
+  const auto& d = g.diameter_edges();
+  for (int i = 0; i < n; ++i) {
+    const double lo = q[i] / q[n], hi = q[i + 1] / q[n];
+    if (hi >= x && hi > lo) return d[i] * std::pow(d[i + 1] / d[i], (x - lo) / (hi - lo));
+  }
+  return d[n];
+}
+
+}  // namespace granuflow::kernels

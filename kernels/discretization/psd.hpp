@@ -1,0 +1,23 @@
+// Statistics of a population on a Grid: moments, densities and the mass-based characteristic diameters.
+//
+// d_{x,3} (x in (0, 1); d10,3 / d50,3 / d90,3 for x = 0.1 / 0.5 / 0.9) is read from the cumulative mass (volume)
+// distribution Q3, known exactly at the cell edges, Q3(d_{i+1}) = sum_{j <= i} N_j x_j / sum_j N_j x_j, and
+// interpolated linearly in ln d inside a cell (the class's mass spread uniformly over ln d):
+//     d_x = d_i (d_{i+1} / d_i)^((x - Q3(d_i)) / (Q3(d_{i+1}) - Q3(d_i))).
+#pragma once
+#include "discretization/grid.hpp"
+
+namespace granuflow::kernels {
+
+// sum_i N_i x_i^k (volume moments; k = 0 number, k = 1 volume).
+double volume_moment(const Grid& g, const double* N, int k);
+// sum_i N_i d_i^k (diameter moments).
+double diameter_moment(const Grid& g, const double* N, int k);
+// Densities per unit particle volume, 1/m^3 (number), m^3/m^3 (volume) or kg/m^3 (mass, volume times rho).
+void number_density(const Grid& g, const double* N, double* out);
+void volume_density(const Grid& g, const double* N, double* out);
+void mass_density(const Grid& g, const double* N, double rho, double* out);
+// Mass-based characteristic diameter d_{x,3}, m; NaN for an empty population.
+double characteristic_diameter(const Grid& g, const double* N, double x);
+
+}  // namespace granuflow::kernels

@@ -1,0 +1,62 @@
+// What every physical kernel of the population balance shares: its declared parameters (ParamSpec, SI unit and
+// bounds) and the per-class state it reads. A kernel is a small functor written once as a template on the
+// scalar type (double for residuals, Jet for Jacobians and parameter sensitivities) and wrapped for the
+// registry by the family interfaces (aggregation/aggregation_kernel.hpp, breakage/selection_rate.hpp,
+// breakage/fragment_distribution.hpp, growth/growth_law.hpp).
+//
+// Contract: params() is the kernel's static table; the owning unit declares them (with a prefix such as
+// "agg_") and hands their values back as `p`, in the same order. A kernel whose needs() are all false is
+// state-independent: the unit evaluates it once per run (Unit::configure) and again only when one of its
+// parameter values changes (a time-dependent input), never once per residual.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "granuflow/ad.hpp"
+#include "granuflow/param.hpp"
+
+namespace granuflow {
+class Settings;
+}
+
+namespace granuflow::kernels {
+
+// Which per-class state a kernel reads besides the sizes.
+struct ClassNeeds {
+  bool number = false;           // particle numbers N_i (makes the kernel depend on the solution itself)
+  bool moisture = false;         // liquid loading X_i, kg/kg dry solid
+  bool spot_moisture = false;    // moisture of the wet spot, kg/kg dry solid (paper 001, Eq. (55))
+  bool temperature = false;      // K
+  bool liquid_fraction = false;  // liquid volume / particle volume, - (paper 002, Eq. (13))
+  bool any() const { return number || moisture || spot_moisture || temperature || liquid_fraction; }
+};
+
+// Per-class state handed to kernels. Sizes are the grid's pivots (constants); the other arrays are null unless
+// the kernel declared it needs them.
+template <class T>
+struct ClassState {
+  int n = 0;
+  const double* volume = nullptr;    // m^3, pivot volumes
+  const double* diameter = nullptr;  // m, volume-equivalent sphere diameters of the pivots
+  const T* number = nullptr;
+  const T* moisture = nullptr;
+  const T* spot_moisture = nullptr;
+  const T* temperature = nullptr;
+  const T* liquid_fraction = nullptr;
+};
+
+class KernelBase {
+ public:
+  virtual ~KernelBase() = default;
+  virtual std::vector<ParamSpec> params() const { return {}; }
+  virtual ClassNeeds needs() const { return {}; }
+  bool state_dependent() const { return needs().any(); }
+  // Structure choices of the kernel (e.g. which data table), read from the owning unit's settings with names
+  // prefixed by `prefix`. Called once, while the unit declares itself.
+  virtual void declare(Settings& /*settings*/, const std::string& /*prefix*/) {}
+  // Checks what the parameter bounds alone cannot (sums, table shapes) before a run; throws ConfigError naming
+  // `where`, the value and the rule.
+  virtual void check(const ClassState<double>& /*s*/, const double* /*p*/, const std::string& /*where*/) const {}
+};
+
+}  // namespace granuflow::kernels

@@ -1,0 +1,33 @@
+// The one list of built-in population-balance plugins, each family in its own registry: physical kernels
+// (aggregation beta, breakage selection S and fragments b, growth G) and numerical schemes (aggregation,
+// breakage, growth). A scene names one of each by string; unknown names throw ConfigError listing the valid ones.
+// Adding a kernel: its file pair, one call in registry.cpp, one line in CMakeLists.txt.
+#pragma once
+#include "aggregation/aggregation_kernel.hpp"
+#include "breakage/fragment_distribution.hpp"
+#include "breakage/selection_rate.hpp"
+#include "discretization/aggregation_scheme.hpp"
+#include "discretization/breakage_scheme.hpp"
+#include "discretization/fv_growth.hpp"
+#include "granuflow/registry.hpp"
+#include "growth/growth_law.hpp"
+
+namespace granuflow::kernels {
+
+struct KernelRegistries {
+  Registry<AggregationKernel> aggregation{"aggregation kernel"};
+  Registry<SelectionRate> selection{"breakage selection rate"};
+  Registry<FragmentDistribution> fragments{"fragment distribution"};
+  Registry<GrowthLaw> growth{"growth law"};
+  Registry<AggregationScheme> aggregation_schemes{"aggregation scheme"};
+  Registry<BreakageScheme> breakage_schemes{"breakage scheme"};
+  Registry<FvGrowth> growth_schemes{"growth scheme"};
+};
+
+void register_all(KernelRegistries& r);
+
+// The process-wide registries with every built-in plugin, created on first use. Prototype kernels (e.g. Python
+// callables, aggregation/callback.hpp) are added here before a flowsheet is built.
+KernelRegistries& registries();
+
+}  // namespace granuflow::kernels

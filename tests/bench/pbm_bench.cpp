@@ -1,0 +1,240 @@
+// Work-precision of granuflow's population-balance schemes against the analytic solutions of VERIFY.md
+// (N0 = v0 = 1, n(v, 0) = exp(-v)), through the full framework (Flowsheet + pbm_batch + simulate() on IDAS).
+//
+//   granuflow_bench_pbm [--json] [--repeats R] [--quick] [--case constant|sum|product|growth|breakage]
+//   (wired as `granuflow bench pbm --json`; baseline: /usr/bin/python3 tests/bench/scipy_fixed_pivot.py --json)
+//
+// One record per (case, method, q, rtol) with keys case, method, q, classes, rtol, tau, err_M0, err_M2, err_L1
+// (relative L1 error of the mass density; null where no density is known), mass_drift (relative closure of
+// the volume book-keeping), solve_ms (median wall time of simulate() over R repeats, one process), plus the
+// solver counters and where the time goes: est_residual_ms / est_jacobian_ms / est_lu_ms are the counts times
+// the per-call cost measured at the final state, setup_ms the DaeSystem construction (layout + configure).
+// Grids: v in [2^-12, 2^15] (27 doublings, q classes per doubling) for aggregation and breakage; [2^-12, 2^7]
+// for growth. atol = 1e-3 rtol (absolute; N0 = 1). Benchmarks never assert on time.
+#include <sys/utsname.h>
+#include <unistd.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <ctime>
+#include <fstream>
+#include <string>
+
+#include "granuflow/dae_system.hpp"
+#include "pbm_analytic.hpp"
+#include "pbm_test_helpers.hpp"
+
+namespace granuflow {
+namespace {
+
+namespace an = pbm_analytic;
+using clk = std::chrono::steady_clock;
+
+struct Case {
+  std::string name;        // constant, sum, product, growth, breakage
+  double tau;
+  int doublings;
+  std::vector<std::string> methods;
+};
+
+struct Record {
+  std::string case_name, method;
+  int q = 0, classes = 0;
+  double rtol = 0, tau = 0, err_m0 = 0, err_m2 = 0, err_l1 = NAN, drift = 0, solve_ms = 0;
+  long steps = 0, jacobians = 0, residuals = 0, setups = 0;
+  double setup_ms = 0, res_ms = 0, jac_ms = 0, lu_ms = 0;
+};
+
+double ms_since(clk::time_point t0) { return std::chrono::duration<double>(clk::now() - t0).count() * 1e3; }
+
+pbm_test::Strings settings(const Case& c, const std::string& method, int q) {
+  auto s = pbm_test::grid_settings(q, c.doublings);
+  if (c.name == "growth") {
+    s["growth"] = "constant";
+    s["growth_scheme"] = method;
+  } else if (c.name == "breakage") {
+    s["breakage"] = "linear";
+    s["fragments"] = "uniform_binary";
+    s["breakage_scheme"] = method;
+  } else {
+    s["aggregation"] = c.name;
+    s["aggregation_scheme"] = method;
+  }
+  return s;
+}
+
+pbm_test::Values params(const Case& c) { return c.name == "growth" ? pbm_test::Values{{"growth_G", 1.0}} : pbm_test::Values{}; }
+
+void analytic(const Case& c, const kernels::Grid& g, double& m0, double& m2, std::vector<double>& cells) {
+  const double t = c.tau;
+  cells.clear();
+  if (c.name == "constant") {
+    m0 = an::scott_m0(t), m2 = an::scott_m2(t);
+    cells = an::cell_volumes(g, [&](double v) { return an::scott_density(v, t); });
+  } else if (c.name == "sum") {
+    m0 = an::golovin_m0(t), m2 = an::golovin_m2(t);
+    cells = an::cell_volumes(g, [&](double v) { return an::golovin_density(v, t); });
+  } else if (c.name == "product") {
+    m0 = an::product_m0(t), m2 = an::product_m2(t);
+  } else if (c.name == "breakage") {
+    m0 = an::ziff_m0(t), m2 = an::ziff_m2(t);
+    cells = an::cell_volumes(g, [&](double v) { return an::ziff_density(v, t); });
+  } else {
+    m0 = an::growth_moment(0, t), m2 = an::growth_moment(2, t);
+    cells = an::growth_cell_volumes(g, t);
+  }
+}
+
+// Per-call costs at state y: residual, Jacobian assembly, dense LU (the framework's Eigen solver does the same).
+void profile(Flowsheet& fs, const std::vector<double>& y, Record& rec) {
+  DaeSystem sys(fs);
+  const int n = sys.size();
+  std::vector<double> yp(n, 0.0), r(n), J(size_t(n) * n);
+  const int reps = std::max(20, 200000 / (n * n));
+  auto t0 = clk::now();
+  for (int k = 0; k < reps; ++k) sys.residual(0, y.data(), yp.data(), r.data());
+  const double res = ms_since(t0) / reps;
+  t0 = clk::now();
+  for (int k = 0; k < reps / 4 + 1; ++k) sys.jacobian(0, y.data(), yp.data(), 10.0, J.data(), nullptr);
+  const double jac = ms_since(t0) / (reps / 4 + 1);
+  Eigen::Map<Eigen::MatrixXd> A(J.data(), n, n);
+  Eigen::PartialPivLU<Eigen::MatrixXd> lu(n);
+  t0 = clk::now();
+  for (int k = 0; k < reps / 4 + 1; ++k) {
+    lu.compute(A);
+    volatile double rc = lu.rcond();
+    (void)rc;
+  }
+  const double fact = ms_since(t0) / (reps / 4 + 1);
+  rec.res_ms = res * rec.residuals;
+  rec.jac_ms = jac * rec.jacobians;
+  rec.lu_ms = fact * rec.setups;
+}
+
+Record run(const Case& c, const std::string& method, int q, double rtol, int repeats) {
+  Record rec;
+  rec.case_name = c.name, rec.method = method, rec.q = q, rec.rtol = rtol, rec.tau = c.tau;
+  const auto g = pbm_test::grid(q, c.doublings);
+  rec.classes = g.size();
+  std::vector<double> times, setups;
+  pbm_test::Run r;
+  for (int k = 0; k < repeats; ++k) {
+    auto fs = pbm_test::flowsheet(settings(c, method, q), params(c));
+    auto t0 = clk::now();
+    { DaeSystem probe(*fs); }
+    setups.push_back(ms_since(t0));
+    fs = pbm_test::flowsheet(settings(c, method, q), params(c));
+    t0 = clk::now();
+    r = pbm_test::run(*fs, {0, c.tau}, rtol, 1e-3 * rtol);
+    times.push_back(ms_since(t0));
+  }
+  std::sort(times.begin(), times.end());
+  std::sort(setups.begin(), setups.end());
+  rec.solve_ms = times[times.size() / 2];
+  rec.setup_ms = setups[setups.size() / 2];
+  const auto& st = r.result.stats;
+  rec.steps = st.steps, rec.jacobians = st.jacobians, rec.residuals = st.residuals, rec.setups = st.linear_setups;
+  double m0, m2;
+  std::vector<double> cells;
+  analytic(c, g, m0, m2, cells);
+  rec.err_m0 = pbm_test::moment(g, r.N(1), 0) / m0 - 1.0;
+  rec.err_m2 = pbm_test::moment(g, r.N(1), 2) / m2 - 1.0;
+  if (!cells.empty()) rec.err_l1 = an::l1_mass_error(g, r.N(1), cells);
+  const double v0 = pbm_test::moment(g, r.N(0), 1);
+  const double v1 = pbm_test::moment(g, r.N(1), 1) + r.state(1, "volume_above") + r.state(1, "volume_below") -
+                    r.state(1, "volume_grown");
+  rec.drift = v1 / v0 - 1.0;
+  auto fs = pbm_test::flowsheet(settings(c, method, q), params(c));
+  profile(*fs, std::vector<double>(r.N(1), r.N(1) + r.result.state_names.size()), rec);
+  return rec;
+}
+
+std::string meta_json() {
+  char host[256] = "";
+  gethostname(host, sizeof(host) - 1);
+  std::string cpu;
+  std::ifstream info("/proc/cpuinfo");
+  for (std::string line; std::getline(info, line);)
+    if (line.rfind("model name", 0) == 0) {
+      cpu = line.substr(line.find(':') + 2);
+      break;
+    }
+  std::string commit;
+  if (FILE* p = popen("git -C " GRANUFLOW_SOURCE_DIR " rev-parse --short HEAD 2>/dev/null", "r")) {
+    char buf[64] = "";
+    if (fgets(buf, sizeof(buf), p)) commit = buf;
+    pclose(p);
+    commit.erase(commit.find_last_not_of(" \n") + 1);
+  }
+  char date[32];
+  const std::time_t now = std::time(nullptr);
+  std::strftime(date, sizeof(date), "%Y-%m-%d %H:%M:%S", std::localtime(&now));
+  return std::string("\"code\": \"granuflow\", \"machine\": \"") + host + "\", \"cpu\": \"" + cpu +
+         "\", \"cores\": " + std::to_string(sysconf(_SC_NPROCESSORS_ONLN)) + ", \"commit\": \"" + commit +
+         "\", \"date\": \"" + date + "\"";
+}
+
+std::string num(double v) {
+  if (!std::isfinite(v)) return "null";
+  char b[40];
+  std::snprintf(b, sizeof(b), "%.6g", v);
+  return b;
+}
+
+void print(const Record& r, bool json, int repeats, const std::string& meta) {
+  if (json) {
+    std::printf(
+        "{\"case\": \"%s\", \"method\": \"%s\", \"q\": %d, \"classes\": %d, \"rtol\": %s, \"tau\": %s, \"err_M0\": %s, "
+        "\"err_M2\": %s, \"err_L1\": %s, \"mass_drift\": %s, \"solve_ms\": %s, \"repeats\": %d, \"steps\": %ld, "
+        "\"jacobians\": %ld, \"residuals\": %ld, \"linear_setups\": %ld, \"setup_ms\": %s, \"est_residual_ms\": %s, "
+        "\"est_jacobian_ms\": %s, \"est_lu_ms\": %s, %s}\n",
+        r.case_name.c_str(), r.method.c_str(), r.q, r.classes, num(r.rtol).c_str(), num(r.tau).c_str(),
+        num(r.err_m0).c_str(), num(r.err_m2).c_str(), num(r.err_l1).c_str(), num(r.drift).c_str(),
+        num(r.solve_ms).c_str(), repeats, r.steps, r.jacobians, r.residuals, r.setups, num(r.setup_ms).c_str(),
+        num(r.res_ms).c_str(), num(r.jac_ms).c_str(), num(r.lu_ms).c_str(), meta.c_str());
+  } else {
+    std::printf("%-9s %-13s q=%d n=%3d rtol=%.0e  M0 %+.2e  M2 %+.3e  L1 %.2e  drift %+.1e  %8.3f ms  (setup %.2f, "
+                "res %.2f, jac %.2f, LU %.2f; %ld steps)\n",
+                r.case_name.c_str(), r.method.c_str(), r.q, r.classes, r.rtol, r.err_m0, r.err_m2, r.err_l1, r.drift,
+                r.solve_ms, r.setup_ms, r.res_ms, r.jac_ms, r.lu_ms, r.steps);
+  }
+  std::fflush(stdout);
+}
+
+}  // namespace
+}  // namespace granuflow
+
+int main(int argc, char** argv) {
+  using namespace granuflow;
+  bool json = false, quick = false;
+  int repeats = 5;
+  std::string only;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--json") json = true;
+    else if (a == "--quick") quick = true;
+    else if (a == "--repeats" && i + 1 < argc) repeats = std::max(1, std::atoi(argv[++i]));
+    else if (a == "--case" && i + 1 < argc) only = argv[++i];
+    else {
+      std::fprintf(stderr, "usage: granuflow_bench_pbm [--json] [--repeats R] [--quick] [--case NAME]\n");
+      return 2;
+    }
+  }
+  const std::vector<std::string> agg{"cell_average", "fixed_pivot"};
+  const std::vector<Case> cases{{"constant", 100.0, 27, agg}, {"sum", 3.0, 27, agg}, {"product", 0.4, 27, agg},
+                                {"growth", 1.0, 19, {"fv_koren", "fv_upwind"}}, {"breakage", 10.0, 27, agg}};
+  const std::vector<int> qs = quick ? std::vector<int>{1, 2, 4} : std::vector<int>{1, 2, 3, 4, 6, 8};
+  const std::vector<double> rtols = quick ? std::vector<double>{1e-4, 1e-6} : std::vector<double>{1e-4, 1e-5, 1e-6, 1e-7, 1e-8};
+  const std::string meta = meta_json();
+  for (const auto& c : cases) {
+    if (!only.empty() && c.name != only) continue;
+    for (const auto& m : c.methods)
+      for (int q : qs)
+        for (double rtol : rtols) print(run(c, m, q, rtol, repeats), json, repeats, meta);
+  }
+  return 0;
+}

@@ -1,0 +1,61 @@
+// Builds and runs a one-unit flowsheet with pbm_batch for the PBM tests.
+#pragma once
+#include <map>
+#include <memory>
+#include <string>
+
+#include "granuflow/flowsheet.hpp"
+#include "granuflow/simulator.hpp"
+#include "kernels/discretization/grid.hpp"
+#include "units/registry.hpp"
+
+namespace granuflow::pbm_test {
+
+using Strings = std::map<std::string, std::string>;
+using Values = std::map<std::string, double>;
+
+inline std::unique_ptr<Flowsheet> flowsheet(const Strings& settings, const Values& params = {}) {
+  auto fs = std::make_unique<Flowsheet>("pbm");
+  fs->add_unit("pbm", units::builtin().create("pbm_batch"), Settings("pbm", settings));
+  fs->finalize();
+  for (const auto& [k, v] : params) fs->set_param("pbm." + k, v);
+  return fs;
+}
+
+// The verification grid: v from 2^-12 to 2^15 (27 doublings), q classes per doubling.
+inline Strings grid_settings(int q, int doublings = 27) {
+  return {{"q", std::to_string(q)}, {"classes", std::to_string(doublings * q)}};
+}
+inline kernels::Grid grid(int q, int doublings = 27) { return kernels::Grid::geometric(std::exp2(-12.0), q, doublings * q); }
+
+struct Run {
+  SimResult result;
+  int n = 0;
+  const double* N(size_t k) const { return &result.y[k * result.state_names.size()]; }
+  double state(size_t k, const std::string& name) const {
+    for (size_t i = 0; i < result.state_names.size(); ++i)
+      if (result.state_names[i] == "pbm." + name) return result.y[k * result.state_names.size() + i];
+    return 0.0;
+  }
+};
+
+inline Run run(Flowsheet& fs, std::vector<double> t_out, double rtol = 1e-8, double atol = 1e-12) {
+  SimOptions o;
+  o.t_end = t_out.back();
+  o.t_out = std::move(t_out);
+  o.rtol = rtol;
+  o.atol = atol;
+  Run r;
+  r.result = simulate(fs, o);
+  for (const auto& s : r.result.state_names)
+    if (s.rfind("pbm.N_", 0) == 0) ++r.n;
+  return r;
+}
+
+inline double moment(const kernels::Grid& g, const double* N, int k) {
+  double s = 0;
+  for (int i = 0; i < g.size(); ++i) s += N[i] * std::pow(g.pivot(i), k);
+  return s;
+}
+
+}  // namespace granuflow::pbm_test

@@ -1,0 +1,196 @@
+// Grids, PSD statistics, initial binning and the kernel registries: every registered plugin declares its
+// parameters with checked SI units and bounds; kernels evaluate to finite, symmetric, non-negative values;
+// unknown names are ConfigErrors listing the valid ones; a callable kernel (the Python prototyping path)
+// reproduces the compiled one; parameter sensitivities flow through the kernels.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "granuflow/errors.hpp"
+#include "granuflow/quantity.hpp"
+#include "kernels/aggregation/callback.hpp"
+#include "kernels/aggregation/dem_collision.hpp"
+#include "kernels/data_tables.hpp"
+#include "kernels/discretization/initial_distribution.hpp"
+#include "kernels/discretization/psd.hpp"
+#include "kernels/registry.hpp"
+#include "pbm_analytic.hpp"
+#include "pbm_test_helpers.hpp"
+
+namespace granuflow {
+namespace {
+
+using namespace kernels;
+
+TEST(PbmGrid, GeometricGridHasRatioTwoToTheOneOverQ) {
+  for (int q : {1, 2, 3, 5}) {
+    const auto g = Grid::geometric(std::exp2(-12.0), q, 9 * q);
+    for (int i = 0; i < g.size(); ++i) {
+      EXPECT_NEAR(g.edge(i + 1) / g.edge(i), std::exp2(1.0 / q), 1e-14);
+      EXPECT_DOUBLE_EQ(g.pivot(i), 0.5 * (g.edge(i) + g.edge(i + 1)));
+      EXPECT_NEAR(g.diameter_pivots()[i], std::cbrt(6 * g.pivot(i) / pbm_analytic::kPi), 1e-15 * g.diameter_pivots()[i]);
+      EXPECT_EQ(g.cell_of(g.pivot(i)), i);
+      EXPECT_EQ(g.interval_of(g.pivot(i)), i);
+    }
+    EXPECT_EQ(g.edge(q), std::exp2(-11.0));  // exact powers of two
+  }
+  const auto g1 = Grid::geometric(1.0, 1, 5);
+  EXPECT_EQ(g1.pivot(0) + g1.pivot(0), g1.pivot(1));  // q = 1: equal partners land exactly on a pivot
+  EXPECT_EQ(g1.cell_of(0.5), -1);
+  EXPECT_EQ(g1.cell_of(32.0), 5);
+  EXPECT_EQ(g1.interval_of(g1.upper_virtual()), 5);
+  EXPECT_THROW(Grid::geometric(1.0, 0, 5), ConfigError);
+  EXPECT_THROW(Grid::geometric(-1.0, 1, 5), ConfigError);
+  EXPECT_THROW(Grid::from_pivots({1.0, 0.5, 2.0}), ConfigError);
+  const auto gp = Grid::from_diameter_pivots({50e-6, 100e-6, 200e-6, 400e-6});
+  EXPECT_NEAR(gp.diameter_pivots()[0], 50e-6, 1e-18);
+  EXPECT_NEAR(gp.diameter_edges()[1], std::sqrt(50e-6 * 100e-6), 1e-15);
+}
+
+TEST(PbmGrid, CharacteristicDiametersInterpolateTheCumulativeMassInLogD) {
+  const auto g = Grid::geometric(1.0, 1, 4);
+  std::vector<double> N(4, 0.0);
+  N[2] = 1.0 / g.pivot(2);  // all mass in class 2
+  const double d2 = g.diameter_edges()[2], d3 = g.diameter_edges()[3];
+  EXPECT_NEAR(characteristic_diameter(g, N.data(), 0.5), std::sqrt(d2 * d3), 1e-14 * d3);
+  EXPECT_NEAR(characteristic_diameter(g, N.data(), 0.1), d2 * std::pow(d3 / d2, 0.1), 1e-14 * d3);
+  // A fine grid reproduces the median of a log-normal mass distribution.
+  const auto f = Grid::from_diameter_pivots([] {
+    std::vector<double> d;
+    for (int i = 0; i < 200; ++i) d.push_back(20e-6 * std::pow(100.0, i / 199.0));
+    return d;
+  }());
+  std::vector<double> num(f.size()), vol(f.size()), M(f.size());
+  lognormal_mass_cells(f, 1e-3, 300e-6, 1.4, num.data(), vol.data());
+  bin_cells(f, Binning::kMass, num.data(), vol.data(), M.data());
+  EXPECT_NEAR(characteristic_diameter(f, M.data(), 0.5), 300e-6, 1e-3 * 300e-6);
+  const double s = std::log(1.4), z = 1.2815515655446004;  // Phi^-1(0.9)
+  EXPECT_NEAR(characteristic_diameter(f, M.data(), 0.9), 300e-6 * std::exp(z * s), 2e-3 * 300e-6);
+  EXPECT_NEAR(volume_moment(f, M.data(), 1), 1e-3, 1e-9);
+}
+
+TEST(PbmGrid, MomentBinningKeepsNumberAndVolumeOfTheCells) {
+  const auto g = Grid::geometric(std::exp2(-12.0), 2, 54);
+  std::vector<double> num(g.size()), vol(g.size()), N(g.size());
+  exponential_cells(g, 1.0, 1.0, num.data(), vol.data());
+  bin_cells(g, Binning::kMoments, num.data(), vol.data(), N.data());
+  double n_cells = 0, v_cells = 0;
+  for (int i = 0; i < g.size(); ++i) n_cells += num[i], v_cells += vol[i];
+  // Exact cell integrals: number above 2^-12 and the volume of exp(-v).
+  EXPECT_NEAR(n_cells, std::exp(-std::exp2(-12.0)), 1e-14);
+  EXPECT_NEAR(v_cells, (1 + std::exp2(-12.0)) * std::exp(-std::exp2(-12.0)), 1e-13);
+  EXPECT_NEAR(volume_moment(g, N.data(), 1) / v_cells, 1.0, 1e-14);
+  // The number moves only where the lowest cell's packet reaches below the first pivot.
+  EXPECT_NEAR(volume_moment(g, N.data(), 0) / n_cells, 1.0, 1e-6);
+}
+
+template <class K>
+void expect_declared(const Registry<K>& reg) {
+  for (const auto& name : reg.names()) {
+    EXPECT_FALSE(reg.description(name).empty()) << name;
+    const auto k = reg.create(name);
+    for (const auto& p : k->params()) {
+      EXPECT_TRUE(is_known_si_unit(p.unit)) << name << "." << p.name << " unit " << p.unit;
+      EXPECT_LE(p.lower, p.value) << name << "." << p.name;
+      EXPECT_LE(p.value, p.upper) << name << "." << p.name;
+      EXPECT_FALSE(p.description.empty()) << name << "." << p.name;
+    }
+  }
+}
+
+TEST(PbmKernels, EveryRegisteredPluginDeclaresItsParameters) {
+  auto& r = registries();
+  expect_declared(r.aggregation);
+  expect_declared(r.selection);
+  expect_declared(r.fragments);
+  expect_declared(r.growth);
+  for (const char* name : {"constant", "sum", "product", "kapur", "eke", "shear", "dem_collision", "stokes",
+                           "glass_transition"})
+    EXPECT_TRUE(r.aggregation.contains(name)) << name;
+  for (const char* name : {"linear", "power_law", "vogel_peukert"}) EXPECT_TRUE(r.selection.contains(name));
+  for (const char* name : {"uniform_binary", "power_law", "tanh_power_law"}) EXPECT_TRUE(r.fragments.contains(name));
+  for (const char* name : {"constant", "surface_proportional", "moment_based"}) EXPECT_TRUE(r.growth.contains(name));
+  try {
+    r.aggregation.create("constnat");
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("constant, dem_collision, eke"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(pbm_test::flowsheet({{"aggregation", "golovin"}}), ConfigError);
+  EXPECT_THROW(pbm_test::flowsheet({{"aggregation", "sum"}, {"aggregation_scheme", "moving_pivot"}}), ConfigError);
+  // sum lambda_k = 1 (paper 003, Eq. (7.36)) is checked when a run starts.
+  auto fs = pbm_test::flowsheet({{"growth", "moment_based"}}, {{"growth_lambda_0", 0.5}});
+  EXPECT_THROW(pbm_test::run(*fs, {0, 1}), ConfigError);
+}
+
+TEST(PbmKernels, AggregationKernelsAreSymmetricFiniteAndNonNegative) {
+  const auto g = Grid::from_diameter_pivots({60e-6, 120e-6, 250e-6, 500e-6, 1000e-6});
+  set_table("test_collisions", collision_frequency_table(std::vector<double>(25, 10.0), std::vector<double>(5, 1e3), 0.5, "test"));
+  std::vector<double> X(5, 0.05), T(5, 330.0), LC{0.1, 0.3, 0.1, 0.3, 0.5};
+  ClassState<double> cs{5, g.pivots().data(), g.diameter_pivots().data(), nullptr, X.data(), X.data(), T.data(), LC.data()};
+  for (const auto& name : registries().aggregation.names()) {
+    auto k = registries().aggregation.create(name);
+    Settings st("test", {{"agg_collisions", "test_collisions"}});
+    k->declare(st, "agg_");
+    std::vector<double> p, beta(25);
+    for (const auto& s : k->params()) p.push_back(s.value);
+    k->evaluate(cs, p.data(), beta.data());
+    for (int i = 0; i < 5; ++i)
+      for (int j = 0; j < 5; ++j) {
+        EXPECT_TRUE(std::isfinite(beta[i * 5 + j]) && beta[i * 5 + j] >= 0) << name;
+        EXPECT_EQ(beta[i * 5 + j], beta[j * 5 + i]) << name;
+      }
+    if (name == "eke") {  // Eq. (37), paper 001, by hand
+      const double di = 60e-6, dj = 1000e-6;
+      EXPECT_NEAR(beta[4], std::exp(-17.24) * (di + dj) * (di + dj) * std::sqrt(1 / (di * di * di) + 1 / (dj * dj * dj)) * 0.22,
+                  1e-12 * beta[4]);
+    }
+    if (name == "dem_collision") {  // Eqs. (12)-(13), paper 002: C = 10 / (1e3 1e3 0.5); wet if either LC >= 0.2
+      EXPECT_EQ(beta[0], 0.0);
+      EXPECT_NEAR(beta[1], 2e-5 * 0.01, 1e-20);
+    }
+  }
+}
+
+TEST(PbmKernels, CallableKernelReproducesTheCompiledOne) {
+  auto& reg = registries().aggregation;
+  if (!reg.contains("test_python_constant"))
+    register_callback_kernel(reg, "test_python_constant", "beta = beta0 from a callable",
+                             {{"beta0", "1/s", 1.0, 0.0, 10.0, "rate coefficient", "test"}}, {},
+                             [](const ClassState<double>& s, const double* p, double* beta) {
+                               for (int k = 0; k < s.n * s.n; ++k) beta[k] = p[0];
+                             });
+  std::vector<double> m2;
+  for (const char* k : {"constant", "test_python_constant"}) {
+    auto s = pbm_test::grid_settings(2, 20);
+    s["aggregation"] = k;
+    auto fs = pbm_test::flowsheet(s, {{"agg_beta0", 0.7}});
+    const auto r = pbm_test::run(*fs, {0, 10});
+    m2.push_back(pbm_test::moment(pbm_test::grid(2, 20), r.N(1), 2));
+  }
+  EXPECT_NEAR(m2[1] / m2[0], 1.0, 1e-12);
+}
+
+TEST(PbmKernels, SensitivityToAKernelParameterEqualsFiniteDifferences) {
+  auto s = pbm_test::grid_settings(2, 20);
+  s["aggregation"] = "sum";
+  auto make = [&](double b) { return pbm_test::flowsheet(s, {{"agg_beta0", b}}); };
+  auto fs = make(1.0);
+  SimOptions o;
+  o.t_end = 1.0;
+  o.t_out = {0, 1.0};
+  o.rtol = 1e-9;
+  o.atol = 1e-13;
+  o.sensitivities = {"pbm.agg_beta0"};
+  const auto r = simulate(*fs, o);
+  const int n = r.n_states();
+  const auto g = pbm_test::grid(2, 20);
+  double sens_m0 = 0;
+  for (int i = 0; i < g.size(); ++i) sens_m0 += r.sens[size_t(n) + i];
+  // M0 = exp(-beta0 t) for the sum kernel: dM0/dbeta0 = -t M0 (the discrete M0 obeys it exactly).
+  const double m0 = pbm_test::moment(g, &r.y[n], 0);
+  EXPECT_NEAR(sens_m0 / (-1.0 * m0), 1.0, 1e-5);
+}
+
+}  // namespace
+}  // namespace granuflow

@@ -1,0 +1,515 @@
+#include "fluid_bed.hpp"
+
+#include <cmath>
+#include <type_traits>
+#include <vector>
+
+#include "granuflow/errors.hpp"
+#include "granuflow/flowsheet.hpp"
+#include "granuflow/properties.hpp"
+#include "size_grid_settings.hpp"
+#include "kernels/breakage/paper001_breakage_laws.hpp"
+#include "kernels/discretization/grid.hpp"
+#include "kernels/drying/paper001_drying.hpp"
+#include "kernels/limited.hpp"
+#include "kernels/particle_geometry.hpp"
+#include "kernels/transfer/fluid_bed_transfer.hpp"
+#include "kernels/wetting/paper001_spray_zone.hpp"
+
+namespace granuflow::units {
+namespace {
+
+namespace p1 = kernels::paper001;
+namespace def = kernels::paper001::defaults;
+namespace tr = kernels::transfer;
+
+enum P {
+  kBedMass, kX0, kD50, kSigma, kTS0, kRhoS, kEps, kCpS, kCpL, kABed,                   // bed and material
+  kLnBeta0, kTauSpray, kStickyOffset, kStickySlope, kGtK, kTgL, kTgS, kVVessel,       // agglomeration
+  kKBreak, kDMinBreak, kFMat, kEMin, kQFrag, kDFragMin,                              // breakage
+  kXcr, kShCorr, kBetMm, kBetN, kDv, kLambda, kNParams                               // drying, transfer
+};
+enum Port { kWet, kGasProbe, kInletProbe, kVapourOut, kHeatIn, kState };
+
+enum class Aggregation { kNone, kGlassTransition, kConstant };
+
+class FluidBed : public UnitBase<FluidBed> {
+ public:
+  std::string type() const override { return "fluid_bed"; }
+
+  void declare(UnitSpec& s, Settings& st) override {
+    const std::vector<double> d = log_spaced_pivots(st);
+    n_ = static_cast<int>(d.size());
+    const std::string agg = st.get_choice("aggregation", "glass_transition", {"glass_transition", "constant", "none"},
+                                          "agglomeration kernel: paper 001 Eqs. (36)-(57), size-independent, or off");
+    agg_ = agg == "glass_transition" ? Aggregation::kGlassTransition
+         : agg == "constant"         ? Aggregation::kConstant
+                                     : Aggregation::kNone;
+    breakage_ = st.get_choice("breakage", "vogel_peukert", {"vogel_peukert", "none"},
+                              "breakage: paper 001 Eqs. (90)-(93), or off") == "vogel_peukert";
+    size_unit_ = p1::breakage_size_unit_from_string(
+        st.get_choice("breakage_size_unit", "um", {"um", "mm"}, "unit of d in Eq. (92) (PAPER001_DECISIONS: um)"));
+    per_volume_ = st.get_choice("beta0_basis", "absolute", {"absolute", "per_m3"},
+                                "beta0 for absolute particle numbers (default) or per m^3 of vessel") == "per_m3";
+    grid_ = std::make_unique<kernels::Grid>(kernels::Grid::from_diameter_pivots(d));
+
+    const std::string t7 = "paper 001, Table 7", t6 = "paper 001, Table 6", t9 = "paper 001, Table 9",
+                      t10 = "paper 001, Table 10", t8 = "paper 001, Table 8", dec = "PAPER001_DECISIONS";
+    const ParamSpec specs[kNParams] = {
+        {"bed_mass", "kg", 15.0, 1e-3, 1e4, "initial wet bed mass", "paper 001, section 3.1.3"},
+        {"X0", "kg/kg", 0.03 / 0.97, 0.0, 1.0, "initial moisture, dry basis", dec},
+        {"d50_0", "m", 200e-6, 1e-6, 1e-2, "initial mass median diameter (log-normal in mass)", dec},
+        {"sigma_0", "-", 1.5, 1.01, 5.0, "initial geometric standard deviation", dec},
+        {"T0", "K", 333.15, 250.0, 500.0, "initial solids temperature", dec},
+        {"rho_s", "kg/m3", def::kSolidSkeletalDensity, 100.0, 5000.0, "skeletal density", t6},
+        {"eps_intra", "-", def::kIntraParticleVoidFraction, 0.0, 0.9, "intra-particle void fraction", t7},
+        {"cp_s", "J/(kg K)", def::kSolidCp, 100.0, 1e4, "solid heat capacity", t6},
+        {"cp_l", "J/(kg K)", def::kLiquidCp, 100.0, 1e4, "liquid heat capacity", t6},
+        {"A_bed", "m2", def::kBedArea, 1e-4, 100.0, "bed cross-section (A_inlet)", t6},
+        {"ln_beta0", "-", def::kLnBeta0, -60.0, 10.0, "ln of the agglomeration rate constant (beta0 in 1/s with d in m)", t9},
+        {"tau_spray", "-", def::kTauSpray, 0.0, 1.0, "fraction of particles in the spray zone, Eq. (37)", t9},
+        {"sticky_offset", "K", def::kStickyOffset, 0.0, 200.0, "sticky point above Tg, Eq. (53)", t9},
+        {"sticky_slope", "K", def::kStickySlope, 0.1, 200.0, "width of the sticky transition, Eq. (53)", t9},
+        {"gt_k", "-", def::kGordonTaylorK, 0.01, 100.0, "Gordon-Taylor constant, Eq. (54)", t9},
+        {"Tg_liquid", "K", def::kTgLiquid, 50.0, 400.0, "glass transition of water", t9},
+        {"Tg_solid", "K", def::kTgSolid, 200.0, 700.0, "glass transition of maltodextrin", t9},
+        {"V_vessel", "m3", def::kEquipmentVolume, 1e-3, 1e3, "vessel volume (beta0_basis = per_m3)", t6},
+        {"k_break", "1/s", def::kBreakageRate, 0.0, 10.0, "breakage rate constant, Eq. (92)", t10},
+        {"d_min_break", "m", def::kBreakageDiameterMin, 1e-7, 1e-2, "minimum breakage diameter, Eq. (92)", t10},
+        {"f_mat", "-", def::kMaterialParameter, 0.0, 100.0, "material parameter, Eq. (92)", t10},
+        {"E_min", "J/kg", def::kBreakageEnergyMin, 0.0, 100.0, "mass-based threshold energy, Eq. (92)", t10},
+        {"q_frag", "-", def::kFragmentExponent, 0.01, 10.0, "fragment power-law exponent, Eq. (93)", t10},
+        {"d_frag_min", "m", def::kFragmentDiameterMin, 1e-7, 1e-2, "minimum fragment size, Eq. (93)", t10},
+        {"X_cr", "kg/kg", def::kCriticalMoisture, 1e-4, 1.0, "critical moisture content, Eq. (80)", t8},
+        {"sh_corr", "-", def::kBulkSherwoodCorrection, 1e-3, 100.0, "bulk Sherwood correction, Eq. (74)", t8},
+        {"bet_mm", "kg/kg", def::kBetMonolayer, 0.0, 1.0, "BET monolayer moisture, Eq. (81)", t8},
+        {"bet_n", "-", def::kBetN, 1.0, 100.0, "BET n, Eq. (81)", t8},
+        {"D_v", "m2/s", def::kVapourDiffusivity, 1e-7, 1e-3, "vapour diffusivity", t6},
+        {"lambda_g", "W/(m K)", def::kGasConductivity, 1e-3, 1.0, "gas thermal conductivity", t6},
+    };
+    for (const auto& p : specs) s.add_param(p);
+
+    for (int i = 0; i < n_; ++i) s.add_state("M_" + std::to_string(i), StateKind::Differential, "kg", 1.0);
+    for (int i = 0; i < n_; ++i) s.add_state("W_" + std::to_string(i), StateKind::Differential, "kg", 0.05);
+    sH_ = s.add_state("H", StateKind::Differential, "J", 1e6);
+    sT_ = s.add_state("T", StateKind::Algebraic, "K", 300.0);
+    sU0_ = s.add_state("u0", StateKind::Algebraic, "m/s", 1.0);
+    sVap_ = s.add_state("m_vap", StateKind::Algebraic, "kg/s", 1e-3);
+    sQ_ = s.add_state("Q", StateKind::Algebraic, "W", 1e3);
+    sTop_ = s.add_state("mass_beyond_top", StateKind::Differential, "kg", 1.0);
+
+    s.set_port_grid(s.add_port("wetting", StreamKind::Wetting, PortDir::In, n_, true), d);
+    s.add_port("gas", StreamKind::Gas, PortDir::In);
+    s.add_port("inlet", StreamKind::Gas, PortDir::In);
+    const int vap = s.add_port("vapour", StreamKind::Vapour, PortDir::Out, 0, true);
+    s.provide(vap, vapour::kMdot, sVap_);
+    s.provide(vap, vapour::kT, sT_);
+    s.provide(s.add_port("heat", StreamKind::Heat, PortDir::In, 0, true), heat::kQ, sQ_);
+    const int probe = s.add_port("state", StreamKind::Holdup, PortDir::Probe, n_);
+    s.set_port_grid(probe, d);
+    for (int i = 0; i < n_; ++i) {
+      s.provide(probe, holdup::mass(i), i);
+      s.provide(probe, holdup::water(n_, i), n_ + i);
+    }
+    s.provide(probe, holdup::T(n_), sT_);
+    s.provide(probe, holdup::u0(n_), sU0_);
+
+    for (const char* o : {"d10", "d50", "d90"}) s.add_output(o, "m");
+    s.add_output("moisture", "kg/kg");
+    s.add_output("moisture_wet", "kg/kg");
+    s.add_output("particles", "-");
+    s.add_output("reg_eta", "-");
+    s.add_output("reg_activity_cap", "-");
+    s.add_output("balance_water_hold", "kg");
+    s.add_output("balance_solids_hold", "kg");
+    s.add_output("balance_energy_hold", "J");
+    for (int i = 0; i < n_; ++i) s.add_output("psd_d_" + std::to_string(i), "m");
+    for (int i = 0; i < n_; ++i) s.add_output("psd_m_" + std::to_string(i), "kg");
+  }
+
+  void configure(const UnitSpec&, const double* p) override {
+    const auto& x = grid_->pivots();
+    const auto& de = grid_->diameter_edges();
+    const auto& dp = grid_->diameter_pivots();
+    // Aggregation targets of every pair (mass-based fixed pivot): the aggregate of volume x_j + x_k is split
+    // between the pivots around it keeping number and mass; beyond the top pivot it stays in the top class
+    // with its mass (PAPER001_DECISIONS), and that mass is tracked.
+    pairs_.clear();
+    for (int j = 0; j < n_; ++j)
+      for (int k = j; k < n_; ++k) {
+        const double v = x[j] + x[k];
+        Pair pr{j, k, -1, 0.0, 0.0};
+        if (v >= x[n_ - 1]) {
+          pr.a = n_ - 1;
+          pr.frac_upper = 0.0;  // all mass to the top class
+        } else {
+          int a = 0;
+          while (x[a + 1] <= v) ++a;
+          const double nu = (v - x[a]) / (x[a + 1] - x[a]);
+          pr.a = a;
+          // mass fractions of the aggregate landing on a and a + 1
+          pr.frac_upper = nu * x[a + 1] / v;
+        }
+        pr.beyond = v >= x[n_ - 1] ? 1.0 : 0.0;
+        pairs_.push_back(pr);
+      }
+    // Eq. (37) per pair depends on parameters only: once per run for residuals and Jacobians
+    cf_.resize(pairs_.size());
+    for (size_t q = 0; q < pairs_.size(); ++q)
+      cf_[q] = p1::collision_frequency(dp[pairs_[q].j], dp[pairs_[q].k], p[kLnBeta0], p[kTauSpray]);
+    // Breakage: selection rate per unit k_break (Eq. (92)) and the mass split of a parent's fragments over the
+    // cells below it (Eq. (93) read as a cumulative mass fraction); fines below the first edge go to class 0.
+    shape_.assign(n_, 0.0);
+    frag_.assign(size_t(n_) * n_, 0.0);
+    for (int k = 0; k < n_; ++k) {
+      shape_[k] = p1::breakage_rate(dp[k], size_unit_, 1.0, p[kDMinBreak], p[kFMat], p[kEMin]);
+      double below = 0.0;
+      for (int c = 0; c <= k; ++c) {
+        const double upper = c == k ? dp[k] : de[c + 1];
+        const double b = p1::cumulative_fragment_distribution(upper, dp[k], p[kQFrag], p[kDFragMin]);
+        frag_[size_t(c) * n_ + k] = b - below;
+        below = b;
+      }
+      frag_[size_t(k) * n_ + k] -= 1.0;  // the parent leaves class k
+    }
+    particle_mass_.resize(n_);
+    for (int i = 0; i < n_; ++i) particle_mass_[i] = p[kRhoS] * (1.0 - p[kEps]) * x[i];
+    // Initial log-normal mass distribution over the cells; tails beyond the grid folded into the end classes.
+    init_frac_.assign(n_, 0.0);
+    auto cdf = [&](double d) { return 0.5 * std::erfc(-std::log(d / p[kD50]) / (std::log(p[kSigma]) * std::sqrt(2.0))); };
+    for (int i = 0; i < n_; ++i) init_frac_[i] = (i == n_ - 1 ? 1.0 : cdf(de[i + 1])) - (i == 0 ? 0.0 : cdf(de[i]));
+  }
+
+  template <class T>
+  Status eval(const Ctx<T>& c) const {
+    std::vector<T> dM(n_, T(0.0)), dW(n_, T(0.0)), X(n_);
+    for (int i = 0; i < n_; ++i) X[i] = moisture(c, i);
+    const T& t_s = c.x_(sT_);
+    T beyond(0.0);
+    // jacobian_part() differentiates the aggregation pair by pair; AD covers the rest
+    if (agg_ != Aggregation::kNone && !c.skip_analytic) aggregation(c, X.data(), dM.data(), dW.data(), &beyond);
+    if (breakage_) {
+      for (int k = 0; k < n_; ++k) {
+        // Eq. (92) selection times the fragment mass split: linear in M and W (fragments keep the parent's
+        // moisture, PAPER001_DECISIONS)
+        const T sk = c.par(kKBreak) * shape_[k];
+        for (int cl = 0; cl <= k; ++cl) {
+          const double f = frag_[size_t(cl) * n_ + k];
+          dM[cl] += sk * f * c.x_(k);
+          dW[cl] += sk * f * c.x_(n_ + k);
+        }
+      }
+    }
+    int reg_eta = 0, reg_a = 0;
+    std::vector<T> dry(n_);
+    T q_vs(0.0);
+    transfer(c, dry.data(), &q_vs, &reg_eta, &reg_a);
+    T m_vap(0.0), h_dep(0.0);
+    const bool wet = c.connected(kWet);
+    for (int i = 0; i < n_; ++i) {
+      const T dep = wet ? c.port(kWet, wetting::mdot(i)) : T(0.0);
+      m_vap += dry[i];
+      c.res(i) = c.xd(i) - dM[i];                         // Eq. (20), paper 001, per class in mass
+      c.res(n_ + i) = c.xd(n_ + i) - (dep - dry[i] + dW[i]);  // Eq. (58), paper 001, as water mass per class
+      h_dep += dep;
+    }
+    const T t_liq = wet ? c.port(kWet, wetting::T(n_)) : T(props::kT0);
+    // Eq. (59), paper 001, conservative: deposited liquid at its enthalpy, drying vapour leaves at h_v(T_S)
+    // (the particle supplies the latent heat), gas-solid heat transfer Q.
+    c.res(sH_) = c.xd(sH_) - (h_dep * props::liquid_water_enthalpy(t_liq, c.par(kCpL)) -
+                              c.x_(sVap_) * props::vapour_enthalpy(t_s) + c.x_(sQ_));
+    T heat_capacity(0.0);
+    for (int i = 0; i < n_; ++i) heat_capacity += c.x_(i) * c.par(kCpS) + c.x_(n_ + i) * c.par(kCpL);
+    c.res(sT_) = c.x_(sH_) - heat_capacity * (t_s - props::kT0);  // Eq. (60), paper 001
+    c.res(sU0_) = c.x_(sU0_) - inlet_velocity(c);
+    c.res(sVap_) = c.x_(sVap_) - m_vap;
+    c.res(sQ_) = c.x_(sQ_) - q_vs;
+    c.res(sTop_) = c.xd(sTop_) - beyond;
+    return Status::kOk;
+  }
+
+  template <class T>
+  void init(InitCtx<T>& c) const {
+    const T dry = c.p[kBedMass] / (1.0 + c.p[kX0]);
+    T heat_capacity(0.0);
+    for (int i = 0; i < n_; ++i) {
+      c.x0[i] = dry * init_frac_[i];
+      c.x0[n_ + i] = c.x0[i] * c.p[kX0];
+      heat_capacity += c.x0[i] * c.p[kCpS] + c.x0[n_ + i] * c.p[kCpL];
+    }
+    c.x0[sT_] = c.p[kTS0];
+    c.x0[sH_] = heat_capacity * (c.p[kTS0] - props::kT0);
+    c.x0[sU0_] = T(0.5);
+    c.x0[sVap_] = T(0.0);
+    c.x0[sQ_] = T(0.0);
+    c.x0[sTop_] = T(0.0);
+  }
+
+  // The aggregation term of the M and W rows, differentiated pair by pair: each pair's event rate depends on
+  // at most seven variables (both masses, wetted fractions and wet-spot moistures, and T_S), so the exact
+  // Jacobian costs O(N^2) instead of O(N^2) per AD direction.
+  bool jacobian_part(const Ctx<double>& c, double /*cj*/, JacobianSink& sink) const override {
+    if (agg_ == Aggregation::kNone) return true;
+    const bool wet = c.connected(kWet);
+    if (agg_ == Aggregation::kGlassTransition && !wet) return true;  // no wetted surface: beta = 0
+    const auto& ports = *c.port_index;
+    std::vector<double> number(n_), X(n_), fwet(n_, 0.0), sticky(n_, 0.0), ds_dx(n_, 0.0), ds_dt(n_, 0.0);
+    for (int i = 0; i < n_; ++i) {
+      number[i] = c.x_(i) / particle_mass_[i];
+      X[i] = moisture(c, i);
+      if (agg_ == Aggregation::kGlassTransition) {
+        using J2 = ceres::Jet<double, 2>;  // d/dXwet, d/dT_S
+        fwet[i] = c.port(kWet, wetting::fwet(n_, i));
+        const J2 xw(c.port(kWet, wetting::Xwet(n_, i)), 0), ts(c.x_(sT_), 1);
+        const J2 tg = p1::gordon_taylor(xw, J2(c.par(kGtK)), J2(c.par(kTgL)), J2(c.par(kTgS)));
+        const J2 s = p1::sticky_probability(ts, tg, J2(c.par(kStickySlope)), J2(c.par(kStickyOffset)));
+        sticky[i] = s.a;
+        ds_dx[i] = s.v[0];
+        ds_dt[i] = s.v[1];
+      }
+    }
+    const double scale = per_volume_ ? 1.0 / c.par(kVVessel) : 1.0;
+    const int col_t = c.offset + sT_;
+    auto col_m = [&](int i) { return c.offset + i; };
+    auto col_w = [&](int i) { return c.offset + n_ + i; };
+    for (size_t q = 0; q < pairs_.size(); ++q) {
+      const Pair& pr = pairs_[q];
+      const int j = pr.j, k = pr.k;
+      const double mj = particle_mass_[j], mk = particle_mass_[k], s = (j == k ? 0.5 : 1.0) * scale;
+      double beta, db_dfj = 0, db_dfk = 0, db_dxj = 0, db_dxk = 0, db_dt = 0;
+      if (agg_ == Aggregation::kGlassTransition) {
+        const double cf = cf_[q];
+        const double pg = 1.0 - (1.0 - fwet[j]) * (1.0 - fwet[k]);
+        const double pp = 1.0 - (1.0 - sticky[j]) * (1.0 - sticky[k]);
+        beta = cf * pg * pp;
+        db_dfj = cf * pp * (1.0 - fwet[k]);
+        db_dfk = cf * pp * (1.0 - fwet[j]);
+        db_dxj = cf * pg * (1.0 - sticky[k]) * ds_dx[j];
+        db_dxk = cf * pg * (1.0 - sticky[j]) * ds_dx[k];
+        db_dt = cf * pg * ((1.0 - sticky[k]) * ds_dt[j] + (1.0 - sticky[j]) * ds_dt[k]);
+      } else {
+        beta = std::exp(c.par(kLnBeta0));
+      }
+      const double nn = s * number[j] * number[k];
+      const double e = beta * nn;  // events per second
+      // dE/d(column) for the pair's variables
+      struct D { int col; double v; };
+      D de[7];
+      int nd = 0;
+      de[nd++] = {col_m(j), s * beta * number[k] / mj};
+      de[nd++] = {col_m(k), s * beta * number[j] / mk};
+      if (agg_ == Aggregation::kGlassTransition) {
+        de[nd++] = {ports[kWet][wetting::fwet(n_, j)], db_dfj * nn};
+        de[nd++] = {ports[kWet][wetting::fwet(n_, k)], db_dfk * nn};
+        de[nd++] = {ports[kWet][wetting::Xwet(n_, j)], db_dxj * nn};
+        de[nd++] = {ports[kWet][wetting::Xwet(n_, k)], db_dxk * nn};
+        de[nd++] = {col_t, db_dt * nn};
+      }
+      // rates per event: mass and water coefficients of the touched rows (residual = xdot - rate)
+      const double up = pr.frac_upper, m_agg = mj + mk, w_agg = mj * X[j] + mk * X[k];
+      struct R { int row; double cm, cw; };
+      const R rows[4] = {{j, -mj, -mj * X[j]}, {k, -mk, -mk * X[k]}, {pr.a, (1 - up) * m_agg, (1 - up) * w_agg},
+                         {pr.a + 1, up * m_agg, up * w_agg}};
+      const int nrows = up > 0 ? 4 : 3;
+      for (int r = 0; r < nrows; ++r)
+        for (int t = 0; t < nd; ++t) {
+          sink.add(rows[r].row, de[t].col, -rows[r].cm * de[t].v);
+          sink.add(n_ + rows[r].row, de[t].col, -rows[r].cw * de[t].v);
+        }
+      if (pr.beyond > 0)
+        for (int t = 0; t < nd; ++t) sink.add(sTop_, de[t].col, -m_agg * de[t].v);
+      // water rows through X_j = W_j / (M_j + floor) and X_k
+      for (auto [cls, mc] : {std::pair{j, mj}, std::pair{k, mk}}) {
+        const double inv = 1.0 / (c.x_(cls) + kMassFloor);
+        const double dx_dw = inv, dx_dm = -X[cls] * inv;
+        const double coef[3] = {-e * mc, (1 - up) * e * mc, up * e * mc};  // d(rate of W rows) / dX_cls
+        const int wrows[3] = {cls, pr.a, pr.a + 1};
+        for (int r = 0; r < (up > 0 ? 3 : 2); ++r) {
+          sink.add(n_ + wrows[r], col_w(cls), -coef[r] * dx_dw);
+          sink.add(n_ + wrows[r], col_m(cls), -coef[r] * dx_dm);
+        }
+      }
+    }
+    return true;
+  }
+
+  void report(const Ctx<double>& c, double* out) const override {
+    double m = 0, w = 0, n = 0;
+    std::vector<double> mass(n_);
+    for (int i = 0; i < n_; ++i) {
+      mass[i] = c.x_(i);
+      m += c.x_(i);
+      w += c.x_(n_ + i);
+      n += c.x_(i) / particle_mass_[i];
+    }
+    out[0] = quantile(mass, 0.1);
+    out[1] = quantile(mass, 0.5);
+    out[2] = quantile(mass, 0.9);
+    out[3] = w / m;
+    out[4] = w / (m + w);
+    out[5] = n;
+    std::vector<double> dry(n_);
+    double q = 0;
+    int reg_eta = 0, reg_a = 0;
+    transfer(c, dry.data(), &q, &reg_eta, &reg_a);
+    out[6] = reg_eta;
+    out[7] = reg_a;
+    out[8] = w;
+    out[9] = m;
+    out[10] = c.x_(sH_);
+    for (int i = 0; i < n_; ++i) {
+      out[11 + i] = grid_->diameter_pivots()[i];
+      out[11 + n_ + i] = mass[i];
+    }
+  }
+
+ private:
+  struct Pair {
+    int j, k, a;
+    double frac_upper;  // mass fraction of the aggregate landing on pivot a + 1
+    double beyond;      // 1 if the aggregate is beyond the top pivot (kept in the top class)
+  };
+
+  // Moisture of class i, kg/kg dry; the floor keeps an emptied class finite.
+  template <class T>
+  T moisture(const Ctx<T>& c, int i) const {
+    return c.x_(n_ + i) / (c.x_(i) + kMassFloor);
+  }
+
+  // Superficial velocity from the inlet flow at inlet conditions, Eq. (77), paper 001.
+  template <class T>
+  T inlet_velocity(const Ctx<T>& c) const {
+    const T rho_da = props::dry_air_partial_density(c.port(kInletProbe, gas::kT), c.port(kInletProbe, gas::kP),
+                                                    c.port(kInletProbe, gas::kY));
+    return tr::superficial_velocity(T(c.port(kInletProbe, gas::kMdot) / rho_da), c.par(kABed));
+  }
+
+  // Eqs. (21)-(24) with the kernel of Eq. (39) (or a constant one) on the mass-based fixed pivot; water moves
+  // with the solid mass: an agglomerate carries the mass-weighted loading of its partners.
+  template <class T>
+  void aggregation(const Ctx<T>& c, const T* X, T* dM, T* dW, T* beyond) const {
+    const auto& d = grid_->diameter_pivots();
+    std::vector<T> number(n_), fwet(n_), sticky(n_);
+    const bool wet = c.connected(kWet);
+    for (int i = 0; i < n_; ++i) {
+      number[i] = c.x_(i) / particle_mass_[i];
+      if (agg_ == Aggregation::kGlassTransition) {
+        fwet[i] = wet ? c.port(kWet, wetting::fwet(n_, i)) : T(0.0);
+        const T xwet = wet ? c.port(kWet, wetting::Xwet(n_, i)) : X[i];
+        const T tg = p1::gordon_taylor(xwet, c.par(kGtK), c.par(kTgL), c.par(kTgS));              // Eq. (54)
+        sticky[i] = p1::sticky_probability(c.x_(sT_), tg, c.par(kStickySlope), c.par(kStickyOffset));  // Eq. (53)
+      }
+    }
+    const T scale = per_volume_ ? T(1.0 / c.par(kVVessel)) : T(1.0);
+    for (size_t q = 0; q < pairs_.size(); ++q) {
+      const Pair& pr = pairs_[q];
+      const int j = pr.j, k = pr.k;
+      T beta;
+      if (agg_ == Aggregation::kGlassTransition) {
+        T cf;  // Eq. (37); Jets recompute it so that sensitivities to ln_beta0 and tau_spray carry through
+        if constexpr (std::is_same_v<T, double>) cf = cf_[q];
+        else cf = p1::collision_frequency(T(d[j]), T(d[k]), c.par(kLnBeta0), c.par(kTauSpray));
+        beta = p1::agglomeration_kernel(cf, p1::geometric_success_factor(fwet[j], fwet[k]),
+                                        p1::physical_success_factor(sticky[j], sticky[k]));          // Eq. (39)
+      } else {
+        using std::exp;
+        beta = exp(c.par(kLnBeta0));
+      }
+      // events per second: 1/2 beta N_j^2 for like pairs, beta N_j N_k otherwise (Eq. (21) and (24))
+      const T events = (j == k ? 0.5 : 1.0) * scale * beta * number[j] * number[k];
+      const T mj = events * particle_mass_[j], mk = events * particle_mass_[k];
+      const T m_agg = mj + mk, w_agg = mj * X[j] + mk * X[k];
+      dM[j] -= mj;
+      dM[k] -= mk;
+      dW[j] -= mj * X[j];
+      dW[k] -= mk * X[k];
+      const double up = pr.frac_upper;
+      dM[pr.a] += (1.0 - up) * m_agg;
+      dW[pr.a] += (1.0 - up) * w_agg;
+      if (up > 0) {
+        dM[pr.a + 1] += up * m_agg;
+        dW[pr.a + 1] += up * w_agg;
+      }
+      if (pr.beyond > 0) *beyond += m_agg;
+    }
+  }
+
+  // Drying per class (Eqs. (70)-(83)) and gas-solid heat transfer (Eqs. (85)-(89)); counts the
+  // regularizations that replaced the literal equations.
+  template <class T>
+  void transfer(const Ctx<T>& c, T* dry, T* q, int* reg_eta, int* reg_a) const {
+    const auto& d = grid_->diameter_pivots();
+    const T& t_s = c.x_(sT_);
+    const T& y = c.port(kGasProbe, gas::kY);
+    const T& p = c.port(kGasProbe, gas::kP);
+    const T& t_g = c.port(kGasProbe, gas::kT);
+    const T& u0 = c.x_(sU0_);
+    const T rho = props::humid_air_density(t_g, p, y);
+    const T rho_da = props::dry_air_partial_density(t_g, p, y);  // Y is per kg dry air in Eq. (72)
+    const T mu = props::air_viscosity(t_g);
+    const T nu = props::kinematic_viscosity(mu, rho);
+    const T sc = props::schmidt_number(mu, rho, c.par(kDv));                                 // Eq. (78)
+    const T pr = props::prandtl_number(props::humid_heat_capacity(y), mu, c.par(kLambda));  // Eq. (89)
+    std::vector<T> area(n_);
+    T surface(0.0);
+    for (int i = 0; i < n_; ++i) {
+      area[i] = kernels::class_surface(T(c.x_(i) / particle_mass_[i]), T(d[i]));  // N_i pi d_i^2 (DECISIONS)
+      surface += area[i];
+    }
+    const T ratio = tr::bed_area_ratio(surface, c.par(kABed));  // A_p / A_inlet in Eqs. (74), (87)
+    // Eqs. (82)-(83): activity of the bulk gas at the solids temperature; BET (81) is singular at a = 1
+    const auto a = kernels::cap_at(p1::water_activity(y, t_s, p), T(0.99));
+    *reg_a += a.active;
+    const T x_eq = p1::bet_equilibrium_moisture(a.value, c.par(kBetMm), c.par(kBetN));  // Eq. (81)
+    const T y_sat = props::equilibrium_humidity(t_s, p);  // Y_eq at T_S (PAPER001_DECISIONS)
+    *q = T(0.0);
+    for (int i = 0; i < n_; ++i) {
+      const T di(d[i]);
+      const T re0 = tr::particle_reynolds_number(u0, di, nu);                                   // Eq. (76)
+      const T shb = tr::bulk_sherwood(tr::sherwood_single(re0, sc), re0, sc, ratio, c.par(kShCorr));  // (74), (75)
+      const T j = p1::drying_mass_flux(rho_da, tr::mass_transfer_coefficient(shb, c.par(kDv), di), y_sat, y);  // (72), (73)
+      const auto eta = p1::normalized_moisture(moisture(c, i), x_eq, c.par(kXcr));  // Eq. (80), regularized
+      *reg_eta += eta.active;
+      dry[i] = p1::drying_rate(p1::linear_drying_curve(eta.value), area[i], j);  // Eqs. (70), (79)
+      const T nub = tr::bulk_nusselt(tr::nusselt_single(re0, pr), re0, pr, ratio);  // Eqs. (87), (88)
+      *q += tr::heat_transfer_coefficient(nub, c.par(kLambda), di) * area[i] * (t_g - t_s);  // Eqs. (85), (86)
+    }
+  }
+
+  // Diameter below which a fraction q of the mass lies: the cumulative mass Q3 is known at the cell edges and
+  // interpolated linearly in ln d between them (mass spread log-uniformly inside a cell).
+  double quantile(const std::vector<double>& mass, double q) const {
+    const auto& e = grid_->diameter_edges();
+    double total = 0;
+    for (double m : mass) total += m;
+    double below = 0;
+    for (int i = 0; i < n_; ++i) {
+      const double next = below + mass[i] / total;
+      if (next >= q && mass[i] > 0) {
+        const double f = (q - below) / (next - below);
+        return std::exp(std::log(e[i]) + f * (std::log(e[i + 1]) - std::log(e[i])));
+      }
+      below = next;
+    }
+    return e[n_];
+  }
+
+  int n_ = def::kSizeClasses;
+  static constexpr double kMassFloor = 1e-12;  // kg
+  int sH_ = 0, sT_ = 0, sU0_ = 0, sVap_ = 0, sQ_ = 0, sTop_ = 0;
+  Aggregation agg_ = Aggregation::kGlassTransition;
+  bool breakage_ = true, per_volume_ = false;
+  p1::BreakageSizeUnit size_unit_ = p1::BreakageSizeUnit::kMicrometre;
+  std::unique_ptr<kernels::Grid> grid_;
+  std::vector<Pair> pairs_;
+  std::vector<double> shape_, frag_, particle_mass_, init_frac_, cf_;
+};
+
+}  // namespace
+
+void register_fluid_bed(Registry<Unit>& r) {
+  r.add("fluid_bed", "batch fluid bed: population balance, drying and heat transfer (paper 001)",
+        [] { return std::make_unique<FluidBed>(); });
+}
+
+}  // namespace granuflow::units

@@ -1,0 +1,10 @@
+#pragma once
+#include "granuflow/registry.hpp"
+#include "granuflow/unit.hpp"
+namespace granuflow::units {
+// Spray zone of paper 001 (Eqs. (27)-(35), (40)-(51), (55)-(57)): from the bed's hold-up (read through its
+// probe) and the deposited liquid, the DEM-surrogate closures give per class the liquid deposited, the wetted
+// surface fraction and the wet-spot moisture that the glass-transition agglomeration kernel needs.
+// Zero hold-up: every state is algebraic.
+void register_spray_zone(Registry<Unit>& r);
+}
