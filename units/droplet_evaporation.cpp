@@ -33,6 +33,7 @@ class DropletEvaporation : public UnitBase<DropletEvaporation> {
       s.provide(p, liquid::kT, kT);
       s.provide(p, liquid::kW, kW);
     }
+    s.set_explicit();
     s.add_output("evaporated_fraction", "-");
     s.add_output("reg_evaporation_capped", "-");
   }
@@ -54,7 +55,7 @@ class DropletEvaporation : public UnitBase<DropletEvaporation> {
     if (m < T(0.0)) m = T(0.0);
     if (m > m_l) m = m_l;
     c.res(kEvap) = c.x_(kEvap) - m;
-    c.res(kDep) = c.x_(kDep) - (m_l - c.x_(kEvap));
+    c.res(kDep) = c.x_(kDep) - (m_l - m);
     c.res(kT) = c.x_(kT) - c.port(kSpray, liquid::kT);
     c.res(kW) = c.x_(kW) - c.port(kSpray, liquid::kW);
     return Status::kOk;

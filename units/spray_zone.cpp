@@ -52,6 +52,7 @@ class SprayZone : public UnitBase<SprayZone> {
     const int out = s.add_port("out", StreamKind::Wetting, PortDir::Out, n_);
     s.provide_all(out, 0);
     s.set_port_grid(out, d_);
+    s.set_explicit();  // zero hold-up: its states are evaluated inline, never integrated
     s.add_output("reg_ws_floor", "-");
     s.add_output("reg_wet_volume_cap", "-");
     s.add_output("fwet_mean", "-");

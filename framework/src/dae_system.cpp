@@ -5,18 +5,47 @@
 #include <set>
 #include <unordered_map>
 
+#include <Eigen/Dense>
+
 #include "granuflow/errors.hpp"
 
 namespace granuflow {
 
-DaeSystem::DaeSystem(Flowsheet& fs) : fs_(fs) {
+DaeSystem::DaeSystem(Flowsheet& fs, bool inline_explicit) : fs_(fs) {
   if (!fs_.finalized()) fs_.finalize();
-  n_ = fs_.n_states();
+  n_ext_ = fs_.n_states();
+  inline_ = inline_explicit && fs_.n_explicit_states() > 0;
+  n_ = inline_ ? n_ext_ - fs_.n_explicit_states() : n_ext_;
   const auto& units = fs_.units();
+  // Explicit units in dependency order (one reading another's states comes after it).
+  std::vector<int> pending;
+  for (size_t u = 0; u < units.size(); ++u) (units[u].spec.is_explicit() ? pending : real_units_).push_back(int(u));
+  while (!pending.empty()) {
+    bool progressed = false;
+    for (size_t i = 0; i < pending.size(); ++i) {
+      const int u = pending[i];
+      bool ready = true;
+      for (const auto& port : units[u].port_index)
+        for (int c : port)
+          if (c >= 0 && fs_.units()[fs_.state_unit(c)].spec.is_explicit() && fs_.state_unit(c) != u &&
+              std::find(explicit_order_.begin(), explicit_order_.end(), fs_.state_unit(c)) == explicit_order_.end())
+            ready = false;
+      if (ready) {
+        explicit_order_.push_back(u);
+        pending.erase(pending.begin() + i);
+        progressed = true;
+        break;
+      }
+    }
+    if (!progressed)
+      throw ConfigError("explicit units read each other in a loop (" + units[pending.front()].name +
+                        " ...): give one of them states");
+  }
+  const int n_all = n_ext_;
   pvals_.resize(units.size());
   local_cols_.resize(units.size());
   // Columns each unit's rows can depend on: own states and every field its ports read.
-  std::vector<std::set<int>> col_rows(n_);
+  std::vector<std::set<int>> col_rows(n_all);
   for (size_t u = 0; u < units.size(); ++u) {
     std::set<int> cols;
     const int ns = static_cast<int>(units[u].spec.states().size());
@@ -28,9 +57,9 @@ DaeSystem::DaeSystem(Flowsheet& fs) : fs_(fs) {
     for (int c : cols)
       for (int k = 0; k < ns; ++k) col_rows[c].insert(units[u].offset + k);
   }
-  pattern_.n = n_;
-  pattern_.col_ptr.assign(n_ + 1, 0);
-  for (int c = 0; c < n_; ++c) {
+  pattern_.n = n_all;
+  pattern_.col_ptr.assign(n_all + 1, 0);
+  for (int c = 0; c < n_all; ++c) {
     pattern_.row_idx.insert(pattern_.row_idx.end(), col_rows[c].begin(), col_rows[c].end());
     pattern_.col_ptr[c + 1] = static_cast<int>(pattern_.row_idx.size());
   }
@@ -52,10 +81,58 @@ DaeSystem::DaeSystem(Flowsheet& fs) : fs_(fs) {
   col_map_.resize(units.size());
   for (size_t u = 0; u < units.size(); ++u)
     for (size_t j = 0; j < local_cols_[u].size(); ++j) col_map_[u][local_cols_[u][j]] = static_cast<int>(j);
-  xj_.resize(n_);
-  xdj_.resize(n_);
-  rbuf_.resize(n_);
+  xj_.resize(n_all);
+  xdj_.resize(n_all);
+  rbuf_.resize(n_all);
+  y_ext_.resize(n_all);
+  yp_ext_.resize(n_all);
   reconfigure();
+  // An explicit unit's residual must be exactly x - f with f independent of x: check the slope once.
+  if (inline_) {
+    std::vector<double> y0, yp0(n_ext_, 0.0), r0(n_ext_), r1(n_ext_);
+    for (size_t u = 0; u < units.size(); ++u) {
+      InitCtx<double> c{pvals_[u].data(), y_ext_.data() + units[u].offset};
+      units[u].unit->initial(c);
+    }
+    for (int u : explicit_order_) {
+      const int ns = static_cast<int>(units[u].spec.states().size()), off = units[u].offset;
+      for (double shift : {0.0, 1.0}) {
+        auto y = y_ext_;
+        for (int k = 0; k < ns; ++k) y[off + k] = shift;
+        Ctx<double> c{0.0, y.data(), yp0.data(), pvals_[u].data(), (shift > 0 ? r1 : r0).data(), off,
+                      &units[u].port_index, 0.0};
+        units[u].unit->residual(c);
+      }
+      for (int k = 0; k < ns; ++k)
+        if (std::abs(r1[k] - r0[k] - 1.0) > 1e-9)
+          throw std::logic_error("unit '" + units[u].name + "' is declared explicit but the residual of state '" +
+                                 units[u].spec.states()[k].name + "' is not x - f(inputs)");
+    }
+  }
+}
+
+// Evaluates the explicit units in order: with their states set to zero, residual = -f.
+template <class T>
+void DaeSystem::evaluate_explicit(double t, T* x, T* xd, const std::vector<std::vector<T>>& params,
+                                  std::vector<T>& scratch) {
+  const auto& units = fs_.units();
+  for (int u : explicit_order_) {
+    const int ns = static_cast<int>(units[u].spec.states().size()), off = units[u].offset;
+    for (int k = 0; k < ns; ++k) x[off + k] = T(0.0), xd[off + k] = T(0.0);
+    scratch.resize(ns);
+    Ctx<T> c{t, x, xd, params[u].data(), scratch.data(), off, &units[u].port_index, segment_start_};
+    units[u].unit->residual(c);
+    for (int k = 0; k < ns; ++k) x[off + k] = -scratch[k];
+  }
+}
+
+void DaeSystem::extend(double t, const double* y, const double* yp, double* y_full, double* yp_full) {
+  std::copy(y, y + n_, y_full);
+  std::copy(yp, yp + n_, yp_full);
+  if (!inline_) return;
+  fill_params(t);
+  std::vector<double> scratch;
+  evaluate_explicit(t, y_full, yp_full, pvals_, scratch);
 }
 
 void DaeSystem::reconfigure() {
@@ -89,7 +166,16 @@ Status DaeSystem::residual(double t, const double* y, const double* yp, double* 
   ++n_res_;
   fill_params(t);
   const auto& units = fs_.units();
+  if (inline_) {
+    std::copy(y, y + n_, y_ext_.begin());
+    std::copy(yp, yp + n_, yp_ext_.begin());
+    std::vector<double> scratch;
+    evaluate_explicit(t, y_ext_.data(), yp_ext_.data(), pvals_, scratch);
+    y = y_ext_.data();
+    yp = yp_ext_.data();
+  }
   for (size_t u = 0; u < units.size(); ++u) {
+    if (inline_ && units[u].spec.is_explicit()) continue;
     Ctx<double> c{t, y, yp, pvals_[u].data(), r + units[u].offset, units[u].offset, &units[u].port_index, segment_start_};
     const Status s = units[u].unit->residual(c);
     if (s != Status::kOk) return s;
@@ -134,10 +220,32 @@ class SparseSink : public JacobianSink {
 void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj, double* dense, double* sparse) {
   ++n_jac_;
   fill_params(t);
+  if (!inline_) return assemble(t, y, yp, cj, n_, dense, sparse);
+  if (!dense) throw std::logic_error("explicit units are inlined only with dense Jacobians");
+  std::copy(y, y + n_, y_ext_.begin());
+  std::copy(yp, yp + n_, yp_ext_.begin());
+  std::vector<double> scratch;
+  evaluate_explicit(t, y_ext_.data(), yp_ext_.data(), pvals_, scratch);
+  jac_ext_.resize(size_t(n_ext_) * n_ext_);
+  assemble(t, y_ext_.data(), yp_ext_.data(), cj, n_ext_, jac_ext_.data(), nullptr);
+  // Chain rule through the explicit states: dF_R/dy_R = J_RR - J_RS J_SS^-1 J_SR.
+  const int m = n_ext_ - n_;
+  Eigen::Map<const Eigen::MatrixXd> J(jac_ext_.data(), n_ext_, n_ext_);
+  Eigen::Map<Eigen::MatrixXd> out(dense, n_, n_);
+  const auto jss = J.bottomRightCorner(m, m);
+  if (jss.isIdentity(0.0))  // no explicit unit reads another: J_SS = I
+    out.noalias() = J.topLeftCorner(n_, n_) - J.topRightCorner(n_, m) * J.bottomLeftCorner(m, n_);
+  else
+    out.noalias() = J.topLeftCorner(n_, n_) -
+                    J.topRightCorner(n_, m) * Eigen::MatrixXd(jss).partialPivLu().solve(J.bottomLeftCorner(m, n_));
+}
+
+void DaeSystem::assemble(double t, const double* y, const double* yp, double cj, int dim, double* dense,
+                         double* sparse) {
   const auto& units = fs_.units();
-  if (dense) std::fill(dense, dense + size_t(n_) * n_, 0.0);
+  if (dense) std::fill(dense, dense + size_t(dim) * dim, 0.0);
   if (sparse) std::fill(sparse, sparse + pattern_.nnz(), 0.0);
-  for (int i = 0; i < n_; ++i) {
+  for (int i = 0; i < dim; ++i) {
     xj_[i] = Jet(y[i]);
     xdj_[i] = Jet(yp[i]);
   }
@@ -150,7 +258,7 @@ void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj,
     Ctx<double> cd{t, y, yp, pvals_[u].data(), rbuf_.data(), units[u].offset, &units[u].port_index, segment_start_};
     bool partial = false;
     if (dense) {
-      DenseSink sink(dense, n_, units[u].offset);
+      DenseSink sink(dense, dim, units[u].offset);
       if (units[u].unit->jacobian(cd, cj, sink)) continue;
       partial = units[u].unit->jacobian_part(cd, cj, sink);
     } else {
@@ -176,7 +284,7 @@ void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj,
         for (int k = 0; k < ns; ++k) {
           const double d = rj_[k].v[j - c0];
           if (dense)
-            dense[size_t(cols[j]) * n_ + units[u].offset + k] += d;
+            dense[size_t(cols[j]) * dim + units[u].offset + k] += d;
           else
             sparse[block_pos_[u][size_t(k) * cols.size() + j]] += d;
         }
@@ -199,8 +307,9 @@ Status DaeSystem::sens_residual(double t, const double* y, const double* yp, con
                                 const double* const* yS, const double* const* ypS, double* const* rS) {
   fill_params(t);
   const auto& units = fs_.units();
-  std::vector<Jet> pj;
-  rj_.assign(n_, Jet(0.0));
+  std::vector<std::vector<Jet>> pj(units.size());
+  std::vector<Jet> scratch;
+  rj_.assign(n_ext_, Jet(0.0));
   for (size_t d0 = 0; d0 < params.size(); d0 += kAdChunk) {
     const size_t d1 = std::min(params.size(), d0 + kAdChunk);
     for (int i = 0; i < n_; ++i) {
@@ -212,9 +321,13 @@ Status DaeSystem::sens_residual(double t, const double* y, const double* yp, con
       }
     }
     for (size_t u = 0; u < units.size(); ++u) {
-      params_as(static_cast<int>(u), pj);
-      for (size_t d = d0; d < d1; ++d) seed(params[d], static_cast<int>(u), d - d0, pj);
-      Ctx<Jet> c{t, xj_.data(), xdj_.data(), pj.data(), rj_.data() + units[u].offset, units[u].offset,
+      params_as(static_cast<int>(u), pj[u]);
+      for (size_t d = d0; d < d1; ++d) seed(params[d], static_cast<int>(u), d - d0, pj[u]);
+    }
+    if (inline_) evaluate_explicit(t, xj_.data(), xdj_.data(), pj, scratch);
+    for (size_t u = 0; u < units.size(); ++u) {
+      if (inline_ && units[u].spec.is_explicit()) continue;
+      Ctx<Jet> c{t, xj_.data(), xdj_.data(), pj[u].data(), rj_.data() + units[u].offset, units[u].offset,
                  &units[u].port_index, segment_start_};
       const Status s = units[u].unit->residual(c);
       if (s != Status::kOk) return s;
@@ -228,19 +341,45 @@ Status DaeSystem::sens_residual(double t, const double* y, const double* yp, con
   return Status::kOk;
 }
 
+void DaeSystem::extend_sensitivities(double t, const double* y, const double* yp, const std::vector<int>& params,
+                                     const double* const* yS, double* const* yS_full) {
+  for (size_t d = 0; d < params.size(); ++d) std::copy(yS[d], yS[d] + n_, yS_full[d]);
+  if (!inline_) return;
+  fill_params(t);
+  const auto& units = fs_.units();
+  std::vector<std::vector<Jet>> pj(units.size());
+  std::vector<Jet> scratch;
+  for (size_t d0 = 0; d0 < params.size(); d0 += kAdChunk) {
+    const size_t d1 = std::min(params.size(), d0 + kAdChunk);
+    for (int i = 0; i < n_; ++i) {
+      xj_[i] = Jet(y[i]);
+      xdj_[i] = Jet(yp[i]);
+      for (size_t d = d0; d < d1; ++d) xj_[i].v[d - d0] = yS[d][i];
+    }
+    for (size_t u = 0; u < units.size(); ++u) {
+      params_as(static_cast<int>(u), pj[u]);
+      for (size_t d = d0; d < d1; ++d) seed(params[d], static_cast<int>(u), d - d0, pj[u]);
+    }
+    evaluate_explicit(t, xj_.data(), xdj_.data(), pj, scratch);
+    for (size_t d = d0; d < d1; ++d)
+      for (int i = n_; i < n_ext_; ++i) yS_full[d][i] = xj_[i].v[d - d0];
+  }
+}
+
 void DaeSystem::initial_values(std::vector<double>& y0) const {
-  y0.assign(n_, 0.0);
+  y0.assign(n_ext_, 0.0);
   const auto& units = fs_.units();
   for (size_t u = 0; u < units.size(); ++u) {
     InitCtx<double> c{pvals_[u].data(), y0.data() + units[u].offset};
     units[u].unit->initial(c);
   }
+  y0.resize(n_);  // explicit states, if inlined, are computed, not integrated
 }
 
 void DaeSystem::initial_sensitivities(const std::vector<int>& params, std::vector<std::vector<double>>& yS0) const {
   yS0.assign(params.size(), std::vector<double>(n_, 0.0));
   const auto& units = fs_.units();
-  std::vector<Jet> pj, x0(n_);
+  std::vector<Jet> pj, x0(n_ext_);
   for (size_t d0 = 0; d0 < params.size(); d0 += kAdChunk) {
     const size_t d1 = std::min(params.size(), d0 + kAdChunk);
     for (size_t u = 0; u < units.size(); ++u) {

@@ -161,12 +161,19 @@ void Flowsheet::finalize() {
   n_states_ = 0;
   state_owner_.clear();
   param_table_.clear();
-  for (size_t u = 0; u < units_.size(); ++u) {
-    units_[u].offset = n_states_;
-    n_states_ += static_cast<int>(units_[u].spec.states().size());
-    state_owner_.insert(state_owner_.end(), units_[u].spec.states().size(), static_cast<int>(u));
+  // Integrated states first, then those of explicit units, which a simulator may evaluate inline.
+  n_explicit_ = 0;
+  for (bool explicit_pass : {false, true})
+    for (size_t u = 0; u < units_.size(); ++u) {
+      if (units_[u].spec.is_explicit() != explicit_pass) continue;
+      const int ns = static_cast<int>(units_[u].spec.states().size());
+      units_[u].offset = n_states_;
+      n_states_ += ns;
+      if (explicit_pass) n_explicit_ += ns;
+      state_owner_.insert(state_owner_.end(), ns, static_cast<int>(u));
+    }
+  for (size_t u = 0; u < units_.size(); ++u)
     for (size_t k = 0; k < units_[u].params.size(); ++k) param_table_.push_back({int(u), int(k)});
-  }
   for (auto& inst : units_) {
     const auto& ports = inst.spec.ports();
     inst.port_index.assign(ports.size(), {});
@@ -328,9 +335,9 @@ std::vector<double> Flowsheet::breakpoints(double t_end) const {
 }
 
 std::vector<std::string> Flowsheet::state_names() const {
-  std::vector<std::string> v;
+  std::vector<std::string> v(n_states_);
   for (const auto& u : units_)
-    for (const auto& s : u.spec.states()) v.push_back(u.name + "." + s.name);
+    for (size_t k = 0; k < u.spec.states().size(); ++k) v[u.offset + k] = u.name + "." + u.spec.states()[k].name;
   return v;
 }
 

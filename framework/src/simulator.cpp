@@ -150,8 +150,12 @@ void ida_err(int code, const char* module, const char* function, char* msg, void
 SimResult simulate(Flowsheet& fs, const SimOptions& opt) {
   opt.validate();
   const auto wall0 = std::chrono::steady_clock::now();
-  DaeSystem sys(fs);
-  const int n = sys.size();
+  if (!fs.finalized()) fs.finalize();
+  // Explicit units are inlined whenever the remaining system is solved densely.
+  const bool inline_explicit = opt.linear_solver != "sparse" &&
+                               fs.n_states() - fs.n_explicit_states() <= opt.dense_limit;
+  DaeSystem sys(fs, inline_explicit);
+  const int n = sys.size(), n_full = sys.full_size();
   if (n == 0) throw ConfigError("flowsheet '" + fs.name() + "' has no states to integrate");
 
   std::vector<int> sens_ids;
@@ -178,7 +182,7 @@ SimResult simulate(Flowsheet& fs, const SimOptions& opt) {
   }
 
   IdaUser user{&sys, true, sens_ids, {}, {}, {}, {}};
-  user.dense = opt.linear_solver == "dense" || (opt.linear_solver == "auto" && n <= opt.dense_limit);
+  user.dense = sys.inlined() || opt.linear_solver == "dense" || (opt.linear_solver == "auto" && n <= opt.dense_limit);
 
   void* mem = IDACreate(C.ctx);
   std::unique_ptr<void, void (*)(void*)> mem_guard(mem, [](void* m) { IDAFree(&m); });
@@ -237,6 +241,7 @@ SimResult simulate(Flowsheet& fs, const SimOptions& opt) {
   res.sens_params = opt.sensitivities;
   const int no = static_cast<int>(res.output_names.size());
   res.stats.states = n;
+  res.stats.explicit_states = n_full - n;
   res.stats.linear_solver = user.dense ? "dense (Eigen LU)" : "sparse (KLU)";
 
   auto fail = [&](int flag, const char* what) {
@@ -273,20 +278,26 @@ SimResult simulate(Flowsheet& fs, const SimOptions& opt) {
     IDAGetNumNonlinSolvConvFails(mem, &v), res.stats.nonlinear_failures += v;
   };
 
+  std::vector<double> y_full(n_full), yp_full(n_full);
+  std::vector<std::vector<double>> s_full(ns, std::vector<double>(n_full));
   auto record = [&](double t) {
+    sys.extend(t, y.data(), yp.data(), y_full.data(), yp_full.data());
     res.t.push_back(t);
-    res.y.insert(res.y.end(), y.data(), y.data() + n);
-    res.yp.insert(res.yp.end(), yp.data(), yp.data() + n);
+    res.y.insert(res.y.end(), y_full.begin(), y_full.end());
+    res.yp.insert(res.yp.end(), yp_full.begin(), yp_full.end());
     std::vector<double> out(no);
-    if (no > 0) sys.report(t, y.data(), yp.data(), out.data());
+    if (no > 0) sys.report(t, y_full.data(), yp_full.data(), out.data());
     for (double& v : out)
       if (!std::isfinite(v)) v = std::nan("");
     res.outputs.insert(res.outputs.end(), out.begin(), out.end());
     if (ns > 0) {
       realtype tret;
       if (t > 0) IDAGetSens(mem, &tret, yS);
-      for (int k = 0; k < ns; ++k)
-        res.sens.insert(res.sens.end(), N_VGetArrayPointer(yS[k]), N_VGetArrayPointer(yS[k]) + n);
+      std::vector<const double*> src(ns);
+      std::vector<double*> dst(ns);
+      for (int k = 0; k < ns; ++k) src[k] = N_VGetArrayPointer(yS[k]), dst[k] = s_full[k].data();
+      sys.extend_sensitivities(t, y.data(), yp.data(), sens_ids, src.data(), dst.data());
+      for (int k = 0; k < ns; ++k) res.sens.insert(res.sens.end(), s_full[k].begin(), s_full[k].end());
     }
   };
 
@@ -433,7 +444,8 @@ void consistent_initial_values(DaeSystem& sys, double t, std::vector<double>& y0
 
 SteadyResult solve_steady_state(Flowsheet& fs, const SteadyOptions& opt, const std::vector<double>* guess) {
   opt.validate();
-  DaeSystem sys(fs);
+  if (!fs.finalized()) fs.finalize();
+  DaeSystem sys(fs, fs.n_states() - fs.n_explicit_states() <= 400);
   const int n = sys.size();
   sys.set_segment_start(opt.t);
   Context C;

@@ -65,7 +65,8 @@ py::dict simulate(Scene& s, std::optional<double> t_end, std::optional<std::vect
                  "linear_setups"_a = r.stats.linear_setups, "nonlinear_iterations"_a = r.stats.nonlinear_iterations,
                  "error_test_failures"_a = r.stats.error_test_failures,
                  "nonlinear_failures"_a = r.stats.nonlinear_failures, "reinits"_a = r.stats.reinits,
-                 "states"_a = r.stats.states, "linear_solver"_a = r.stats.linear_solver);
+                 "states"_a = r.stats.states, "explicit_states"_a = r.stats.explicit_states,
+                 "linear_solver"_a = r.stats.linear_solver);
   return py::dict("t"_a = as_array(r.t, {nt}), "y"_a = as_array(r.y, {nt, ns}), "yp"_a = as_array(r.yp, {nt, ns}),
                   "state_names"_a = r.state_names, "outputs"_a = as_array(r.outputs, {nt, no}),
                   "output_names"_a = r.output_names, "sens"_a = as_array(r.sens, {nt, np, ns}),

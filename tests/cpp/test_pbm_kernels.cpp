@@ -152,12 +152,16 @@ TEST(PbmKernels, AggregationKernelsAreSymmetricFiniteAndNonNegative) {
   }
 }
 
-TEST(PbmKernels, CallableKernelReproducesTheCompiledOne) {
+// The Python prototyping path: a callable returning the n x n matrix. It is state-independent, so it is
+// evaluated once per run, however many residuals the solver takes.
+TEST(PbmKernels, CallableKernelReproducesTheCompiledOneAndIsEvaluatedOncePerRun) {
   auto& reg = registries().aggregation;
+  static int calls = 0;
   if (!reg.contains("test_python_constant"))
     register_callback_kernel(reg, "test_python_constant", "beta = beta0 from a callable",
                              {{"beta0", "1/s", 1.0, 0.0, 10.0, "rate coefficient", "test"}}, {},
                              [](const ClassState<double>& s, const double* p, double* beta) {
+                               ++calls;
                                for (int k = 0; k < s.n * s.n; ++k) beta[k] = p[0];
                              });
   std::vector<double> m2;
@@ -165,7 +169,12 @@ TEST(PbmKernels, CallableKernelReproducesTheCompiledOne) {
     auto s = pbm_test::grid_settings(2, 20);
     s["aggregation"] = k;
     auto fs = pbm_test::flowsheet(s, {{"agg_beta0", 0.7}});
+    calls = 0;
     const auto r = pbm_test::run(*fs, {0, 10});
+    if (std::string(k) == "test_python_constant") {
+      EXPECT_EQ(calls, 1);
+      EXPECT_GT(r.result.stats.residuals, 50);
+    }
     m2.push_back(pbm_test::moment(pbm_test::grid(2, 20), r.N(1), 2));
   }
   EXPECT_NEAR(m2[1] / m2[0], 1.0, 1e-12);

@@ -22,10 +22,20 @@ class DaeSystem {
  public:
   // Calls configure() of every unit with the current parameters. The flowsheet must be finalized and must
   // outlive this object; parameter changes need a new DaeSystem (cheap) or reconfigure().
-  explicit DaeSystem(Flowsheet& fs);
+  // With `inline_explicit`, the states of explicit units (UnitSpec::set_explicit) are not unknowns of the
+  // system: they are evaluated from the others before every residual and eliminated from the Jacobian by the
+  // Schur complement J_RR - J_RS J_SS^-1 J_SR (dense Jacobians only).
+  explicit DaeSystem(Flowsheet& fs, bool inline_explicit = true);
   void reconfigure();
 
-  int size() const { return n_; }
+  int size() const { return n_; }              // unknowns of the integrator
+  int full_size() const { return n_ext_; }     // every state of the flowsheet, explicit ones last
+  bool inlined() const { return inline_; }
+  // The full state vector (explicit states evaluated) from the integrator's y, y'; explicit states' y' = 0.
+  void extend(double t, const double* y, const double* yp, double* y_full, double* yp_full);
+  // Sensitivities of all states from those of the unknowns (explicit ones by forward AD).
+  void extend_sensitivities(double t, const double* y, const double* yp, const std::vector<int>& params,
+                            const double* const* yS, double* const* yS_full);
   const Flowsheet& flowsheet() const { return fs_; }
 
   // Inputs with step interpolation are held at their value at the start of the current segment, so the
@@ -45,7 +55,8 @@ class DaeSystem {
   void initial_sensitivities(const std::vector<int>& params, std::vector<std::vector<double>>& yS0) const;
   std::vector<double> differential_id() const;  // 1 differential, 0 algebraic
   std::vector<double> scales() const;
-  void report(double t, const double* y, const double* yp, double* out);
+  // Reported outputs at the full state vector (see extend()).
+  void report(double t, const double* y_full, const double* yp_full, double* out);
   // Unit and state name of a global row, for error messages.
   std::string describe_row(int row) const;
 
@@ -54,12 +65,20 @@ class DaeSystem {
 
  private:
   void fill_params(double t);
+  template <class T>
+  void evaluate_explicit(double t, T* x, T* xd, const std::vector<std::vector<T>>& params, std::vector<T>& scratch);
+  void assemble(double t, const double* y, const double* yp, double cj, int dim, double* dense, double* sparse);
   void seed(int id, int u, size_t slot, std::vector<Jet>& pj) const;
   template <class T>
   void params_as(int unit, std::vector<T>& out) const;
 
   Flowsheet& fs_;
-  int n_;
+  int n_;                       // unknowns
+  int n_ext_;                   // all states
+  bool inline_ = false;
+  std::vector<int> explicit_order_;  // explicit units, each after the explicit units it reads
+  std::vector<int> real_units_;      // the others
+  std::vector<double> y_ext_, yp_ext_, jac_ext_;
   double segment_start_ = 0.0;
   std::vector<std::vector<double>> pvals_;   // per unit, at the last fill time
   std::vector<std::vector<int>> local_cols_; // per unit: global columns its rows depend on

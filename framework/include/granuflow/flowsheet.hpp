@@ -91,6 +91,7 @@ class Flowsheet {
 
   // Layout (after finalize).
   int n_states() const { return n_states_; }
+  int n_explicit_states() const { return n_explicit_; }  // the last ones, belonging to explicit units
   std::vector<std::string> state_names() const;  // "unit.state"
   const StateSpec& state_spec(int global) const;
   int state_unit(int global) const;              // unit index owning a state
@@ -111,6 +112,7 @@ class Flowsheet {
   std::vector<int> state_owner_;
   std::vector<std::pair<int, int>> links_;  // (target, source) parameter ids
   int n_states_ = 0;
+  int n_explicit_ = 0;
   bool finalized_ = false;
 };
 

@@ -34,7 +34,8 @@ struct SolverStats {
   long error_test_failures = 0;
   long nonlinear_failures = 0;
   long reinits = 0;        // restarts at input breakpoints
-  long states = 0;
+  long states = 0;         // unknowns of the integrator
+  long explicit_states = 0;  // states of explicit units, evaluated inline
   std::string linear_solver;
 };
 

@@ -62,6 +62,11 @@ class UnitSpec {
   // Provides fields [0, n) of `port` by consecutive own states starting at `first_state`.
   void provide_all(int port, int first_state);
   int add_output(std::string name, std::string unit);
+  // Declares the unit explicit: zero hold-up, every state algebraic with residual exactly x_k - f_k(ports),
+  // f independent of the unit's own states. The simulator then evaluates f inline instead of integrating the
+  // states, and chains its Jacobian into the consumers' (Schur complement), so such a unit adds no unknowns.
+  void set_explicit() { explicit_ = true; }
+  bool is_explicit() const { return explicit_; }
 
   const std::vector<StateSpec>& states() const { return states_; }
   const std::vector<ParamSpec>& params() const { return params_; }
@@ -75,6 +80,7 @@ class UnitSpec {
   std::vector<ParamSpec> params_;
   std::vector<PortSpec> ports_;
   std::vector<OutputSpec> outputs_;
+  bool explicit_ = false;
 };
 
 // The view of the global system a unit's residual sees.
