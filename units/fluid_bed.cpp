@@ -1,6 +1,7 @@
 #include "fluid_bed.hpp"
 
 #include <cmath>
+#include <tuple>
 #include <type_traits>
 #include <vector>
 
@@ -173,7 +174,11 @@ class FluidBed : public UnitBase<FluidBed> {
       frag_[size_t(k) * n_ + k] -= 1.0;  // the parent leaves class k
     }
     particle_mass_.resize(n_);
-    for (int i = 0; i < n_; ++i) particle_mass_[i] = p[kRhoS] * (1.0 - p[kEps]) * x[i];
+    surface_per_mass_.resize(n_);
+    for (int i = 0; i < n_; ++i) {
+      particle_mass_[i] = p[kRhoS] * (1.0 - p[kEps]) * x[i];
+      surface_per_mass_[i] = kernels::sphere_surface(dp[i]) / particle_mass_[i];
+    }
     // Initial log-normal mass distribution over the cells; tails beyond the grid folded into the end classes.
     init_frac_.assign(n_, 0.0);
     auto cdf = [&](double d) { return 0.5 * std::erfc(-std::log(d / p[kD50]) / (std::log(p[kSigma]) * std::sqrt(2.0))); };
@@ -246,12 +251,12 @@ class FluidBed : public UnitBase<FluidBed> {
   }
 
   // The aggregation term of the M and W rows, differentiated pair by pair: each pair's event rate depends on
-  // at most seven variables (both masses, wetted fractions and wet-spot moistures, and T_S), so the exact
-  // Jacobian costs O(N^2) instead of O(N^2) per AD direction.
-  bool jacobian_part(const Ctx<double>& c, double /*cj*/, JacobianSink& sink) const override {
-    if (agg_ == Aggregation::kNone) return true;
+  // at most seven variables (both masses, wetted fractions and wet-spot moistures, and T_S), so this part of
+  // the exact Jacobian costs O(N^2) instead of O(N^2) per AD direction.
+  void aggregation_jacobian(const Ctx<double>& c, JacobianSink& sink) const {
+    if (agg_ == Aggregation::kNone) return;
     const bool wet = c.connected(kWet);
-    if (agg_ == Aggregation::kGlassTransition && !wet) return true;  // no wetted surface: beta = 0
+    if (agg_ == Aggregation::kGlassTransition && !wet) return;  // no wetted surface: beta = 0
     const auto& ports = *c.port_index;
     std::vector<double> number(n_), X(n_), fwet(n_, 0.0), sticky(n_, 0.0), ds_dx(n_, 0.0), ds_dt(n_, 0.0);
     for (int i = 0; i < n_; ++i) {
@@ -330,6 +335,95 @@ class FluidBed : public UnitBase<FluidBed> {
         }
       }
     }
+  }
+
+  // The exact Jacobian, assembled from small pieces instead of AD over all ~5N local columns: aggregation pair
+  // by pair, breakage as its constant matrix, drying and heat transfer class by class with local AD over the
+  // eight variables each class depends on (M_i, W_i, T_S, u0, Y, p, T_gas and the bed's area ratio, whose
+  // derivative with respect to every M_j is a constant).
+  bool jacobian(const Ctx<double>& c, double cj, JacobianSink& sink) const override {
+    using J8 = ceres::Jet<double, 8>;
+    using J4 = ceres::Jet<double, 4>;
+    const auto& ports = *c.port_index;
+    auto col_m = [&](int i) { return c.offset + i; };
+    auto col_w = [&](int i) { return c.offset + n_ + i; };
+    const int col_ts = c.offset + sT_;
+    for (int i = 0; i < n_; ++i) sink.add(i, col_m(i), cj), sink.add(n_ + i, col_w(i), cj);
+    sink.add(sH_, c.offset + sH_, cj);
+    sink.add(sTop_, c.offset + sTop_, cj);
+    aggregation_jacobian(c, sink);
+    if (breakage_)
+      for (int k = 0; k < n_; ++k)
+        for (int cl = 0; cl <= k; ++cl) {
+          const double v = c.par(kKBreak) * shape_[k] * frag_[size_t(cl) * n_ + k];
+          sink.add(cl, col_m(k), -v);
+          sink.add(n_ + cl, col_w(k), -v);
+        }
+    // drying (W rows, m_vap row) and heat transfer (Q row)
+    std::vector<J8> par(kNParams);
+    for (int k = 0; k < kNParams; ++k) par[k] = J8(c.par(k));
+    const int cols[7] = {0, 0, col_ts, c.offset + sU0_, ports[kGasProbe][gas::kY], ports[kGasProbe][gas::kP],
+                         ports[kGasProbe][gas::kT]};
+    const GasSide<J8> g = gas_side(J8(c.x_(sT_), 2), J8(c.port(kGasProbe, gas::kT), 6), J8(c.port(kGasProbe, gas::kY), 4),
+                                   J8(c.port(kGasProbe, gas::kP), 5), J8(c.x_(sU0_), 3), J8(value_of(area_ratio(c)), 7),
+                                   par.data());
+    std::vector<double> ddry_dratio(n_);
+    double dvap_dratio = 0, dq_dratio = 0;
+    for (int i = 0; i < n_; ++i) {
+      J8 dry, q;
+      class_transfer(i, J8(c.x_(i), 0), J8(c.x_(n_ + i), 1), g, par.data(), &dry, &q);
+      for (auto [row, f, sign] : {std::tuple{n_ + i, &dry, 1.0}, std::tuple{sVap_, &dry, -1.0}, std::tuple{sQ_, &q, -1.0}}) {
+        sink.add(row, col_m(i), sign * f->v[0]);
+        sink.add(row, col_w(i), sign * f->v[1]);
+        for (int d = 2; d < 7; ++d) sink.add(row, cols[d], sign * f->v[d]);
+      }
+      ddry_dratio[i] = dry.v[7];
+      dvap_dratio -= dry.v[7];
+      dq_dratio -= q.v[7];
+    }
+    for (int j = 0; j < n_; ++j) {
+      const double r = surface_per_mass_[j] / c.par(kABed);  // d ratio / d M_j
+      for (int i = 0; i < n_; ++i) sink.add(n_ + i, col_m(j), ddry_dratio[i] * r);
+      sink.add(sVap_, col_m(j), dvap_dratio * r);
+      sink.add(sQ_, col_m(j), dq_dratio * r);
+    }
+    sink.add(sVap_, c.offset + sVap_, 1.0);
+    sink.add(sQ_, c.offset + sQ_, 1.0);
+    // u0 row: u0 - V/A with V from the inlet's dry-gas flow at inlet conditions
+    sink.add(sU0_, c.offset + sU0_, 1.0);
+    {
+      const J4 m(c.port(kInletProbe, gas::kMdot), 0), t(c.port(kInletProbe, gas::kT), 1),
+          y(c.port(kInletProbe, gas::kY), 2), p(c.port(kInletProbe, gas::kP), 3);
+      const J4 u = tr::superficial_velocity(J4(m / props::dry_air_partial_density(t, p, y)), J4(c.par(kABed)));
+      const int in_cols[4] = {ports[kInletProbe][gas::kMdot], ports[kInletProbe][gas::kT],
+                              ports[kInletProbe][gas::kY], ports[kInletProbe][gas::kP]};
+      for (int k = 0; k < 4; ++k) sink.add(sU0_, in_cols[k], -u.v[k]);
+    }
+    // deposition into the W rows and the enthalpy row (Eq. (59)); enthalpy row's other terms
+    const double t_s = c.x_(sT_);
+    if (c.connected(kWet)) {
+      const double t_liq = c.port(kWet, wetting::T(n_));
+      double h_dep = 0;
+      for (int i = 0; i < n_; ++i) {
+        const int col = ports[kWet][wetting::mdot(i)];
+        h_dep += c.port(kWet, wetting::mdot(i));
+        sink.add(n_ + i, col, -1.0);
+        sink.add(sH_, col, -props::liquid_water_enthalpy(t_liq, c.par(kCpL)));
+      }
+      sink.add(sH_, ports[kWet][wetting::T(n_)], -h_dep * c.par(kCpL));
+    }
+    sink.add(sH_, c.offset + sVap_, props::vapour_enthalpy(t_s));
+    sink.add(sH_, col_ts, c.x_(sVap_) * props::kCpVapour);
+    sink.add(sH_, c.offset + sQ_, -1.0);
+    // T row: H - C (T_S - T0), Eq. (60)
+    double heat_capacity = 0;
+    sink.add(sT_, c.offset + sH_, 1.0);
+    for (int i = 0; i < n_; ++i) {
+      heat_capacity += c.x_(i) * c.par(kCpS) + c.x_(n_ + i) * c.par(kCpL);
+      sink.add(sT_, col_m(i), -c.par(kCpS) * (t_s - props::kT0));
+      sink.add(sT_, col_w(i), -c.par(kCpL) * (t_s - props::kT0));
+    }
+    sink.add(sT_, col_ts, -heat_capacity);
     return true;
   }
 
@@ -434,45 +528,66 @@ class FluidBed : public UnitBase<FluidBed> {
     }
   }
 
-  // Drying per class (Eqs. (70)-(83)) and gas-solid heat transfer (Eqs. (85)-(89)); counts the
-  // regularizations that replaced the literal equations.
+  // Gas-side quantities shared by all classes' drying and heat transfer.
   template <class T>
-  void transfer(const Ctx<T>& c, T* dry, T* q, int* reg_eta, int* reg_a) const {
-    const auto& d = grid_->diameter_pivots();
-    const T& t_s = c.x_(sT_);
-    const T& y = c.port(kGasProbe, gas::kY);
-    const T& p = c.port(kGasProbe, gas::kP);
-    const T& t_g = c.port(kGasProbe, gas::kT);
-    const T& u0 = c.x_(sU0_);
+  struct GasSide {
+    T t_s, t_g, y, u0, ratio, rho_da, nu, sc, pr, x_eq, y_sat;
+    bool activity_capped;
+  };
+  template <class T>
+  GasSide<T> gas_side(const T& t_s, const T& t_g, const T& y, const T& p, const T& u0, const T& ratio,
+                      const T* par) const {
+    GasSide<T> g{t_s, t_g, y, u0, ratio, T(0.0), T(0.0), T(0.0), T(0.0), T(0.0), T(0.0), false};
     const T rho = props::humid_air_density(t_g, p, y);
-    const T rho_da = props::dry_air_partial_density(t_g, p, y);  // Y is per kg dry air in Eq. (72)
+    g.rho_da = props::dry_air_partial_density(t_g, p, y);  // Y is per kg dry air in Eq. (72)
     const T mu = props::air_viscosity(t_g);
-    const T nu = props::kinematic_viscosity(mu, rho);
-    const T sc = props::schmidt_number(mu, rho, c.par(kDv));                                 // Eq. (78)
-    const T pr = props::prandtl_number(props::humid_heat_capacity(y), mu, c.par(kLambda));  // Eq. (89)
-    std::vector<T> area(n_);
-    T surface(0.0);
-    for (int i = 0; i < n_; ++i) {
-      area[i] = kernels::class_surface(T(c.x_(i) / particle_mass_[i]), T(d[i]));  // N_i pi d_i^2 (DECISIONS)
-      surface += area[i];
-    }
-    const T ratio = tr::bed_area_ratio(surface, c.par(kABed));  // A_p / A_inlet in Eqs. (74), (87)
+    g.nu = props::kinematic_viscosity(mu, rho);
+    g.sc = props::schmidt_number(mu, rho, par[kDv]);                                 // Eq. (78)
+    g.pr = props::prandtl_number(props::humid_heat_capacity(y), mu, par[kLambda]);  // Eq. (89)
     // Eqs. (82)-(83): activity of the bulk gas at the solids temperature; BET (81) is singular at a = 1
     const auto a = kernels::cap_at(p1::water_activity(y, t_s, p), T(0.99));
-    *reg_a += a.active;
-    const T x_eq = p1::bet_equilibrium_moisture(a.value, c.par(kBetMm), c.par(kBetN));  // Eq. (81)
-    const T y_sat = props::equilibrium_humidity(t_s, p);  // Y_eq at T_S (PAPER001_DECISIONS)
+    g.activity_capped = a.active;
+    g.x_eq = p1::bet_equilibrium_moisture(a.value, par[kBetMm], par[kBetN]);  // Eq. (81)
+    g.y_sat = props::equilibrium_humidity(t_s, p);  // Y_eq at T_S (PAPER001_DECISIONS)
+    return g;
+  }
+
+  // Drying rate (Eqs. (70)-(80)) and gas-to-solid heat flow (Eqs. (85)-(89)) of class i; returns whether the
+  // Eq. (80) regularization replaced the literal equation.
+  template <class T>
+  bool class_transfer(int i, const T& m, const T& w, const GasSide<T>& g, const T* par, T* dry, T* q) const {
+    const T di(grid_->diameter_pivots()[i]);
+    const T area = kernels::class_surface(T(m / particle_mass_[i]), di);  // N_i pi d_i^2 (PAPER001_DECISIONS)
+    const T re0 = tr::particle_reynolds_number(g.u0, di, g.nu);                                  // Eq. (76)
+    const T shb = tr::bulk_sherwood(tr::sherwood_single(re0, g.sc), re0, g.sc, g.ratio, par[kShCorr]);  // (74), (75)
+    const T j = p1::drying_mass_flux(g.rho_da, tr::mass_transfer_coefficient(shb, par[kDv], di), g.y_sat, g.y);  // (72), (73)
+    const auto eta = p1::normalized_moisture(T(w / (m + kMassFloor)), g.x_eq, par[kXcr]);  // Eq. (80), regularized
+    *dry = p1::drying_rate(p1::linear_drying_curve(eta.value), area, j);                   // Eqs. (70), (79)
+    const T nub = tr::bulk_nusselt(tr::nusselt_single(re0, g.pr), re0, g.pr, g.ratio);     // Eqs. (87), (88)
+    *q = tr::heat_transfer_coefficient(nub, par[kLambda], di) * area * (g.t_g - g.t_s);   // Eqs. (85), (86)
+    return eta.active;
+  }
+
+  // A_p / A_inlet of Eqs. (74), (87): total particle surface of the bed over the cross-section; its derivative
+  // with respect to M_i is the constant surface_per_mass_[i] / A_bed.
+  template <class T>
+  T area_ratio(const Ctx<T>& c) const {
+    T surface(0.0);
+    for (int i = 0; i < n_; ++i) surface += c.x_(i) * surface_per_mass_[i];
+    return tr::bed_area_ratio(surface, c.par(kABed));
+  }
+
+  // Drying and heat transfer of every class; counts the regularizations that replaced the literal equations.
+  template <class T>
+  void transfer(const Ctx<T>& c, T* dry, T* q, int* reg_eta, int* reg_a) const {
+    const GasSide<T> g = gas_side(c.x_(sT_), c.port(kGasProbe, gas::kT), c.port(kGasProbe, gas::kY),
+                                  c.port(kGasProbe, gas::kP), c.x_(sU0_), area_ratio(c), c.p);
+    *reg_a += g.activity_capped;
     *q = T(0.0);
     for (int i = 0; i < n_; ++i) {
-      const T di(d[i]);
-      const T re0 = tr::particle_reynolds_number(u0, di, nu);                                   // Eq. (76)
-      const T shb = tr::bulk_sherwood(tr::sherwood_single(re0, sc), re0, sc, ratio, c.par(kShCorr));  // (74), (75)
-      const T j = p1::drying_mass_flux(rho_da, tr::mass_transfer_coefficient(shb, c.par(kDv), di), y_sat, y);  // (72), (73)
-      const auto eta = p1::normalized_moisture(moisture(c, i), x_eq, c.par(kXcr));  // Eq. (80), regularized
-      *reg_eta += eta.active;
-      dry[i] = p1::drying_rate(p1::linear_drying_curve(eta.value), area[i], j);  // Eqs. (70), (79)
-      const T nub = tr::bulk_nusselt(tr::nusselt_single(re0, pr), re0, pr, ratio);  // Eqs. (87), (88)
-      *q += tr::heat_transfer_coefficient(nub, c.par(kLambda), di) * area[i] * (t_g - t_s);  // Eqs. (85), (86)
+      T qi;
+      *reg_eta += class_transfer(i, c.x_(i), c.x_(n_ + i), g, c.p, &dry[i], &qi);
+      *q += qi;
     }
   }
 
@@ -502,7 +617,7 @@ class FluidBed : public UnitBase<FluidBed> {
   p1::BreakageSizeUnit size_unit_ = p1::BreakageSizeUnit::kMicrometre;
   std::unique_ptr<kernels::Grid> grid_;
   std::vector<Pair> pairs_;
-  std::vector<double> shape_, frag_, particle_mass_, init_frac_, cf_;
+  std::vector<double> shape_, frag_, particle_mass_, surface_per_mass_, init_frac_, cf_;
 };
 
 }  // namespace

@@ -45,7 +45,7 @@ DaeSystem::DaeSystem(Flowsheet& fs, bool inline_explicit) : fs_(fs) {
   pvals_.resize(units.size());
   local_cols_.resize(units.size());
   // Columns each unit's rows can depend on: own states and every field its ports read.
-  std::vector<std::set<int>> col_rows(n_all);
+  std::vector<std::vector<int>> col_rows(n_all);
   for (size_t u = 0; u < units.size(); ++u) {
     std::set<int> cols;
     const int ns = static_cast<int>(units[u].spec.states().size());
@@ -55,11 +55,12 @@ DaeSystem::DaeSystem(Flowsheet& fs, bool inline_explicit) : fs_(fs) {
         if (c >= 0) cols.insert(c);
     local_cols_[u].assign(cols.begin(), cols.end());
     for (int c : cols)
-      for (int k = 0; k < ns; ++k) col_rows[c].insert(units[u].offset + k);
+      for (int k = 0; k < ns; ++k) col_rows[c].push_back(units[u].offset + k);
   }
   pattern_.n = n_all;
   pattern_.col_ptr.assign(n_all + 1, 0);
   for (int c = 0; c < n_all; ++c) {
+    std::sort(col_rows[c].begin(), col_rows[c].end());  // units' row blocks are disjoint: no duplicates
     pattern_.row_idx.insert(pattern_.row_idx.end(), col_rows[c].begin(), col_rows[c].end());
     pattern_.col_ptr[c + 1] = static_cast<int>(pattern_.row_idx.size());
   }
@@ -268,21 +269,35 @@ void DaeSystem::assemble(double t, const double* y, const double* yp, double cj,
     }
     params_as(static_cast<int>(u), pj);
     rj_.assign(ns, Jet(0.0));
-    for (size_t c0 = 0; c0 < cols.size(); c0 += kAdChunk) {
-      const size_t c1 = std::min(cols.size(), c0 + kAdChunk);
+    // An explicit unit's residual is x - f: its own columns are the identity, no AD needed.
+    const bool expl = units[u].spec.is_explicit();
+    std::vector<size_t> ad;  // positions in `cols` differentiated by AD
+    for (size_t j = 0; j < cols.size(); ++j) {
+      const bool own = cols[j] >= units[u].offset && cols[j] < units[u].offset + ns;
+      if (expl && own) {
+        const int k = cols[j] - units[u].offset;
+        if (dense) dense[size_t(cols[j]) * dim + cols[j]] += 1.0;
+        else sparse[block_pos_[u][size_t(k) * cols.size() + j]] += 1.0;
+      } else {
+        ad.push_back(j);
+      }
+    }
+    for (size_t a0 = 0; a0 < ad.size(); a0 += kAdChunk) {
+      const size_t a1 = std::min(ad.size(), a0 + kAdChunk);
       // Seed column j as direction: d/de F(y + e_j, y' + cj e_j) is column j of dF/dy + cj dF/dy'.
-      for (size_t j = c0; j < c1; ++j) {
-        xj_[cols[j]].v[j - c0] = 1.0;
-        xdj_[cols[j]].v[j - c0] = cj;
+      for (size_t a = a0; a < a1; ++a) {
+        xj_[cols[ad[a]]].v[a - a0] = 1.0;
+        xdj_[cols[ad[a]]].v[a - a0] = cj;
       }
       Ctx<Jet> c{t, xj_.data(), xdj_.data(), pj.data(), rj_.data(), units[u].offset, &units[u].port_index, segment_start_,
                  partial};
       units[u].unit->residual(c);
-      for (size_t j = c0; j < c1; ++j) {
-        xj_[cols[j]].v[j - c0] = 0.0;
-        xdj_[cols[j]].v[j - c0] = 0.0;
+      for (size_t a = a0; a < a1; ++a) {
+        const size_t j = ad[a];
+        xj_[cols[j]].v[a - a0] = 0.0;
+        xdj_[cols[j]].v[a - a0] = 0.0;
         for (int k = 0; k < ns; ++k) {
-          const double d = rj_[k].v[j - c0];
+          const double d = rj_[k].v[a - a0];
           if (dense)
             dense[size_t(cols[j]) * dim + units[u].offset + k] += d;
           else
