@@ -31,6 +31,13 @@ DaeSystem::DaeSystem(Flowsheet& fs, bool inline_explicit) : fs_(fs) {
               std::find(explicit_order_.begin(), explicit_order_.end(), fs_.state_unit(c)) == explicit_order_.end())
             ready = false;
       if (ready) {
+        // record which earlier explicit units it reads, for the forward substitution of the Schur complement
+        std::set<int> reads;
+        for (const auto& port : units[u].port_index)
+          for (int c : port)
+            if (c >= 0 && fs_.units()[fs_.state_unit(c)].spec.is_explicit() && fs_.state_unit(c) != u)
+              reads.insert(fs_.state_unit(c));
+        for (int v : reads) explicit_reads_.push_back({u, v});
         explicit_order_.push_back(u);
         pending.erase(pending.begin() + i);
         progressed = true;
@@ -233,12 +240,17 @@ void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj,
   const int m = n_ext_ - n_;
   Eigen::Map<const Eigen::MatrixXd> J(jac_ext_.data(), n_ext_, n_ext_);
   Eigen::Map<Eigen::MatrixXd> out(dense, n_, n_);
-  const auto jss = J.bottomRightCorner(m, m);
-  if (jss.isIdentity(0.0))  // no explicit unit reads another: J_SS = I
-    out.noalias() = J.topLeftCorner(n_, n_) - J.topRightCorner(n_, m) * J.bottomLeftCorner(m, n_);
-  else
-    out.noalias() = J.topLeftCorner(n_, n_) -
-                    J.topRightCorner(n_, m) * Eigen::MatrixXd(jss).partialPivLu().solve(J.bottomLeftCorner(m, n_));
+  // J_SS = I + (blocks where an explicit unit reads another), block unit-lower-triangular in dependency order:
+  // Z = J_SS^-1 J_SR by forward substitution over the explicit units, each block row solved once.
+  Eigen::MatrixXd& z = schur_z_;
+  z = J.bottomLeftCorner(m, n_);
+  const auto& units = fs_.units();
+  for (const auto& [u, v] : explicit_reads_) {
+    const int ou = units[u].offset - n_, nu = static_cast<int>(units[u].spec.states().size());
+    const int ov = units[v].offset - n_, nv = static_cast<int>(units[v].spec.states().size());
+    z.middleRows(ou, nu).noalias() -= J.block(n_ + ou, n_ + ov, nu, nv) * z.middleRows(ov, nv);
+  }
+  out.noalias() = J.topLeftCorner(n_, n_) - J.topRightCorner(n_, m) * z;
 }
 
 void DaeSystem::assemble(double t, const double* y, const double* yp, double cj, int dim, double* dense,

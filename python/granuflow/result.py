@@ -125,6 +125,10 @@ class Result:
             v = float(self[src][-1])
             s[key] = _finite(v * 1e6 if key.endswith("_um") else v)
         s["balance"] = self.balance_closure()
+        # Where a model left the paper's literal equations (floors, caps, regularizations): the largest count of
+        # classes or instances affected at any output time, per unit (PAPER001_DECISIONS asks for this).
+        s["regularizations"] = {n: float(np.max(self.outputs[:, j])) for j, n in enumerate(self.output_names)
+                                if ".reg_" in n}
         s["wall_time_s"] = self.wall_time_s
         st = self.stats
         s["solver"] = {"states": st["states"], "steps": st["steps"], "residuals": st["residuals"],

@@ -2,6 +2,7 @@
 // (per unit: the unit's analytic Jacobian if it supplies one, else forward AD over its local variables),
 // sensitivity residuals for named parameters, initial values, and per-state metadata for the solvers.
 #pragma once
+#include <Eigen/Dense>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -78,6 +79,8 @@ class DaeSystem {
   bool inline_ = false;
   std::vector<int> explicit_order_;  // explicit units, each after the explicit units it reads
   std::vector<int> real_units_;      // the others
+  std::vector<std::pair<int, int>> explicit_reads_;  // (u, v): explicit unit u reads explicit unit v, in order
+  Eigen::MatrixXd schur_z_;
   std::vector<double> y_ext_, yp_ext_, jac_ext_;
   double segment_start_ = 0.0;
   std::vector<std::vector<double>> pvals_;   // per unit, at the last fill time
