@@ -10,6 +10,9 @@ inline constexpr int kAdChunk = 8;
 using Jet = ceres::Jet<double, kAdChunk>;
 
 inline double value_of(double x) { return x; }
-inline double value_of(const Jet& x) { return x.a; }
+template <int N>
+double value_of(const ceres::Jet<double, N>& x) {
+  return x.a;
+}
 
 }  // namespace granuflow
