@@ -44,7 +44,7 @@ class DropletEvaporation : public UnitBase<DropletEvaporation> {
     namespace p1 = kernels::paper001;
     const T& m_l = c.port(kSpray, liquid::kMdot);
     const T a = p1::droplet_surface_rate(m_l, c.par(kRhoL), c.par(kDDrop));
-    const T y_eq = props::equilibrium_humidity(c.port(kGas, gas::kT), c.port(kGas, gas::kP));
+    const T y_eq = p1::saturation_humidity(c.port(kGas, gas::kT), c.port(kGas, gas::kP)).value;  // Eq. (68), capped
     return c.par(kMult) * p1::droplet_evaporation_rate(c.par(kKEvap), a, y_eq, c.port(kGas, gas::kY));
   }
   template <class T>

@@ -97,7 +97,8 @@ class FluidBed : public UnitBase<FluidBed> {
     sU0_ = s.add_state("u0", StateKind::Algebraic, "m/s", 1.0);
     sVap_ = s.add_state("m_vap", StateKind::Algebraic, "kg/s", 1e-3);
     sQ_ = s.add_state("Q", StateKind::Algebraic, "W", 1e3);
-    sTop_ = s.add_state("mass_beyond_top", StateKind::Differential, "kg", 1.0);
+    // cumulative mass of aggregates formed beyond the top pivot (each kept in the top class with its mass)
+    sTop_ = s.add_state("mass_through_top", StateKind::Differential, "kg", 1.0);
 
     s.set_port_grid(s.add_port("wetting", StreamKind::Wetting, PortDir::In, n_, true), d);
     s.add_port("gas", StreamKind::Gas, PortDir::In);
@@ -115,16 +116,18 @@ class FluidBed : public UnitBase<FluidBed> {
     s.provide(probe, holdup::T(n_), sT_);
     s.provide(probe, holdup::u0(n_), sU0_);
 
-    for (const char* o : {"d10", "d50", "d90"}) s.add_output(o, "m");
-    s.add_output("moisture", "kg/kg");
-    s.add_output("moisture_wet", "kg/kg");
-    s.add_output("particles", "-");
-    s.add_output("reg_eta", "-");
-    s.add_output("reg_activity_cap", "-");
-    s.add_output("balance_water_hold", "kg");
+    for (const char* o : {"d10", "d50", "d90"}) o_quantiles_.push_back(s.add_output(o, "m"));
+    o_moisture_ = s.add_output("moisture", "kg/kg");
+    o_moisture_wet_ = s.add_output("moisture_wet", "kg/kg");
+    o_particles_ = s.add_output("particles", "-");
+    o_top_ = s.add_output("top_class_fraction", "-");  // mass fraction in the top class: the grid saturates
+    o_reg_eta_ = s.add_output("reg_eta", "-");
+    o_reg_a_ = s.add_output("reg_activity_cap", "-");  // water activity < 0.99 in Eq. (81), p_sat < 0.9 p in (72)
+    o_balance_ = s.add_output("balance_water_hold", "kg");
     s.add_output("balance_solids_hold", "kg");
     s.add_output("balance_energy_hold", "J");
-    for (int i = 0; i < n_; ++i) s.add_output("psd_d_" + std::to_string(i), "m");
+    o_psd_ = s.add_output("psd_d_0", "m");
+    for (int i = 1; i < n_; ++i) s.add_output("psd_d_" + std::to_string(i), "m");
     for (int i = 0; i < n_; ++i) s.add_output("psd_m_" + std::to_string(i), "kg");
   }
 
@@ -436,24 +439,24 @@ class FluidBed : public UnitBase<FluidBed> {
       w += c.x_(n_ + i);
       n += c.x_(i) / particle_mass_[i];
     }
-    out[0] = quantile(mass, 0.1);
-    out[1] = quantile(mass, 0.5);
-    out[2] = quantile(mass, 0.9);
-    out[3] = w / m;
-    out[4] = w / (m + w);
-    out[5] = n;
+    const double q[3] = {0.1, 0.5, 0.9};
+    for (int k = 0; k < 3; ++k) out[o_quantiles_[k]] = quantile(mass, q[k]);
+    out[o_moisture_] = w / m;
+    out[o_moisture_wet_] = w / (m + w);
+    out[o_particles_] = n;
+    out[o_top_] = mass[n_ - 1] / m;
     std::vector<double> dry(n_);
-    double q = 0;
+    double qv = 0;
     int reg_eta = 0, reg_a = 0;
-    transfer(c, dry.data(), &q, &reg_eta, &reg_a);
-    out[6] = reg_eta;
-    out[7] = reg_a;
-    out[8] = w;
-    out[9] = m;
-    out[10] = c.x_(sH_);
+    transfer(c, dry.data(), &qv, &reg_eta, &reg_a);
+    out[o_reg_eta_] = reg_eta;
+    out[o_reg_a_] = reg_a;
+    out[o_balance_] = w;
+    out[o_balance_ + 1] = m;
+    out[o_balance_ + 2] = c.x_(sH_);
     for (int i = 0; i < n_; ++i) {
-      out[11 + i] = grid_->diameter_pivots()[i];
-      out[11 + n_ + i] = mass[i];
+      out[o_psd_ + i] = grid_->diameter_pivots()[i];
+      out[o_psd_ + n_ + i] = mass[i];
     }
   }
 
@@ -532,12 +535,12 @@ class FluidBed : public UnitBase<FluidBed> {
   template <class T>
   struct GasSide {
     T t_s, t_g, y, u0, ratio, rho_da, nu, sc, pr, x_eq, y_sat;
-    bool activity_capped;
+    bool activity_capped, saturation_capped;
   };
   template <class T>
   GasSide<T> gas_side(const T& t_s, const T& t_g, const T& y, const T& p, const T& u0, const T& ratio,
                       const T* par) const {
-    GasSide<T> g{t_s, t_g, y, u0, ratio, T(0.0), T(0.0), T(0.0), T(0.0), T(0.0), T(0.0), false};
+    GasSide<T> g{t_s, t_g, y, u0, ratio, T(0.0), T(0.0), T(0.0), T(0.0), T(0.0), T(0.0), false, false};
     const T rho = props::humid_air_density(t_g, p, y);
     g.rho_da = props::dry_air_partial_density(t_g, p, y);  // Y is per kg dry air in Eq. (72)
     const T mu = props::air_viscosity(t_g);
@@ -548,7 +551,9 @@ class FluidBed : public UnitBase<FluidBed> {
     const auto a = kernels::cap_at(p1::water_activity(y, t_s, p), T(0.99));
     g.activity_capped = a.active;
     g.x_eq = p1::bet_equilibrium_moisture(a.value, par[kBetMm], par[kBetN]);  // Eq. (81)
-    g.y_sat = props::equilibrium_humidity(t_s, p);  // Y_eq at T_S (PAPER001_DECISIONS)
+    const auto ys = p1::saturation_humidity(t_s, p);  // Y_eq at T_S (PAPER001_DECISIONS), capped near boiling
+    g.y_sat = ys.value;
+    g.saturation_capped = ys.active;
     return g;
   }
 
@@ -582,7 +587,7 @@ class FluidBed : public UnitBase<FluidBed> {
   void transfer(const Ctx<T>& c, T* dry, T* q, int* reg_eta, int* reg_a) const {
     const GasSide<T> g = gas_side(c.x_(sT_), c.port(kGasProbe, gas::kT), c.port(kGasProbe, gas::kY),
                                   c.port(kGasProbe, gas::kP), c.x_(sU0_), area_ratio(c), c.p);
-    *reg_a += g.activity_capped;
+    *reg_a += g.activity_capped + g.saturation_capped;
     *q = T(0.0);
     for (int i = 0; i < n_; ++i) {
       T qi;
@@ -612,6 +617,9 @@ class FluidBed : public UnitBase<FluidBed> {
   int n_ = def::kSizeClasses;
   static constexpr double kMassFloor = 1e-12;  // kg
   int sH_ = 0, sT_ = 0, sU0_ = 0, sVap_ = 0, sQ_ = 0, sTop_ = 0;
+  std::vector<int> o_quantiles_;  // output indices
+  int o_moisture_ = 0, o_moisture_wet_ = 0, o_particles_ = 0, o_top_ = 0, o_reg_eta_ = 0, o_reg_a_ = 0, o_balance_ = 0,
+      o_psd_ = 0;
   Aggregation agg_ = Aggregation::kGlassTransition;
   bool breakage_ = true, per_volume_ = false;
   p1::BreakageSizeUnit size_unit_ = p1::BreakageSizeUnit::kMicrometre;

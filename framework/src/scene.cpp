@@ -40,6 +40,7 @@ class Loader {
 
     const YAML::Node units = required(root, "units", "");
     if (!units.IsMap() || units.size() == 0) fail("units", "expected a non-empty mapping of unit name -> {type, ...}");
+    check_unique(units, "units");
     std::vector<std::pair<std::string, YAML::Node>> params;
     for (const auto& kv : units) {
       const std::string name = kv.first.as<std::string>();
@@ -51,6 +52,7 @@ class Loader {
       std::map<std::string, std::string> settings;
       if (u["settings"]) {
         if (!u["settings"].IsMap()) fail(at + ".settings", "expected a mapping, got " + kind_name(u["settings"]));
+        check_unique(u["settings"], at + ".settings");
         for (const auto& st : u["settings"]) settings[st.first.as<std::string>()] = scalar(st.second, at + ".settings." + st.first.as<std::string>());
       }
       try {
@@ -85,6 +87,7 @@ class Loader {
     for (const auto& [unit, node] : params) {
       const std::string at = "units." + unit + ".params";
       if (!node.IsMap()) fail(at, "expected a mapping of parameter -> value, got " + kind_name(node));
+      check_unique(node, at);
       for (const auto& p : node) {
         const std::string key = p.first.as<std::string>();
         const std::string q = unit + "." + key;
@@ -159,6 +162,7 @@ class Loader {
     return a == std::string::npos ? "" : s.substr(a, b - a + 1);
   }
   void check_keys(const YAML::Node& m, const std::string& at, const std::set<std::string>& allowed) const {
+    check_unique(m, at);
     for (const auto& kv : m) {
       const std::string k = kv.first.as<std::string>();
       if (!allowed.count(k)) {
@@ -166,6 +170,14 @@ class Loader {
         for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
         fail(at.empty() ? k : at + "." + k, "unknown key (allowed: " + list + ")");
       }
+    }
+  }
+  // YAML parsers keep the last of two equal keys; a scene must say each thing once.
+  void check_unique(const YAML::Node& m, const std::string& at) const {
+    std::set<std::string> seen;
+    for (const auto& kv : m) {
+      const std::string k = kv.first.as<std::string>();
+      if (!seen.insert(k).second) fail(at.empty() ? k : at + "." + k, "given twice");
     }
   }
   YAML::Node required(const YAML::Node& m, const std::string& key, const std::string& at) const {

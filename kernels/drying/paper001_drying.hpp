@@ -38,6 +38,15 @@ Limited<T> normalized_moisture(const T& x, const T& x_eq, const T& x_cr,
   return {eta.value, den.active || eta.active};
 }
 
+// Eq. (68), paper 001, with the saturation pressure capped at `cap` p: Eq. (68) diverges as p_sat approaches
+// the total pressure (water boiling at the surface, e.g. a bed or gas at 100 degC), where the surface flux is
+// limited by heat supply instead. `active` reports the cap (a regularization beyond the paper).
+template <class T>
+Limited<T> saturation_humidity(const T& temp, const T& p, double cap = 0.9) {
+  const Limited<T> ps = cap_at(props::saturation_pressure(temp), T(cap * p));
+  return {props::humidity_from_partial_pressure(ps.value, p), ps.active};
+}
+
 // Eq. (79), paper 001: linear drying curve, full rate above the critical moisture.
 template <class T>
 T linear_drying_curve(const T& eta) {

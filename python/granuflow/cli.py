@@ -1,4 +1,5 @@
-"""Command line: ``granuflow run SCENE --out DIR [--set unit.param=value ...] [--t-end SECONDS]``.
+"""Command line: ``granuflow run SCENE --out DIR [--set unit.param=value ...] [--t-end SECONDS]``,
+``granuflow sweep SWEEPFILE --out DIR [--workers N] [--set unit.param=value ...]``.
 
 Exit codes: 0 success, 2 bad input (scene, option, parameter), 3 solver failure. A failure prints one line
 on stderr naming what went wrong.
@@ -75,6 +76,73 @@ class ValueError_(ValueError):
     pass
 
 
+def cmd_sweep(args) -> int:
+    """Run a sweep file; write DIR/sweep.csv and DIR/sweep.json. Exit 3 only if every point failed."""
+    import time
+
+    from . import sweep as sw
+
+    spec = sw.load_sweep(args.sweepfile)
+    overrides = {}
+    for item in args.set or []:
+        if "=" not in item:
+            raise ValueError_(f"--set '{item}': expected unit.param=value")
+        name, value = item.split("=", 1)
+        overrides[name.strip()] = value.strip()
+    if args.workers is not None and args.workers < 1:
+        raise ValueError_(f"--workers = {args.workers}: expected an integer >= 1")
+    fs = spec.flowsheet(overrides)
+    if args.t_end:
+        fs.set_t_end(_parse_seconds(args.t_end))
+    t0 = time.perf_counter()
+    df = spec.run(flowsheet=fs, workers=args.workers, executor=args.executor,
+                  progress=False if args.no_progress else None, raise_errors=args.fail_fast)
+    wall = time.perf_counter() - t0
+    n_failed = int((df["status"] != sw.STATUS_OK).sum())
+    effects = None
+    if n_failed < len(df):
+        try:
+            effects = sw.main_effects(df)
+        except ValueError:
+            effects = None
+    os.makedirs(args.out, exist_ok=True)
+    df.to_csv(os.path.join(args.out, "sweep.csv"), index=False)
+    meta = dict(df.attrs)
+    record = {**meta, "sweep_file": os.path.abspath(args.sweepfile), "t_end_s": fs.t_end,
+              "overrides": overrides, "n_points": len(df), "n_failed": n_failed, "wall_time_s": wall,
+              "points": [{k: _json_value(v) for k, v in row.items()} for row in df.to_dict(orient="records")],
+              "main_effects": None if effects is None else
+              {v: {o: _json_value(x) for o, x in r.items()} for v, r in effects.to_dict(orient="index").items()}}
+    with open(os.path.join(args.out, "sweep.json"), "w") as f:
+        json.dump(record, f, indent=2, allow_nan=False)
+    if not args.quiet:
+        import pandas as pd
+
+        cols = [c for c in df.columns if c not in ("message", "solve_time_s")]
+        with pd.option_context("display.width", 200, "display.max_columns", None):
+            print(df[cols].to_string(index=False, float_format=lambda x: f"{x:.4g}"))
+            if effects is not None:
+                print("main effects over the cube corners (mean at high level - mean at low level):")
+                print(effects.to_string(float_format=lambda x: f"{x:.4g}"))
+        print(f"{spec.name}: {len(df)} points ({n_failed} failed) in {wall:.2f} s; "
+              f"wrote sweep.csv, sweep.json to {args.out}")
+    if n_failed:
+        first = df.loc[df["status"] != sw.STATUS_OK].iloc[0]
+        print(f"granuflow: {n_failed} of {len(df)} points failed; first: {first['point']}: {first['message']}",
+              file=sys.stderr)
+    return EXIT_SOLVER if n_failed == len(df) else 0
+
+
+def _json_value(v):
+    import math
+
+    if hasattr(v, "item"):
+        v = v.item()
+    if isinstance(v, float) and not math.isfinite(v):
+        return None
+    return v
+
+
 def cmd_units(args) -> int:
     from . import unit_types
 
@@ -109,6 +177,18 @@ def main(argv=None) -> int:
     r.add_argument("--t-end", help="end time in seconds (or with a unit, e.g. '60 min')")
     r.add_argument("--quiet", action="store_true")
     r.set_defaults(func=cmd_run)
+    w = sub.add_parser("sweep", help="run a sweep file; write sweep.csv and sweep.json")
+    w.add_argument("sweepfile")
+    w.add_argument("--out", required=True, help="output folder (created)")
+    w.add_argument("--workers", type=int, help="parallel solves (default: number of cores)")
+    w.add_argument("--set", action="append", metavar="UNIT.PARAM=VALUE",
+                   help="override a scene parameter for every point (unit allowed)")
+    w.add_argument("--t-end", help="end time of every run in seconds (or with a unit, e.g. '60 min')")
+    w.add_argument("--executor", default="threads", choices=["threads", "serial"])
+    w.add_argument("--no-progress", action="store_true", help="no progress bar (default: only on a terminal)")
+    w.add_argument("--fail-fast", action="store_true", help="stop at the first failed point (exit 3)")
+    w.add_argument("--quiet", action="store_true")
+    w.set_defaults(func=cmd_sweep)
     u = sub.add_parser("units", help="list the built-in unit types")
     u.set_defaults(func=cmd_units)
     d = sub.add_parser("describe", help="list a scene's parameters with units, bounds and sources")
@@ -118,6 +198,7 @@ def main(argv=None) -> int:
     b.add_argument("what", choices=["core", "pbm"])
     b.add_argument("--json", action="store_true", help="print JSON records")
     b.add_argument("--repeats", type=int, default=7)
+    b.add_argument("--quick", action="store_true", help="pbm: a reduced set (q 1, 2, 4; rtol 1e-4, 1e-6)")
     b.set_defaults(func=cmd_bench)
     args = p.parse_args(argv)
 
