@@ -100,6 +100,13 @@ class Flowsheet:
         return self._scene.unit_settings()
 
     # -- simulation -----------------------------------------------------------------------------
+    def steady_state(self, *, t: float = 0.0, ftol: float = 1e-10, max_iterations: int = 200) -> dict:
+        """Steady state F(y, y' = 0) = 0 by Newton (KINSOL) from consistent initial values; inputs evaluated at
+        ``t``. Pure accumulators (cumulative amounts fed or collected) stay at their initial values. Returns
+        ``{"y": {state: value}, "iterations": ..., "residual_norm": ...}``; raises SolverError on failure."""
+        return self._scene.steady_state(t=float(t), ftol=float(ftol), max_iterations=int(max_iterations))
+
+
     def simulate(self, t_end: float | None = None, *, t_out: Iterable[float] | None = None,
                  n_out: int | None = None, rtol: float | None = None, atol: float | None = None,
                  sensitivities: Sequence[str] = (), linear_solver: str | None = None,

@@ -132,3 +132,12 @@ def test_cli_run_writes_summary_csv_and_plots(tmp_path):
     assert math.isfinite(s["T_out_K"])
     assert (out / "timeseries.csv").stat().st_size > 1000
     assert (out / "plot_0.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_steady_state_of_the_recycle_loop_from_python():
+    fs = gf.load(DEMO)
+    s = fs.steady_state(t=200.0)  # after the feed-temperature step: T_feed = 350 K
+    # both tanks at T_feed + Q1 / (cp F): the recycle does not change the steady outlet temperature
+    assert s["y"]["tank1.T"] == pytest.approx(350.0 + 2e4 / (4180.0 * 0.5), rel=1e-10)
+    assert s["y"]["tank2.T"] == pytest.approx(s["y"]["tank1.T"], rel=1e-12)
+    assert s["y"]["mixer.mdot"] == pytest.approx(0.5 / 0.6, rel=1e-12)
