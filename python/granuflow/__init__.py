@@ -11,6 +11,7 @@ Typical use::
 """
 from ._core import CalibrationError, ConfigError, SolverError, unit_types
 from .flowsheet import Flowsheet, load, load_text
+from .kernels import aggregation_kernels, register_kernel
 from .result import Result
 
 __version__ = "0.1.0"

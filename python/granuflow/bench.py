@@ -3,11 +3,15 @@
 ``granuflow bench core [--json]``: cost of one residual per state (ns/state) for chains of stirred tanks with
 about 100, 1 000 and 10 000 states, the cost of one Jacobian relative to one residual, and the wall time of the
 demo flowsheet (median of repeated runs).
-``granuflow bench pbm [--json]``: population-balance work-precision records (tests/bench/).
+``granuflow bench pbm [--json] [--repeats N] [--quick]``: population-balance work precision. Runs
+<build>/tests/bench/granuflow_bench_pbm (next to this package) and the NumPy/SciPy baseline
+tests/bench/scipy_fixed_pivot.py on the same cases; ``--json`` prints one record per run (keys PBM_KEYS plus
+``code``), otherwise a summary: work-precision envelopes and the speed ratio at equal error vs SciPy LSODA.
 """
 from __future__ import annotations
 
 import json
+import math
 import os
 import platform
 import statistics
@@ -73,25 +77,232 @@ def bench_core(repeats: int) -> list[dict]:
     return records
 
 
-def bench_pbm(args) -> list[dict]:
-    root = _repo_root()
-    exe = None
-    for cand in ("build/tests/bench/granuflow_bench_pbm", "build/tests/bench/granuflow_bench_pbm"):
-        if os.path.exists(os.path.join(root, cand)):
-            exe = os.path.join(root, cand)
-    records = []
-    if exe:
-        out = subprocess.run([exe, "--json"], capture_output=True, text=True, check=True).stdout
-        records += [json.loads(l) for l in out.splitlines() if l.startswith("{")]
-    script = os.path.join(root, "tests", "bench", "scipy_fixed_pivot.py")
-    if os.path.exists(script):
-        out = subprocess.run(["/usr/bin/python3", script, "--json"], capture_output=True, text=True, check=True).stdout
-        records += [json.loads(l) for l in out.splitlines() if l.startswith("{")]
+# ---------------------------------------------------------------------------------------------------------- pbm
+PBM_KEYS = ("case", "method", "q", "classes", "rtol", "tau", "err_M0", "err_M2", "err_L1", "mass_drift", "solve_ms")
+PBM_LEVELS = (0.05, 0.01, 0.001)
+
+
+def _build_dir() -> str:
+    """The CMake build folder of the running package (<build>/python/granuflow)."""
+    return os.path.abspath(os.path.join(HERE, "..", ".."))
+
+
+def _source_dir(build: str) -> str:
+    """The source tree the build folder was configured from (CMakeCache.txt), else the repository found by
+    _repo_root()."""
+    try:
+        with open(os.path.join(build, "CMakeCache.txt")) as f:
+            for line in f:
+                if line.startswith("CMAKE_HOME_DIRECTORY:"):
+                    return line.split("=", 1)[1].strip()
+    except OSError:
+        pass
+    return _repo_root()
+
+
+def pbm_executable() -> str:
+    """<build>/tests/bench/granuflow_bench_pbm next to the running package; FileNotFoundError if missing."""
+    build = _build_dir()
+    exe = os.path.join(build, "tests", "bench", "granuflow_bench_pbm")
+    if not os.access(exe, os.X_OK):
+        raise FileNotFoundError(
+            f"the benchmark executable {exe} does not exist (the granuflow package in use is "
+            f"{os.path.join(build, 'python', 'granuflow')}); build it with `ninja -C {build} granuflow_bench_pbm` "
+            f"(configured with -DGRANUFLOW_BUILD_TESTS=ON)")
+    return exe
+
+
+def _json_lines(cmd: list[str], label: str) -> list[dict]:
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    if proc.returncode != 0:
+        tail = " ".join(proc.stderr.split()[-60:])
+        raise RuntimeError(f"{label} failed (exit {proc.returncode}): {' '.join(cmd)}: {tail}")
+    return [json.loads(line) for line in proc.stdout.splitlines() if line.startswith("{")]
+
+
+def bench_pbm(*, quick: bool = False, repeats: int = 5, scipy: bool = True, case: str | None = None,
+              progress: bool = False) -> list[dict]:
+    """Population-balance work-precision records: granuflow_bench_pbm (granuflow's schemes through the full
+    framework) and, with ``scipy``, the NumPy/SciPy fixed-pivot baseline tests/bench/scipy_fixed_pivot.py on the
+    same cases, grids and tolerances. One dict per run with the keys PBM_KEYS plus ``code`` ("granuflow" or
+    "scipy"), solver counters and machine metadata. ``quick``: q in {1, 2, 4}, rtol in {1e-4, 1e-6}.
+    Times are medians of ``repeats`` solves; nothing here asserts on time."""
+    flags = (["--quick"] if quick else []) + ["--repeats", str(int(repeats))] + (["--case", case] if case else [])
+    exe = pbm_executable()
+    if progress:
+        print(f"running {exe} {' '.join(flags)}", file=sys.stderr, flush=True)
+    records = _json_lines([exe, "--json", *flags], "granuflow_bench_pbm")
+    if scipy:
+        script = os.path.join(_source_dir(_build_dir()), "tests", "bench", "scipy_fixed_pivot.py")
+        if not os.path.exists(script):
+            raise FileNotFoundError(f"the SciPy baseline {script} does not exist (source tree of "
+                                    f"{_build_dir()}); pass scipy=False to run granuflow only")
+        if progress:
+            print(f"running {sys.executable} {script} {' '.join(flags)}", file=sys.stderr, flush=True)
+        records += _json_lines([sys.executable, script, "--json", *flags], "scipy_fixed_pivot.py")
     return records
 
 
+def load_records(paths) -> list[dict]:
+    """Records from JSON-lines files (output of ``--json``)."""
+    recs = []
+    for p in paths:
+        with open(p) as f:
+            recs += [json.loads(line) for line in f if line.startswith("{")]
+    return recs
+
+
+def _usable(r: dict) -> bool:
+    return r.get("err_M2") is not None and r.get("solve_ms") is not None and r.get("success", True)
+
+
+def fastest(recs, case: str, code: str, level: float, method_prefix: str = "") -> dict | None:
+    """The fastest run of ``code`` on ``case`` with |err_M2| <= level (any q and rtol; methods starting with
+    ``method_prefix``), or None."""
+    ok = [r for r in recs if r["case"] == case and r.get("code") == code and r["method"].startswith(method_prefix)
+          and _usable(r) and abs(r["err_M2"]) <= level]
+    return min(ok, key=lambda r: r["solve_ms"]) if ok else None
+
+
+def envelope(recs, improvement: float = 0.0) -> list[dict]:
+    """The work-precision curve of each (code, case, method): the runs that no faster run beats in |err_M2|
+    (by more than the relative ``improvement``), in order of solve time."""
+    out = []
+    groups = sorted({(r.get("code", ""), r["case"], r["method"]) for r in recs if _usable(r)})
+    for code, case, method in groups:
+        best = math.inf
+        for r in sorted((r for r in recs if (r.get("code", ""), r["case"], r["method"]) == (code, case, method)
+                         and _usable(r)), key=lambda r: (r["solve_ms"], abs(r["err_M2"]))):
+            if abs(r["err_M2"]) < best * (1.0 - improvement):
+                best = abs(r["err_M2"])
+                out.append(r)
+    return out
+
+
+def speed_ratios(recs, levels=PBM_LEVELS) -> list[dict]:
+    """Speed at equal error: per case, error level and SciPy method, the fastest granuflow run and the fastest
+    run of that SciPy method with |err_M2| <= level, and ratio = SciPy time / granuflow time (None where either
+    code never reaches the level). Long format: one row per (case, level, baseline)."""
+    rows = []
+    for case in sorted({r["case"] for r in recs}):
+        baselines = sorted({r["method"] for r in recs if r["case"] == case and r.get("code") == "scipy"},
+                           key=lambda m: (not m.endswith("LSODA"), m))
+        for level in levels:
+            g = fastest(recs, case, "granuflow", level)
+            for m in baselines:
+                s = fastest(recs, case, "scipy", level, m)
+                row = {"case": case, "level": level, "baseline": m}
+                for tag, r in (("granuflow", g), ("baseline", s)):
+                    row.update({f"{tag}_method": r and r["method"], f"{tag}_q": r and r["q"],
+                                f"{tag}_rtol": r and r["rtol"], f"{tag}_err_M2": r and r["err_M2"],
+                                f"{tag}_ms": r and r["solve_ms"]})
+                row["ratio"] = s["solve_ms"] / g["solve_ms"] if g and s else None
+                rows.append(row)
+    return rows
+
+
+def _run_text(method, q, rtol, err, ms) -> str:
+    if method is None:
+        return "none"
+    return f"{method} q={q} rtol={rtol:.0e} M2 {err:+.2e} {ms:.2f} ms"
+
+
+def format_speed_ratios(rows) -> list[str]:
+    """One line per (case, level): granuflow's fastest run, then each baseline with its ratio."""
+    lines = []
+    for key in dict.fromkeys((r["case"], r["level"]) for r in rows):
+        group = [r for r in rows if (r["case"], r["level"]) == key]
+        g = group[0]
+        desc = ["granuflow: " + _run_text(g["granuflow_method"], g["granuflow_q"], g["granuflow_rtol"],
+                                          g["granuflow_err_M2"], g["granuflow_ms"])]
+        for r in group:
+            ratio = f", x{r['ratio']:.1f}" if r["ratio"] is not None else ""
+            desc.append(f"{r['baseline']}: " + _run_text(r["baseline_method"], r["baseline_q"], r["baseline_rtol"],
+                                                          r["baseline_err_M2"], r["baseline_ms"]) + ratio)
+        lines.append(f"{key[0]:9s} |err_M2| <= {key[1]:g}:  " + "  |  ".join(desc))
+    return lines
+
+
+def same_scheme_ratios(recs) -> list[dict]:
+    """The same discretization in both codes (granuflow's fixed_pivot against scipy_fp_*, fv_upwind against
+    scipy_upwind_*) at the same q and rtol: SciPy time / granuflow time per pair, which isolates the cost of the
+    implementation and integrator from the accuracy of the scheme."""
+    pairs = {"scipy_fp_": "fixed_pivot", "scipy_upwind_": "fv_upwind"}
+    mine = {(r["case"], r["method"], r["q"], r["rtol"]): r for r in recs
+            if r.get("code") == "granuflow" and r.get("solve_ms")}
+    rows = []
+    for s in recs:
+        if s.get("code") != "scipy" or not s.get("solve_ms") or not s.get("success", True):
+            continue
+        prefix = next((p for p in pairs if s["method"].startswith(p)), None)
+        g = prefix and mine.get((s["case"], pairs[prefix], s["q"], s["rtol"]))
+        if g:
+            rows.append({"case": s["case"], "baseline": s["method"], "method": g["method"], "q": s["q"],
+                         "rtol": s["rtol"], "granuflow_ms": g["solve_ms"], "baseline_ms": s["solve_ms"],
+                         "ratio": s["solve_ms"] / g["solve_ms"]})
+    return rows
+
+
+def _fmt(v, spec: str) -> str:
+    return "-" if v is None else format(v, spec)
+
+
+def pbm_summary(recs, levels=PBM_LEVELS) -> list[str]:
+    """The human-readable report of ``granuflow bench pbm``: per case and method the work-precision envelope,
+    the speed ratio at equal error against SciPy's LSODA, and the ratio for the same discretization."""
+    lines = []
+    g = [r for r in recs if r.get("code") == "granuflow"]
+    if g:
+        r0 = g[0]
+        drift = max(abs(r["mass_drift"]) for r in g if r.get("mass_drift") is not None)
+        lines += [f"Population balance, work precision against the analytic solutions (N0 = v0 = 1): {len(g)} granuflow "
+                  f"runs, {len(recs) - len(g)} SciPy runs, median of {r0.get('repeats')} solves each",
+                  f"({r0.get('cpu', '')}, {r0.get('cores', '')} cores, commit {r0.get('commit', '')}). "
+                  f"Largest |mass_drift| of granuflow's runs: {drift:.1e}.", ""]
+    lines.append("Work-precision envelope, |err_M2| @ solve time (runs that no faster run beats by 10 % in |err_M2|):")
+    env = envelope(recs, improvement=0.1)
+    for case in sorted({r["case"] for r in env}):
+        for method in sorted({r["method"] for r in env if r["case"] == case}, key=lambda m: (m.startswith("scipy"), m)):
+            pts = [r for r in env if r["case"] == case and r["method"] == method]
+            lines.append(f"  {case:9s} {method:19s} " + ", ".join(
+                f"{abs(r['err_M2']):.1e} @ {r['solve_ms']:.2f} ms (q={r['q']})" for r in pts))
+    rows = [r for r in speed_ratios(recs, levels) if r["baseline"].endswith("LSODA")]
+    if rows:
+        lines += ["", "Speed at equal error vs SciPy LSODA (fastest run with |err_M2| <= level; ratio = SciPy / granuflow):",
+                  f"  {'case':9s} {'level':>6s}  {'granuflow':28s} {'ms':>7s}  {'SciPy LSODA':27s} {'ms':>7s}  ratio"]
+        for r in rows:
+            gtxt = (f"{r['granuflow_method']} q={r['granuflow_q']} rtol={r['granuflow_rtol']:.0e}"
+                    if r["granuflow_method"] else "not reached")
+            if r["baseline_method"]:
+                stxt = f"{r['baseline'].replace('scipy_', '')} q={r['baseline_q']} rtol={r['baseline_rtol']:.0e}"
+            else:
+                best = min((abs(x["err_M2"]) for x in recs if x["case"] == r["case"] and x["method"] == r["baseline"]
+                            and _usable(x)), default=None)
+                stxt = "not reached" + ("" if best is None else f" (best {best:.1e})")
+            ratio = "-" if r["ratio"] is None else f"x{r['ratio']:.1f}"
+            lines.append(f"  {r['case']:9s} {r['level']:6g}  {gtxt:28s} {_fmt(r['granuflow_ms'], '7.2f')}  "
+                         f"{stxt:27s} {_fmt(r['baseline_ms'], '7.2f')}  {ratio}")
+    same = same_scheme_ratios(recs)
+    if same:
+        lines += ["", "Same discretization and tolerances (fixed pivot; growth: first-order upwind), SciPy / granuflow "
+                  "time over all q and rtol:"]
+        for case in sorted({r["case"] for r in same}):
+            for base in sorted({r["baseline"] for r in same if r["case"] == case}):
+                x = sorted(r["ratio"] for r in same if r["case"] == case and r["baseline"] == base)
+                lines.append(f"  {case:9s} {base:19s} median x{statistics.median(x):.1f} (x{x[0]:.1f} to x{x[-1]:.1f}, "
+                             f"{len(x)} pairs)")
+    lines.append("Times are for information only; nothing asserts on them. `--json` prints every record.")
+    return lines
+
+
 def main(args) -> int:
-    records = bench_core(args.repeats) if args.what == "core" else bench_pbm(args)
+    if args.what == "pbm":
+        records = bench_pbm(quick=getattr(args, "quick", False), repeats=args.repeats, progress=not args.json)
+        if not args.json:
+            print("\n".join(pbm_summary(records)))
+            return 0
+    else:
+        records = bench_core(args.repeats)
     if args.json:
         for r in records:
             print(json.dumps(r))

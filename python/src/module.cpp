@@ -7,6 +7,7 @@ namespace py = pybind11;
 
 namespace granuflow::python {
 void register_flowsheet(py::module_& m);
+void register_kernels(py::module_& m);
 }
 
 PYBIND11_MODULE(_core, m) {
@@ -31,4 +32,5 @@ PYBIND11_MODULE(_core, m) {
     }
   });
   granuflow::python::register_flowsheet(m);
+  granuflow::python::register_kernels(m);
 }

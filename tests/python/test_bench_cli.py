@@ -1,0 +1,110 @@
+"""`granuflow bench pbm`: valid work-precision records and a readable summary (correctness only; benchmarks never
+assert on time)."""
+import json
+import math
+import os
+import subprocess
+import sys
+
+import pytest
+
+import granuflow as gf
+from granuflow import bench
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+# the python/ folder holding the granuflow package under test; the CLI runs from the same one
+PKG_PATH = os.path.dirname(os.path.dirname(os.path.abspath(gf.__file__)))
+CASES = {"constant", "sum", "product", "growth", "breakage"}
+
+
+def granuflow_cli(*args, timeout=300):
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [PKG_PATH, os.environ.get("PYTHONPATH")])))
+    return subprocess.run([sys.executable, "-m", "granuflow", *args], capture_output=True, text=True, env=env,
+                          timeout=timeout)
+
+
+@pytest.fixture(scope="module")
+def records():
+    try:
+        bench.pbm_executable()
+    except FileNotFoundError as e:
+        pytest.skip(str(e))
+    p = granuflow_cli("bench", "pbm", "--json", "--quick", "--repeats", "1")
+    assert p.returncode == 0, p.stderr
+    lines = p.stdout.splitlines()
+    assert lines and all(line.startswith("{") for line in lines), p.stdout[:500]
+    return [json.loads(line) for line in lines]
+
+
+def test_records_have_the_required_keys(records):
+    for r in records:
+        missing = [k for k in bench.PBM_KEYS if k not in r]
+        assert not missing, (missing, r)
+        assert r["code"] in ("granuflow", "scipy")
+        assert r["case"] in CASES and r["q"] in (1, 2, 4) and r["rtol"] in (1e-4, 1e-6)
+        assert r["classes"] == r["q"] * (19 if r["case"] == "growth" else 27)
+        assert r["solve_ms"] > 0 and r["repeats"] == 1
+        for k in ("err_M0", "err_M2", "mass_drift"):
+            assert isinstance(r[k], (int, float)) and math.isfinite(r[k]), (k, r)  # %g prints 0 as 0
+        assert (r["err_L1"] is None) == (r["case"] == "product"), r
+    methods = {(r["case"], r["method"]) for r in records if r["code"] == "granuflow"}
+    assert methods == {(c, m) for c in CASES - {"growth"} for m in ("cell_average", "fixed_pivot")} | {
+        ("growth", "fv_koren"), ("growth", "fv_upwind")}
+    assert len(methods) * 6 == sum(r["code"] == "granuflow" for r in records)  # 3 grids x 2 tolerances each
+    assert {r["method"] for r in records if r["code"] == "scipy"} == {
+        "scipy_fp_BDF", "scipy_fp_LSODA", "scipy_upwind_BDF", "scipy_upwind_LSODA"}
+
+
+def test_granuflow_conserves_mass_to_round_off(records):
+    for r in records:
+        if r["code"] == "granuflow":
+            assert abs(r["mass_drift"]) < 1e-12, r
+
+
+def test_granuflow_fixed_pivot_matches_the_scipy_baseline(records):
+    """The same discretization in both codes: the errors agree to the integration tolerance."""
+    mine = {(r["case"], r["q"], r["rtol"]): r for r in records if r["method"] in ("fixed_pivot", "fv_upwind")}
+    for s in records:
+        if s["method"].endswith("LSODA") and s["rtol"] == 1e-6:
+            g = mine[(s["case"], s["q"], s["rtol"])]
+            assert g["err_M2"] == pytest.approx(s["err_M2"], abs=1e-3 * (1 + abs(s["err_M2"]))), (g, s)
+
+
+def test_summary_and_speed_ratio_script(records, tmp_path):
+    path = tmp_path / "pbm.jsonl"
+    path.write_text("".join(json.dumps(r) + "\n" for r in records))
+    env = dict(os.environ, PYTHONPATH=PKG_PATH)
+    p = subprocess.run([sys.executable, os.path.join(ROOT, "tests", "bench", "pbm_speed_ratio.py"), str(path)],
+                       capture_output=True, text=True, env=env, timeout=60)
+    assert p.returncode == 0, p.stderr
+    assert len(p.stdout.splitlines()) == len(CASES) * len(bench.PBM_LEVELS)
+    assert "constant  |err_M2| <= 0.05:  granuflow: cell_average" in p.stdout
+    text = "\n".join(bench.pbm_summary(records))
+    for heading in ("Work-precision envelope", "Speed at equal error vs SciPy LSODA", "Same discretization"):
+        assert heading in text
+    assert "constant  scipy_fp_LSODA" in text
+
+
+def test_speed_ratio_at_equal_error():
+    def rec(code, method, err, ms, case="constant"):
+        return {"code": code, "case": case, "method": method, "q": 1, "rtol": 1e-6, "err_M2": err, "solve_ms": ms}
+
+    recs = [rec("granuflow", "cell_average", 0.02, 2.0), rec("granuflow", "cell_average", 0.004, 5.0),
+            rec("granuflow", "fixed_pivot", 0.2, 1.0), rec("scipy", "scipy_fp_LSODA", 0.03, 9.0),
+            rec("scipy", "scipy_fp_LSODA", 0.2, 4.0), rec("scipy", "scipy_fp_BDF", 0.3, 8.0)]
+    rows = {(r["level"], r["baseline"]): r for r in bench.speed_ratios(recs, levels=(0.05, 0.01))}
+    assert rows[(0.05, "scipy_fp_LSODA")]["ratio"] == pytest.approx(4.5)
+    assert rows[(0.05, "scipy_fp_LSODA")]["granuflow_ms"] == 2.0
+    assert rows[(0.01, "scipy_fp_LSODA")]["ratio"] is None  # SciPy never reaches 1 %
+    assert rows[(0.01, "scipy_fp_LSODA")]["granuflow_ms"] == 5.0
+    assert rows[(0.05, "scipy_fp_BDF")]["baseline_ms"] is None
+    assert [r["solve_ms"] for r in bench.envelope(recs) if r["method"] == "cell_average"] == [2.0, 5.0]
+    same = bench.same_scheme_ratios(recs)
+    assert {(r["baseline"], r["ratio"]) for r in same} == {("scipy_fp_LSODA", 9.0), ("scipy_fp_LSODA", 4.0),
+                                                           ("scipy_fp_BDF", 8.0)}
+
+
+def test_missing_executable_is_a_clear_error(monkeypatch, tmp_path):
+    monkeypatch.setattr(bench, "HERE", str(tmp_path / "python" / "granuflow"))
+    with pytest.raises(FileNotFoundError, match=r"granuflow_bench_pbm does not exist .*ninja -C"):
+        bench.bench_pbm(quick=True)
