@@ -31,6 +31,7 @@ long Settings::get_int(const std::string& name, long def, long lower, long upper
   if (v < lower || v > upper)
     throw ConfigError(violation(where_ + "." + name, double(v), "",
                                 std::to_string(lower) + " <= " + name + " <= " + std::to_string(upper)));
+  declared_.back().value = v;  // the value in use, not only the default
   return v;
 }
 
@@ -46,6 +47,7 @@ double Settings::get_real(const std::string& name, double def, double lower, dou
   if (v < lower || v > upper)
     throw ConfigError(violation(where_ + "." + name, v, "",
                                 std::to_string(lower) + " <= " + name + " <= " + std::to_string(upper)));
+  declared_.back().value = v;
   return v;
 }
 
@@ -53,8 +55,8 @@ bool Settings::get_bool(const std::string& name, bool def, const std::string& de
   declared_.push_back({name, SettingType::Bool, def, {}, 0, 1, description});
   const std::string* s = given(name);
   if (!s) return def;
-  if (*s == "true" || *s == "on" || *s == "yes") return true;
-  if (*s == "false" || *s == "off" || *s == "no") return false;
+  if (*s == "true" || *s == "on" || *s == "yes") return std::get<bool>(declared_.back().value = true);
+  if (*s == "false" || *s == "off" || *s == "no") return std::get<bool>(declared_.back().value = false);
   throw ConfigError(where_ + "." + name + " = '" + *s + "': expected true or false");
 }
 
@@ -68,6 +70,7 @@ std::string Settings::get_choice(const std::string& name, const std::string& def
     for (const auto& c : choices) allowed += (allowed.empty() ? "" : ", ") + c;
     throw ConfigError(where_ + "." + name + " = '" + *s + "': not one of the allowed values (" + allowed + ")");
   }
+  declared_.back().value = *s;
   return *s;
 }
 

@@ -141,3 +141,11 @@ def test_steady_state_of_the_recycle_loop_from_python():
     assert s["y"]["tank1.T"] == pytest.approx(350.0 + 2e4 / (4180.0 * 0.5), rel=1e-10)
     assert s["y"]["tank2.T"] == pytest.approx(s["y"]["tank1.T"], rel=1e-12)
     assert s["y"]["mixer.mdot"] == pytest.approx(0.5 / 0.6, rel=1e-12)
+
+
+def test_unit_settings_report_the_values_in_use():
+    text = open(DEMO).read().replace("settings: {inlets: 2}", "settings: {inlets: 3}")
+    text = text.replace("  - splitter.out2 -> mixer.in2\n", "  - splitter.out2 -> mixer.in2\n  - feed2.out -> mixer.in3\n")
+    text = text.replace("  product:\n", "  feed2:\n    type: liquid_feed\n    params: {mdot: 0.1 kg/s}\n  product:\n")
+    fs = gf.load_text(text, "three_inlets")
+    assert fs.unit_settings()["mixer"] == ("liquid_mixer", {"inlets": "3"})
