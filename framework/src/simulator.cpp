@@ -67,6 +67,18 @@ struct LinSol {
   ~LinSol() { if (s) SUNLinSolFree(s); }
 };
 
+// Dense: Eigen's blocked LU behind a SUNDenseMatrix; sparse: KLU on the flowsheet's sparsity pattern.
+void make_linear_solver(bool dense, const DaeSystem& sys, N_Vector y, SUNContext ctx, Mat& a, LinSol& ls) {
+  const int n = sys.size();
+  if (dense) {
+    a.m = SUNDenseMatrix(n, n, ctx);
+    ls.s = detail::make_eigen_dense_solver(ctx);
+  } else {
+    a.m = SUNSparseMatrix(n, n, sys.pattern().nnz(), CSC_MAT, ctx);
+    ls.s = SUNLinSol_KLU(y, a.m, ctx);
+  }
+}
+
 std::string ida_flag_text(int flag) {
   const char* name = IDAGetReturnFlagName(flag);
   std::string s = name ? name : "IDA error";
@@ -199,13 +211,7 @@ SimResult simulate(Flowsheet& fs, const SimOptions& opt) {
 
   Mat A;
   LinSol LS;
-  if (user.dense) {
-    A.m = SUNDenseMatrix(n, n, C.ctx);
-    LS.s = detail::make_eigen_dense_solver(C.ctx);
-  } else {
-    A.m = SUNSparseMatrix(n, n, sys.pattern().nnz(), CSC_MAT, C.ctx);
-    LS.s = SUNLinSol_KLU(y.v, A.m, C.ctx);
-  }
+  make_linear_solver(user.dense, sys, y.v, C.ctx, A, LS);
   check(IDASetLinearSolver(mem, LS.s, A.m), "IDASetLinearSolver");
   check(IDASetJacFn(mem, ida_jac), "IDASetJacFn");
 
@@ -428,13 +434,7 @@ void consistent_initial_values(DaeSystem& sys, double t, std::vector<double>& y0
   check(IDASetId(mem, id.v), "IDASetId");
   Mat A;
   LinSol LS;
-  if (user.dense) {
-    A.m = SUNDenseMatrix(n, n, C.ctx);
-    LS.s = detail::make_eigen_dense_solver(C.ctx);
-  } else {
-    A.m = SUNSparseMatrix(n, n, sys.pattern().nnz(), CSC_MAT, C.ctx);
-    LS.s = SUNLinSol_KLU(y.v, A.m, C.ctx);
-  }
+  make_linear_solver(user.dense, sys, y.v, C.ctx, A, LS);
   check(IDASetLinearSolver(mem, LS.s, A.m), "IDASetLinearSolver");
   check(IDASetJacFn(mem, ida_jac), "IDASetJacFn");
   // Failure here is not fatal: Newton then starts from the unit guesses.
@@ -486,13 +486,7 @@ SteadyResult solve_steady_state(Flowsheet& fs, const SteadyOptions& opt, const s
   check(KINSetMaxSetupCalls(mem, 1), "KINSetMaxSetupCalls");  // exact Newton: the Jacobian is cheap and exact
   Mat A;
   LinSol LS;
-  if (user.dense) {
-    A.m = SUNDenseMatrix(n, n, C.ctx);
-    LS.s = detail::make_eigen_dense_solver(C.ctx);
-  } else {
-    A.m = SUNSparseMatrix(n, n, sys.pattern().nnz(), CSC_MAT, C.ctx);
-    LS.s = SUNLinSol_KLU(u.v, A.m, C.ctx);
-  }
+  make_linear_solver(user.dense, sys, u.v, C.ctx, A, LS);
   check(KINSetLinearSolver(mem, LS.s, A.m), "KINSetLinearSolver");
   check(KINSetJacFn(mem, kin_jac), "KINSetJacFn");
   const int flag = KINSol(mem, u.v, KIN_LINESEARCH, su.v, sf.v);
