@@ -129,6 +129,8 @@ class FluidBed : public UnitBase<FluidBed> {
     o_psd_ = s.add_output("psd_d_0", "m");
     for (int i = 1; i < n_; ++i) s.add_output("psd_d_" + std::to_string(i), "m");
     for (int i = 0; i < n_; ++i) s.add_output("psd_m_" + std::to_string(i), "kg");
+    // The further characteristic diameters of paper 001, Table 5 (calibration observables).
+    for (const char* o : {"d5", "d16", "d25", "d75", "d84", "d95"}) o_quantiles_.push_back(s.add_output(o, "m"));
   }
 
   void configure(const UnitSpec&, const double* p) override {
@@ -439,8 +441,8 @@ class FluidBed : public UnitBase<FluidBed> {
       w += c.x_(n_ + i);
       n += c.x_(i) / particle_mass_[i];
     }
-    const double q[3] = {0.1, 0.5, 0.9};
-    for (int k = 0; k < 3; ++k) out[o_quantiles_[k]] = quantile(mass, q[k]);
+    const double q[] = {0.1, 0.5, 0.9, 0.05, 0.16, 0.25, 0.75, 0.84, 0.95};  // order of o_quantiles_
+    for (size_t k = 0; k < o_quantiles_.size(); ++k) out[o_quantiles_[k]] = quantile(mass, q[k]);
     out[o_moisture_] = w / m;
     out[o_moisture_wet_] = w / (m + w);
     out[o_particles_] = n;

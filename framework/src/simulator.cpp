@@ -14,6 +14,7 @@
 #include <memory>
 #include <sstream>
 
+#include "consistent_sensitivities.hpp"
 #include "eigen_linear_solver.hpp"
 #include "granuflow/errors.hpp"
 
@@ -229,8 +230,20 @@ SimResult simulate(Flowsheet& fs, const SimOptions& opt) {
     }
     check(IDASensInit(mem, ns, IDA_STAGGERED, ida_sens_res, yS, ypS), "IDASensInit");
     check(IDASensEEtolerances(mem), "IDASensEEtolerances");
-    check(IDASetSensErrCon(mem, SUNTRUE), "IDASetSensErrCon");
+    check(IDASetSensErrCon(mem, opt.sens_error_control ? SUNTRUE : SUNFALSE), "IDASetSensErrCon");
   }
+  // Consistent initial sensitivities come from one linear solve (consistent_sensitivities.hpp), not from
+  // IDACalcIC's sensitivity Newton: sensitivities are off during IDACalcIC and re-initialized after it.
+  auto sens_initial_conditions = [&](double t) {
+    std::vector<double*> s(ns), sp(ns);
+    for (int k = 0; k < ns; ++k) s[k] = N_VGetArrayPointer(yS[k]), sp[k] = N_VGetArrayPointer(ypS[k]);
+    detail::consistent_sensitivities(sys, user.dense, t, y.data(), yp.data(), sens_ids, s.data(), sp.data());
+    check(IDAReInit(mem, t, y.v, yp.v), "IDAReInit");
+    check(IDASensReInit(mem, IDA_STAGGERED, yS, ypS), "IDASensReInit");
+    check(IDASensEEtolerances(mem), "IDASensEEtolerances");
+    // IDACalcIC's setup ran with sensitivities off and cleared their error-control flag: set it again.
+    check(IDASetSensErrCon(mem, opt.sens_error_control ? SUNTRUE : SUNFALSE), "IDASetSensErrCon");
+  };
   struct SensGuard {
     N_Vector* a;
     N_Vector* b;
@@ -318,16 +331,13 @@ SimResult simulate(Flowsheet& fs, const SimOptions& opt) {
     if (seg > 0) {
       add_stats();
       check(IDAReInit(mem, t0, y.v, yp.v), "IDAReInit");
-      if (ns > 0) {
-        check(IDASensReInit(mem, IDA_STAGGERED, yS, ypS), "IDASensReInit");
-        check(IDASensEEtolerances(mem), "IDASensEEtolerances");
-      }
       ++res.stats.reinits;
     }
+    if (ns > 0) check(IDASensToggleOff(mem), "IDASensToggleOff");
     int flag = IDACalcIC(mem, IDA_YA_YDP_INIT, t1);
     if (flag < 0) fail(flag, "consistent initialization (IDACalcIC)");
     check(IDAGetConsistentIC(mem, y.v, yp.v), "IDAGetConsistentIC");
-    if (ns > 0) check(IDAGetSensConsistentIC(mem, yS, ypS), "IDAGetSensConsistentIC");
+    if (ns > 0) sens_initial_conditions(t0);
     while (iout < t_out.size() && t_out[iout] <= t0 + 1e-12 * std::max(1.0, t0)) {
       if (seg == 0) record(t_out[iout]);
       ++iout;

@@ -295,7 +295,105 @@ def pbm_summary(recs, levels=PBM_LEVELS) -> list[str]:
     return lines
 
 
+# -------------------------------------------------------------------------------------------------------- sweep
+def bench_sweep(*, n: int = 25, repeats: int = 3, workers: int = 2, dask: bool = True,
+                progress: bool = False) -> list[dict]:
+    """Throughput of an n x n contour map (paper 001 Fig. 17: d50,3 after 60 min over inlet temperature 40-80 degC
+    and spray rate 60-120 g/min at 700 m3/h) with 1 worker thread, ``workers`` threads and, with ``dask``, a local
+    Dask cluster of ``workers`` single-threaded worker processes. Modes are interleaved within each repeat; one
+    record per mode (median simulations/s over the repeats, parallel efficiency = rate / (workers x rate with one
+    worker)), with the load average before and after (the machine may be shared). Never asserts on time."""
+    import numpy as np
+
+    from . import design_space as ds
+    from . import load
+
+    scene = os.path.join(_repo_root(), "flowsheets", "stoeckl_gf25_batch.yaml")
+    fs = load(scene)
+    kw = dict(x=("inlet.T", "degC", 40, 80, n), y=("nozzle.mdot", "g/min", 60, 120, n), outputs=["d50_um"],
+              progress=False)
+    modes = [("threads", 1, "threads"), (f"threads_{workers}", workers, "threads")]
+    cluster = client = None
+    dask_startup = None
+    if dask:
+        try:
+            from distributed import Client, LocalCluster
+        except ImportError:
+            dask = False
+        else:
+            t0 = time.perf_counter()
+            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                   dashboard_address=None)
+            client = Client(cluster)
+            dask_startup = time.perf_counter() - t0
+            modes.append((f"dask_{workers}", workers, client))
+    load_before = os.getloadavg()
+    walls: dict[str, list] = {m[0]: [] for m in modes}
+    solves: dict[str, list] = {m[0]: [] for m in modes}
+    d50 = {}
+    try:
+        ds.contour_map(fs, **{**kw, "x": ("inlet.T", "degC", 40, 80, 2), "y": ("nozzle.mdot", "g/min", 60, 120, 2)},
+                       workers=workers)  # warm-up: imports, first clones
+        if client is not None:
+            ds.contour_map(fs, **{**kw, "x": ("inlet.T", "degC", 40, 80, 4)}, executor=client)
+        for r in range(repeats):
+            for name, w, exe in modes:
+                if progress:
+                    print(f"repeat {r + 1}/{repeats}: {name}", file=sys.stderr, flush=True)
+                g = ds.contour_map(fs, **kw, workers=w, executor=exe)
+                walls[name].append(g.wall_time_s)
+                solves[name].append(g.solve_time_s / g.n_simulations)
+                d50[name] = g["d50_um"]
+    finally:
+        if client is not None:
+            client.close()
+            cluster.close()
+    load_after = os.getloadavg()
+    sims = n * n
+    base_rate = sims / statistics.median(walls["threads"])
+    records = []
+    for name, w, exe in modes:
+        rate = sims / statistics.median(walls[name])
+        records.append({
+            "bench": "sweep", "mode": name, "workers": w, "grid": f"{n}x{n}", "simulations": sims,
+            "repeats": repeats, "wall_s_median": statistics.median(walls[name]), "wall_s_all": walls[name],
+            "sims_per_s": rate, "solve_ms_per_sim_median": statistics.median(solves[name]) * 1e3,
+            "speedup": rate / base_rate, "parallel_efficiency": rate / (w * base_rate),
+            "same_values_as_1_worker": bool(np.array_equal(d50[name], d50["threads"], equal_nan=True)),
+            "dask_startup_s": dask_startup if name.startswith("dask") else None,
+            "loadavg_before": list(load_before), "loadavg_after": list(load_after), "scene": scene,
+            "command": "granuflow bench sweep", **_meta()})
+    return records
+
+
+def _main_sweep(args) -> int:
+    records = bench_sweep(repeats=args.repeats, progress=not args.json)
+    if args.json:
+        for r in records:
+            print(json.dumps(r))
+    else:
+        print("\n".join(sweep_summary(records)))
+    return 0
+
+
+def sweep_summary(records) -> list[str]:
+    r0 = records[0]
+    lines = [f"Contour map {r0['grid']} (d50,3 after 60 min over inlet T x spray rate, GF25 batch scene), median of "
+             f"{r0['repeats']} repeats ({r0['cores']} cores, commit {r0['commit']}):"]
+    for r in records:
+        lines.append(f"  {r['mode']:10s} {r['sims_per_s']:7.1f} simulations/s  (wall {r['wall_s_median']:.2f} s, "
+                     f"solver {r['solve_ms_per_sim_median']:.2f} ms/simulation, speedup x{r['speedup']:.2f}, "
+                     f"parallel efficiency {100 * r['parallel_efficiency']:.0f} %"
+                     + (", same values" if r["same_values_as_1_worker"] else ", VALUES DIFFER") + ")")
+    la, lb = r0["loadavg_before"], r0["loadavg_after"]
+    lines.append(f"  load average before {la[0]:.2f} {la[1]:.2f} {la[2]:.2f}, after {lb[0]:.2f} {lb[1]:.2f} "
+                 f"{lb[2]:.2f} (other processes share the cores); times are for information only.")
+    return lines
+
+
 def main(args) -> int:
+    if args.what == "sweep":  # design-space throughput (bench_sweep above)
+        return _main_sweep(args)
     if args.what == "pbm":
         records = bench_pbm(quick=getattr(args, "quick", False), repeats=args.repeats, progress=not args.json)
         if not args.json:

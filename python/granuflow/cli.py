@@ -1,5 +1,6 @@
 """Command line: ``granuflow run SCENE --out DIR [--set unit.param=value ...] [--t-end SECONDS]``,
-``granuflow sweep SWEEPFILE --out DIR [--workers N] [--set unit.param=value ...]``.
+``granuflow sweep SWEEPFILE --out DIR [--workers N] [--set unit.param=value ...]``,
+``granuflow calibrate EXPERIMENTS --stages STAGES --out DIR [--starts N] [--workers N] [--compare]``.
 
 Exit codes: 0 success, 2 bad input (scene, option, parameter), 3 solver failure. A failure prints one line
 on stderr naming what went wrong.
@@ -167,6 +168,54 @@ def cmd_bench(args) -> int:
     return bench.main(args)
 
 
+def cmd_calibrate(args) -> int:
+    """Staged calibration (granuflow.calibration): report.json/.txt, CSV tables and parity plots in DIR.
+    Calibrates on the runs marked `use: calibration`, validates on `use: validation`."""
+    from . import calibration as cal
+
+    exps = cal.load_experiments(args.experiments)
+    fs = exps.flowsheet()
+    plan = cal.load_stages(args.stages, fs)
+    if not exps.calibration:
+        raise ValueError_(f"{args.experiments}: no run has `use: calibration`")
+    options = dict(plan.options)
+    if args.workers is not None:
+        if args.workers < 1:
+            raise ValueError_(f"--workers = {args.workers}: expected an integer >= 1")
+        options["num_threads"] = args.workers
+    if args.starts and args.starts > 1:
+        center = {**{f.name: fs.get(f.name) for s in plan.stages for f in s.free}, **plan.start}
+        starts = [center] + cal.random_starts(plan, args.starts - 1, center=center, spread=args.spread, seed=args.seed)
+        results = cal.multi_start(fs, exps.calibration, plan, starts, options=options, workers=args.workers,
+                                  progress=False if args.no_progress else None)
+        res = cal.best(results)
+        failed = sum(not isinstance(r, cal.CalibrationResult) for r in results)
+        if not args.quiet:
+            print(f"{len(starts)} starts ({failed} failed); best cost {res.cost:.6g} from {res.label}")
+    else:
+        res = cal.calibrate(fs, exps.calibration, plan, options=options, label="staged")
+    comparison = None
+    if args.compare:
+        comparison = cal.calibrate(fs, exps.calibration, plan.simultaneous(), start=plan.start, options=options,
+                                   label="all parameters at once")
+    rep = cal.report(fs, res, exps.calibration, exps.validation, comparison=comparison)
+    written = rep.write(args.out)
+    if not args.quiet:
+        print(res.full_report())
+        if comparison is not None:
+            print(f"all at once: cost {comparison.cost:.6g}, {comparison.simulations} simulations "
+                  f"({comparison.sensitivity_solves} sensitivity solves), {comparison.wall_time_s:.2f} s")
+        print(rep.fit.to_string(float_format=lambda x: f"{x:.4g}"))
+        print(f"wrote {', '.join(written)} to {args.out}")
+    return 0
+
+
+def cmd_contour(args) -> int:
+    from . import design_space
+
+    return design_space.contour_command(args)
+
+
 def main(argv=None) -> int:
     p = _Parser(prog="granuflow", description="spray fluidized-bed flowsheet simulation")
     sub = p.add_subparsers(dest="cmd", required=True, parser_class=_Parser)
@@ -189,17 +238,44 @@ def main(argv=None) -> int:
     w.add_argument("--fail-fast", action="store_true", help="stop at the first failed point (exit 3)")
     w.add_argument("--quiet", action="store_true")
     w.set_defaults(func=cmd_sweep)
+    k = sub.add_parser("contour", help="contour map of outputs over two parameters; feasible window; CSV and PNG")
+    k.add_argument("scene")
+    k.add_argument("--x", required=True, metavar="UNIT.PARAM:UNIT:LO:HI:N", help="e.g. inlet.T:degC:40:80:15")
+    k.add_argument("--y", required=True, metavar="UNIT.PARAM:UNIT:LO:HI:N", help="e.g. nozzle.mdot:g/min:60:120:15")
+    k.add_argument("--output", action="append", help="summary key or state/output name (repeatable; default d50_um)")
+    k.add_argument("--constraint", action="append", metavar="OUTPUT>=VALUE", help='e.g. "bed_moisture_wet<0.04"')
+    k.add_argument("--out", required=True, help="output folder (created)")
+    k.add_argument("--workers", type=int, help="parallel solves (default: number of cores)")
+    k.add_argument("--set", action="append", metavar="UNIT.PARAM=VALUE", help="fixed parameter for every point")
+    k.add_argument("--t-end", help="end time of every run in seconds (or with a unit, e.g. '60 min')")
+    k.add_argument("--executor", default="threads", choices=["threads", "serial"])
+    k.add_argument("--dask", metavar="ADDRESS", help="run on the Dask scheduler at ADDRESS (tcp://host:8786)")
+    k.add_argument("--no-progress", action="store_true", help="no progress bar (default: only on a terminal)")
+    k.add_argument("--quiet", action="store_true")
+    k.set_defaults(func=cmd_contour)
     u = sub.add_parser("units", help="list the built-in unit types")
     u.set_defaults(func=cmd_units)
     d = sub.add_parser("describe", help="list a scene's parameters with units, bounds and sources")
     d.add_argument("scene")
     d.set_defaults(func=cmd_describe)
     b = sub.add_parser("bench", help="benchmarks: speed against error (never pass/fail on time)")
-    b.add_argument("what", choices=["core", "pbm"])
+    b.add_argument("what", choices=["core", "pbm", "sweep"])
     b.add_argument("--json", action="store_true", help="print JSON records")
     b.add_argument("--repeats", type=int, default=7)
     b.add_argument("--quick", action="store_true", help="pbm: a reduced set (q 1, 2, 4; rtol 1e-4, 1e-6)")
     b.set_defaults(func=cmd_bench)
+    c = sub.add_parser("calibrate", help="staged calibration against experiments; report, tables, parity plots")
+    c.add_argument("experiments", help="experiment file (YAML, see granuflow.calibration)")
+    c.add_argument("--stages", required=True, help="stage file (YAML): free parameters, bounds, observables")
+    c.add_argument("--out", required=True, help="output folder (created)")
+    c.add_argument("--workers", type=int, help="threads: experiments in parallel, or starts with --starts")
+    c.add_argument("--starts", type=int, default=1, help="multi-start: number of starts (the first is the file's)")
+    c.add_argument("--spread", type=float, default=1.0, help="multi-start: ± spread in ln units around the start")
+    c.add_argument("--seed", type=int, default=0, help="multi-start: random seed")
+    c.add_argument("--compare", action="store_true", help="also fit all parameters at once from the same start")
+    c.add_argument("--no-progress", action="store_true", help="no progress bar (default: only on a terminal)")
+    c.add_argument("--quiet", action="store_true")
+    c.set_defaults(func=cmd_calibrate)
     args = p.parse_args(argv)
 
     from . import _core
@@ -209,7 +285,7 @@ def main(argv=None) -> int:
     except (_core.ConfigError, ValueError_, FileNotFoundError) as e:
         print(f"granuflow: bad input: {_one_line(e)}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    except _core.SolverError as e:
+    except (_core.SolverError, _core.CalibrationError) as e:
         print(f"granuflow: solver failure: {_one_line(e)}", file=sys.stderr)
         return EXIT_SOLVER
 

@@ -34,8 +34,9 @@ Python::
 
 Executors are pluggable: ``executor="threads"`` (default: a thread pool, each worker thread with its own
 ``Flowsheet.clone()``; the C++ solve releases the GIL), ``"serial"``, or any object with a
-``map_unordered(evaluate, flowsheet, items)`` method (see :class:`ThreadExecutor`), e.g. a Dask executor that
-rebuilds the flowsheet on each worker from :func:`flowsheet_spec`.
+``map_unordered(evaluate, flowsheet, items)`` method (see :class:`ThreadExecutor`). A ``distributed.Client`` is
+accepted as it is and runs the sweep on its Dask cluster (:class:`granuflow.executors.DaskExecutor`, which rebuilds
+the flowsheet on each worker from the scene text and the parameter values).
 """
 from __future__ import annotations
 
@@ -120,12 +121,19 @@ EXECUTORS: dict[str, Callable[..., Any]] = {"threads": ThreadExecutor, "serial":
 
 
 def make_executor(executor: str | Any = "threads", workers: int | None = None):
-    """An executor by name (``"threads"``, ``"serial"``, or one added to ``EXECUTORS``) or the object itself."""
+    """An executor by name (``"threads"``, ``"serial"``, or one added to ``EXECUTORS``), a ``distributed.Client``
+    (wrapped in :class:`granuflow.executors.DaskExecutor`) or the object itself."""
     if isinstance(executor, str):
         try:
             return EXECUTORS[executor](workers=workers)
         except KeyError:
             raise ConfigError(f"executor = '{executor}': unknown (allowed: {', '.join(sorted(EXECUTORS))})") from None
+    # --- a dask.distributed Client runs the same sweep on its cluster (granuflow/executors.py) ---
+    from .executors import DaskExecutor, is_dask_client
+
+    if is_dask_client(executor):
+        return DaskExecutor(executor)
+    # ---
     if not hasattr(executor, "map_unordered"):
         raise ConfigError(f"executor = {executor!r}: expected a name ({', '.join(sorted(EXECUTORS))}) "
                           "or an object with map_unordered(evaluate, flowsheet, items)")

@@ -8,6 +8,7 @@ namespace py = pybind11;
 namespace granuflow::python {
 void register_flowsheet(py::module_& m);
 void register_kernels(py::module_& m);
+void register_calibration(py::module_& m);
 }
 
 PYBIND11_MODULE(_core, m) {
@@ -33,4 +34,5 @@ PYBIND11_MODULE(_core, m) {
   });
   granuflow::python::register_flowsheet(m);
   granuflow::python::register_kernels(m);
+  granuflow::python::register_calibration(m);
 }

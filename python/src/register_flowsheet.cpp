@@ -126,6 +126,7 @@ void register_flowsheet(py::module_& m) {
       .def_readonly("description", &Scene::description)
       .def_readonly("summary_map", &Scene::summary)
       .def_readonly("extra_yaml", &Scene::extra_yaml)
+      .def_readonly("text", &Scene::text)
       .def_property_readonly("t_end", [](const Scene& s) { return s.options.t_end; })
       .def_property_readonly("rtol", [](const Scene& s) { return s.options.rtol; })
       .def_property_readonly("atol", [](const Scene& s) { return s.options.atol; })

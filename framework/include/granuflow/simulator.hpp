@@ -19,6 +19,10 @@ struct SimOptions {
   long max_steps = 200000;                // per segment between breakpoints
   double max_step = 0.0;                  // s; 0 = no limit
   std::vector<std::string> sensitivities; // "unit.param" names for forward sensitivities
+  // Include the sensitivities in the local error test (IDASetSensErrCon). Off, they are still computed by
+  // the staggered corrector at every step of the state, only without their own step-size control: about
+  // half the steps, and accurate to roughly the states' tolerance on smooth problems (calibration Jacobians).
+  bool sens_error_control = true;
   std::string linear_solver = "auto";     // auto | dense | sparse (auto: dense up to dense_limit states)
   int dense_limit = 400;
   // Throws ConfigError naming the field, the value and the rule.

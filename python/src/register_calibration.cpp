@@ -1,0 +1,260 @@
+// Calibration (Ceres): experiments, stages and options arrive as plain dicts/lists (built by
+// granuflow.calibration), results leave as dicts of numpy arrays. The GIL is released while calibrating.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <cmath>
+#include <set>
+
+#include "granuflow/calibration.hpp"
+#include "granuflow/errors.hpp"
+#include "granuflow/output_sensitivity.hpp"
+#include "granuflow/scene.hpp"
+#include "units/registry.hpp"
+
+namespace py = pybind11;
+using namespace pybind11::literals;
+
+namespace granuflow::python {
+namespace {
+
+void check_keys(const py::dict& d, const std::set<std::string>& allowed, const std::string& where) {
+  for (const auto& [k, v] : d) {
+    const auto key = k.cast<std::string>();
+    if (!allowed.count(key)) {
+      std::string names;
+      for (const auto& a : allowed) names += (names.empty() ? "" : ", ") + a;
+      throw ConfigError(where + ": unknown key '" + key + "' (allowed: " + names + ")");
+    }
+  }
+}
+
+Experiment to_experiment(const py::dict& d) {
+  check_keys(d, {"name", "settings", "t_end", "observations"}, "experiment");
+  Experiment e;
+  e.name = d["name"].cast<std::string>();
+  if (d.contains("settings"))
+    for (const auto& [k, v] : d["settings"].cast<py::dict>()) e.settings.emplace_back(k.cast<std::string>(), v.cast<double>());
+  if (d.contains("t_end") && !d["t_end"].is_none()) e.t_end = d["t_end"].cast<double>();
+  for (const auto& o : d["observations"].cast<py::list>()) {
+    const auto od = o.cast<py::dict>();
+    const std::string where = "experiment '" + e.name + "': observation";
+    check_keys(od, {"name", "t", "value", "sigma_abs", "sigma_rel"}, where);
+    Observation ob;
+    ob.name = od["name"].cast<std::string>();
+    ob.t = od["t"].cast<std::vector<double>>();
+    ob.value = od["value"].cast<std::vector<double>>();
+    if (od.contains("sigma_abs") && !od["sigma_abs"].is_none()) ob.sigma_abs = od["sigma_abs"].cast<double>();
+    if (od.contains("sigma_rel") && !od["sigma_rel"].is_none()) ob.sigma_rel = od["sigma_rel"].cast<double>();
+    const std::string w = where + " " + ob.name;
+    if (ob.t.size() != ob.value.size())
+      throw ConfigError(w + ": " + std::to_string(ob.t.size()) + " times but " + std::to_string(ob.value.size()) + " values");
+    if ((ob.sigma_abs > 0) == (ob.sigma_rel > 0))
+      throw ConfigError(w + ": give exactly one of sigma_abs > 0, sigma_rel > 0 (got " + std::to_string(ob.sigma_abs) +
+                        ", " + std::to_string(ob.sigma_rel) + ")");
+    if (ob.sigma_abs < 0 || ob.sigma_rel < 0) throw ConfigError(w + ": sigma must be >= 0");
+    for (size_t i = 0; i < ob.t.size(); ++i) {
+      if (!(ob.t[i] >= 0) || (i > 0 && !(ob.t[i] > ob.t[i - 1])))
+        throw ConfigError(violation(w + ".t[" + std::to_string(i) + "]", ob.t[i], "s", "t >= 0, increasing"));
+    }
+    e.observations.push_back(std::move(ob));
+  }
+  return e;
+}
+
+Stage to_stage(const py::dict& d) {
+  check_keys(d, {"name", "free", "observables"}, "stage");
+  Stage s;
+  s.name = d["name"].cast<std::string>();
+  for (const auto& f : d["free"].cast<py::list>()) {
+    const auto fd = f.cast<py::dict>();
+    check_keys(fd, {"name", "transform", "lower", "upper", "logarithmic"}, "stage '" + s.name + "': free parameter");
+    FreeParameter p;
+    p.name = fd["name"].cast<std::string>();
+    if (fd.contains("transform") && !fd["transform"].is_none()) p.transform = transform_from_string(fd["transform"].cast<std::string>());
+    if (fd.contains("lower") && !fd["lower"].is_none()) p.lower = fd["lower"].cast<double>();
+    if (fd.contains("upper") && !fd["upper"].is_none()) p.upper = fd["upper"].cast<double>();
+    if (fd.contains("logarithmic") && !fd["logarithmic"].is_none()) p.logarithmic = fd["logarithmic"].cast<bool>();
+    s.free.push_back(std::move(p));
+  }
+  if (d.contains("observables") && !d["observables"].is_none())
+    s.observables = d["observables"].cast<std::vector<std::string>>();
+  return s;
+}
+
+CalibrationOptions to_options(const py::dict& d) {
+  CalibrationOptions o;
+  for (const auto& [kk, v] : d) {
+    const auto k = kk.cast<std::string>();
+    if (k == "max_iterations") o.max_iterations = v.cast<int>();
+    else if (k == "function_tolerance") o.function_tolerance = v.cast<double>();
+    else if (k == "gradient_tolerance") o.gradient_tolerance = v.cast<double>();
+    else if (k == "parameter_tolerance") o.parameter_tolerance = v.cast<double>();
+    else if (k == "num_threads") o.num_threads = v.cast<int>();
+    else if (k == "sigma_basis") o.sigma_basis = sigma_basis_from_string(v.cast<std::string>());
+    else if (k == "cost_change_tolerance") o.cost_change_tolerance = v.cast<double>();
+    else if (k == "initial_trust_region_radius") o.initial_trust_region_radius = v.cast<double>();
+    else if (k == "max_reweighting_passes") o.max_reweighting_passes = v.cast<int>();
+    else if (k == "reweighting_tolerance") o.reweighting_tolerance = v.cast<double>();
+    else if (k == "jacobian") o.jacobian = jacobian_method_from_string(v.cast<std::string>());
+    else if (k == "fd_step") o.fd_step = v.cast<double>();
+    else if (k == "rtol") o.rtol = v.cast<double>();
+    else if (k == "atol") o.atol = v.cast<double>();
+    else if (k == "sens_error_control") o.sens_error_control = v.cast<bool>();
+    else if (k == "output_rel_step") o.output_rel_step = v.cast<double>();
+    else if (k == "scale_covariance") o.scale_covariance = v.cast<bool>();
+    else if (k == "rse_threshold") o.rse_threshold = v.cast<double>();
+    else if (k == "correlation_threshold") o.correlation_threshold = v.cast<double>();
+    else if (k == "profile") o.profile = v.cast<bool>();
+    else if (k == "profile_delta_chi2") o.profile_delta_chi2 = v.cast<double>();
+    else if (k == "profile_max_offset") o.profile_max_offset = v.cast<double>();
+    else if (k == "profile_max_points") o.profile_max_points = v.cast<int>();
+    else
+      throw ConfigError("calibration option '" + k +
+                        "' is unknown (allowed: max_iterations, function_tolerance, gradient_tolerance, "
+                        "parameter_tolerance, cost_change_tolerance, initial_trust_region_radius, num_threads, sigma_basis, max_reweighting_passes, "
+                        "reweighting_tolerance, jacobian, fd_step, rtol, atol, "
+                        "sens_error_control, output_rel_step, scale_covariance, rse_threshold, correlation_threshold, "
+                        "profile, profile_delta_chi2, profile_max_offset, profile_max_points)");
+  }
+  o.validate();
+  return o;
+}
+
+py::array_t<double> square(const std::vector<double>& v, size_t n) {
+  py::array_t<double> a({static_cast<py::ssize_t>(n), static_cast<py::ssize_t>(n)});
+  if (v.size() == n * n) std::copy(v.begin(), v.end(), a.mutable_data());
+  else std::fill(a.mutable_data(), a.mutable_data() + n * n, std::nan(""));
+  return a;
+}
+
+py::dict stage_dict(const StageResult& s) {
+  py::list est;
+  for (const auto& e : s.estimates)
+    est.append(py::dict("name"_a = e.name, "transform"_a = to_string(e.transform), "logarithmic"_a = e.logarithmic,
+                        "start"_a = e.start, "value"_a = e.value, "theta"_a = e.theta, "se_theta"_a = e.se_theta,
+                        "se"_a = e.se, "rel_se"_a = e.rel_se, "lower"_a = e.lower, "upper"_a = e.upper,
+                        "at_bound"_a = e.at_bound, "identifiable"_a = e.identifiable, "flag"_a = e.flag));
+  py::list prof;
+  for (const auto& p : s.profiles)
+    prof.append(py::dict("name"_a = p.name, "values"_a = p.values, "delta_chi2"_a = p.delta_chi2,
+                         "lower_95"_a = p.lower_95, "upper_95"_a = p.upper_95, "bounded_below"_a = p.bounded_below,
+                         "bounded_above"_a = p.bounded_above, "linear_trustworthy"_a = p.linear_trustworthy,
+                         "simulations"_a = p.simulations, "sensitivity_solves"_a = p.sensitivity_solves,
+                         "verdict"_a = p.verdict));
+  const size_t n = s.estimates.size();
+  return py::dict("name"_a = s.name, "observables"_a = s.observables, "estimates"_a = est,
+                  "covariance"_a = square(s.covariance, n), "correlation"_a = square(s.correlation, n),
+                  "iteration_costs"_a = s.iteration_costs, "initial_cost"_a = s.initial_cost, "cost"_a = s.cost,
+                  "residuals"_a = s.residuals, "chi2_reduced"_a = s.chi2_reduced, "iterations"_a = s.iterations, "passes"_a = s.passes, "weight_change"_a = s.weight_change,
+                  "simulations"_a = s.simulations, "sensitivity_solves"_a = s.sensitivity_solves,
+                  "wall_time_s"_a = s.wall_time_s, "jacobian_method"_a = s.jacobian_method,
+                  "termination"_a = s.termination, "message"_a = s.message, "usable"_a = s.usable, "profiles"_a = prof);
+}
+
+std::vector<Experiment> to_experiments(const py::list& l) {
+  std::vector<Experiment> v;
+  for (const auto& e : l) v.push_back(to_experiment(e.cast<py::dict>()));
+  return v;
+}
+
+// Residuals of one stage as a function of θ (tests, Jacobian checks).
+class PyStageProblem {
+ public:
+  PyStageProblem(const Scene& scene, const py::list& exps, const py::dict& stage, const py::dict& options,
+                 const std::map<std::string, double>& start)
+      : p_(scene, units::builtin(), to_experiments(exps), to_stage(stage), to_options(options), start) {}
+  py::tuple evaluate(const std::vector<double>& theta, bool jacobian) {
+    std::vector<double> r, J;
+    {
+      py::gil_scoped_release release;
+      p_.evaluate(theta, r, jacobian ? &J : nullptr);
+    }
+    py::array_t<double> ra(static_cast<py::ssize_t>(r.size()));
+    std::copy(r.begin(), r.end(), ra.mutable_data());
+    if (!jacobian) return py::make_tuple(ra, py::none());
+    py::array_t<double> Ja({static_cast<py::ssize_t>(r.size()), static_cast<py::ssize_t>(theta.size())});
+    std::copy(J.begin(), J.end(), Ja.mutable_data());
+    return py::make_tuple(ra, Ja);
+  }
+  StageProblem p_;
+};
+
+}  // namespace
+
+void register_calibration(py::module_& m) {
+  m.def("observable_unit", [](const Scene& s, const std::string& name) { return observable_unit(*s.flowsheet, name); },
+        "scene"_a, "name"_a, "SI unit of a state or reported output; ConfigError listing valid names otherwise.");
+
+  m.def("calibrate", [](const Scene& scene, const py::list& exps, const py::list& stages, const py::dict& options,
+                        const std::map<std::string, double>& start) {
+    const auto ex = to_experiments(exps);
+    std::vector<Stage> st;
+    for (const auto& s : stages) st.push_back(to_stage(s.cast<py::dict>()));
+    const CalibrationOptions o = to_options(options);
+    CalibrationResult r;
+    {
+      py::gil_scoped_release release;
+      r = calibrate(scene, units::builtin(), ex, st, o, start);
+    }
+    py::list sd;
+    for (const auto& s : r.stages) sd.append(stage_dict(s));
+    return py::dict("status"_a = r.status, "message"_a = r.message, "brief"_a = r.brief(),
+                    "full_report"_a = r.full_report(), "parameters"_a = r.parameters, "simulations"_a = r.simulations,
+                    "sensitivity_solves"_a = r.sensitivity_solves, "wall_time_s"_a = r.wall_time_s, "stages"_a = sd);
+  }, "scene"_a, "experiments"_a, "stages"_a, "options"_a = py::dict(), "start"_a = std::map<std::string, double>{});
+
+  m.def("predict", [](const Scene& scene, const py::list& exps, const std::map<std::string, double>& params,
+                      const py::dict& options) {
+    const auto ex = to_experiments(exps);
+    const CalibrationOptions o = to_options(options);
+    std::vector<Prediction> p;
+    {
+      py::gil_scoped_release release;
+      p = predict(scene, units::builtin(), ex, params, o);
+    }
+    py::list out;
+    for (const auto& x : p)
+      out.append(py::dict("experiment"_a = x.experiment, "observable"_a = x.observable, "t"_a = x.t, "data"_a = x.data,
+                          "model"_a = x.model, "sigma"_a = x.sigma));
+    return out;
+  }, "scene"_a, "experiments"_a, "params"_a = std::map<std::string, double>{}, "options"_a = py::dict());
+
+  m.def("output_sensitivities", [](Scene& s, double t_end, const std::vector<double>& t_out,
+                                   const std::vector<std::string>& params, double rel_step) {
+    SimOptions o = s.options;
+    o.t_end = t_end;
+    o.t_out = t_out;
+    o.sensitivities = params;
+    std::vector<double> dz;
+    size_t no = 0;
+    {
+      py::gil_scoped_release release;
+      const SimResult r = simulate(*s.flowsheet, o);
+      OutputSensitivityOptions so;
+      so.rel_step = rel_step;
+      dz = output_sensitivities(*s.flowsheet, r, so);
+      no = r.output_names.size();
+    }
+    py::array_t<double> a({static_cast<py::ssize_t>(t_out.size()), static_cast<py::ssize_t>(params.size()),
+                           static_cast<py::ssize_t>(no)});
+    std::copy(dz.begin(), dz.end(), a.mutable_data());
+    return a;
+  }, "scene"_a, "t_end"_a, "t_out"_a, "params"_a, "rel_step"_a = 1e-6,
+     "d(output)/d(param) [time, param, output] from one forward-sensitivity solve.");
+
+  py::class_<PyStageProblem>(m, "StageProblem")
+      .def(py::init<const Scene&, const py::list&, const py::dict&, const py::dict&, const std::map<std::string, double>&>(),
+           "scene"_a, "experiments"_a, "stage"_a, "options"_a = py::dict(), "start"_a = std::map<std::string, double>{})
+      .def_property_readonly("num_parameters", [](const PyStageProblem& p) { return p.p_.num_parameters(); })
+      .def_property_readonly("num_residuals", [](const PyStageProblem& p) { return p.p_.num_residuals(); })
+      .def("theta0", [](const PyStageProblem& p) { return p.p_.theta0(); })
+      .def("to_params", [](const PyStageProblem& p, const std::vector<double>& th) { return p.p_.to_params(th); })
+      .def("to_theta", [](const PyStageProblem& p, const std::vector<double>& v) { return p.p_.to_theta(v); })
+      .def("evaluate", &PyStageProblem::evaluate, "theta"_a, "jacobian"_a = true)
+      .def_property_readonly("simulations", [](const PyStageProblem& p) { return p.p_.simulations(); })
+      .def_property_readonly("sensitivity_solves", [](const PyStageProblem& p) { return p.p_.sensitivity_solves(); });
+}
+
+}  // namespace granuflow::python

@@ -1,0 +1,242 @@
+// Calibration (Ceres) on the headline scene, shortened to 20 min: output sensitivities and the residual
+// Jacobian against finite differences, exact recovery from noise-free data (sensitivities and central
+// differences), a parameter the data cannot see flagged, and option validation.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "granuflow/calibration.hpp"
+#include "granuflow/output_sensitivity.hpp"
+#include "granuflow/simulator.hpp"
+#include "scene_helpers.hpp"
+
+namespace granuflow {
+namespace {
+
+using testing::scene_from_file;
+
+Scene short_headline() {
+  Scene s = scene_from_file("flowsheets/stoeckl_gf25_batch.yaml");
+  s.options.t_end = 1200.0;
+  return s;
+}
+
+int output_index(const SimResult& r, const std::string& name) {
+  for (size_t i = 0; i < r.output_names.size(); ++i)
+    if (r.output_names[i] == name) return static_cast<int>(i);
+  ADD_FAILURE() << "no output " << name;
+  return 0;
+}
+
+// Two operating points (Table 1 corners), observed every 5 min for 20 min; values filled by predict().
+std::vector<Experiment> experiments(const std::vector<std::string>& observables) {
+  std::vector<Experiment> v;
+  const double pts[2][3] = {{600 / 3600.0, 313.15, 1e-3}, {800 / 3600.0, 353.15, 2e-3}};
+  for (int k = 0; k < 2; ++k) {
+    Experiment e;
+    e.name = "run" + std::to_string(k);
+    e.settings = {{"inlet.V_dot", pts[k][0]}, {"inlet.T", pts[k][1]}, {"nozzle.mdot", pts[k][2]}};
+    e.t_end = 1200.0;
+    for (const auto& o : observables) {
+      Observation ob;
+      ob.name = o;
+      ob.t = {300, 600, 900, 1200};
+      ob.value.assign(4, 1.0);
+      if (o == "gas.T") ob.sigma_abs = 2.0;
+      else if (o == "bed.moisture") ob.sigma_abs = 0.01;
+      else ob.sigma_rel = 0.07;
+      e.observations.push_back(ob);
+    }
+    v.push_back(e);
+  }
+  return v;
+}
+
+// Data = model at `params` (times `factor`).
+void fill_with_model(const Scene& s, std::vector<Experiment>& exps, const std::map<std::string, double>& params,
+                     double factor = 1.0) {
+  CalibrationOptions o;
+  o.rtol = 1e-9;
+  o.atol = 1e-11;
+  const auto pred = predict(s, units::builtin(), exps, params, o);
+  for (auto& e : exps)
+    for (auto& ob : e.observations)
+      for (const auto& p : pred)
+        if (p.experiment == e.name && p.observable == ob.name)
+          for (size_t i = 0; i < ob.value.size(); ++i) ob.value[i] = p.model[i] * factor;
+}
+
+TEST(OutputSensitivities, EqualFiniteDifferencesOfSimulations) {
+  const std::vector<std::string> params{"bed.ln_beta0", "droplets.k_evap"};
+  Scene s = short_headline();
+  SimOptions o = s.options;
+  o.t_out = {0, 600, 1200};
+  o.rtol = 1e-9;
+  o.atol = 1e-11;
+  o.sensitivities = params;
+  const SimResult r = simulate(*s.flowsheet, o);
+  const auto dz = output_sensitivities(*s.flowsheet, r);
+  const size_t no = r.output_names.size();
+  for (const std::string out : {"bed.d50", "bed.d90", "bed.d16", "bed.moisture"}) {
+    const int j = output_index(r, out);
+    for (size_t k = 0; k < params.size(); ++k) {
+      const double p = s.flowsheet->param(params[k]);
+      const double h = params[k] == "bed.ln_beta0" ? 1e-3 : 1e-3 * p;  // small: no class edge in between
+      auto run = [&](double v) {
+        Scene q = short_headline();
+        q.flowsheet->set_param(params[k], v);
+        SimOptions oo = o;
+        oo.sensitivities.clear();
+        oo.rtol = 1e-10;
+        oo.atol = 1e-12;
+        return simulate(*q.flowsheet, oo).outputs[2 * no + j];
+      };
+      const double fd = (run(p + h) - run(p - h)) / (2 * h);
+      const double an = dz[(2 * params.size() + k) * no + j];
+      // d-values are piecewise smooth (kinks where a quantile crosses a class edge): a wide step would
+      // straddle one and see the mean of two slopes
+      EXPECT_NEAR(an, fd, 2e-3 * std::abs(fd) + 1e-12) << out << " / " << params[k];
+    }
+  }
+}
+
+TEST(StageProblem, JacobianEqualsFiniteDifferencesOfTheResiduals) {
+  Scene s = short_headline();
+  auto exps = experiments({"gas.T", "bed.moisture", "bed.d50", "bed.d90"});
+  fill_with_model(s, exps, {}, 1.03);
+  Stage st;
+  st.name = "mixed";
+  st.free = {{"wall.k_wall", Transform::kLog, 1.0, 200.0, {}},
+             {"bed.ln_beta0", Transform::kNone, -25.0, -10.0, {}},
+             {"spray_zone.h_pen", Transform::kLog, 1e-5, 5e-3, {}}};
+  CalibrationOptions o;
+  o.rtol = 1e-10;
+  o.atol = 1e-12;
+  o.sens_error_control = true;
+  StageProblem sp(s, units::builtin(), exps, st, o, {{"wall.k_wall", 18.0}, {"bed.ln_beta0", -17.0}});
+  ASSERT_EQ(sp.num_parameters(), 3);
+  ASSERT_EQ(sp.num_residuals(), 2 * 4 * 4);
+  const auto th = sp.theta0();
+  EXPECT_NEAR(th[0], std::log(18.0), 1e-12);
+  std::vector<double> r, J, rp, rm;
+  sp.evaluate(th, r, &J);  // fixes the weights (σ_rel at this model)
+  const int nr = sp.num_residuals();
+  for (int k = 0; k < 3; ++k) {
+    const double h = 1e-4;
+    auto a = th, b = th;
+    a[k] += h, b[k] -= h;
+    sp.evaluate(a, rp, nullptr);
+    sp.evaluate(b, rm, nullptr);
+    double colmax = 0;
+    for (int i = 0; i < nr; ++i) colmax = std::max(colmax, std::abs(J[size_t(i) * 3 + k]));
+    for (int i = 0; i < nr; ++i) {
+      const double fd = (rp[i] - rm[i]) / (2 * h);
+      EXPECT_NEAR(J[size_t(i) * 3 + k], fd, 1e-4 * colmax) << "row " << i << ", parameter " << k;
+    }
+  }
+  EXPECT_EQ(sp.sensitivity_solves(), 1 * 2);
+}
+
+Stage two_parameter_stage() {
+  Stage st;
+  st.name = "wall_and_agglomeration";
+  st.free = {{"wall.k_wall", Transform::kLog, 1.0, 200.0, {}}, {"bed.ln_beta0", Transform::kNone, -25.0, -10.0, {}}};
+  return st;
+}
+
+TEST(Calibrate, RecoversTheParametersOfNoiseFreeDataExactly) {
+  Scene s = short_headline();
+  const double k_wall = s.flowsheet->param("wall.k_wall"), ln_beta0 = s.flowsheet->param("bed.ln_beta0");
+  auto exps = experiments({"gas.T", "bed.d50", "bed.d90"});
+  fill_with_model(s, exps, {});
+  CalibrationOptions o;
+  o.rtol = 1e-8;
+  o.atol = 1e-10;
+  o.num_threads = 2;
+  o.function_tolerance = 1e-12;
+  o.parameter_tolerance = 1e-10;
+  o.cost_change_tolerance = 0;
+  for (auto method : {JacobianMethod::kSensitivities, JacobianMethod::kCentralDifferences}) {
+    o.jacobian = method;
+    const CalibrationResult r =
+        calibrate(s, units::builtin(), exps, {two_parameter_stage()}, o, {{"wall.k_wall", 20.0}, {"bed.ln_beta0", -16.8}});
+    ASSERT_EQ(r.stages.size(), 1u);
+    const StageResult& st = r.stages[0];
+    EXPECT_EQ(st.jacobian_method, to_string(method));
+    EXPECT_EQ(st.termination, "CONVERGENCE") << st.message;
+    EXPECT_LT(st.cost, 1e-6);
+    EXPECT_NEAR(r.parameters.at("wall.k_wall"), k_wall, 1e-4 * k_wall);
+    EXPECT_NEAR(r.parameters.at("bed.ln_beta0"), ln_beta0, 1e-4);
+    if (method == JacobianMethod::kCentralDifferences) EXPECT_EQ(r.sensitivity_solves, 0);
+    else EXPECT_GT(r.sensitivity_solves, 0);
+    for (const auto& e : st.estimates) EXPECT_TRUE(e.identifiable) << e.name << ": " << e.flag;
+    EXPECT_NE(r.full_report().find("wall.k_wall"), std::string::npos);
+  }
+}
+
+TEST(Calibrate, FlagsAParameterTheDataDoNotSee) {
+  Scene s = short_headline();
+  auto exps = experiments({"gas.T", "bed.d50"});
+  exps.resize(1);
+  fill_with_model(s, exps, {});
+  Stage st = two_parameter_stage();
+  st.free.push_back({"bed.V_vessel", Transform::kLog, 0.5, 5.0, {}});  // only read with beta0_basis = per_m3
+  CalibrationOptions o;
+  o.profile_max_points = 2;
+  const CalibrationResult r = calibrate(s, units::builtin(), exps, {st}, o);
+  const auto& est = r.stages[0].estimates;
+  ASSERT_EQ(est.size(), 3u);
+  EXPECT_TRUE(est[0].identifiable && est[1].identifiable);
+  EXPECT_FALSE(est[2].identifiable);
+  EXPECT_FALSE(std::isfinite(est[2].se));
+  EXPECT_NE(est[2].flag.find("do not constrain"), std::string::npos) << est[2].flag;
+  const Profile* pv = nullptr;  // flagged parameters are profiled
+  for (const auto& p : r.stages[0].profiles)
+    if (p.name == "bed.V_vessel") pv = &p;
+  ASSERT_NE(pv, nullptr);
+  EXPECT_EQ(pv->verdict, "unidentifiable");
+  EXPECT_FALSE(pv->bounded_below || pv->bounded_above);
+  EXPECT_NE(r.brief().find("unidentifiable: bed.V_vessel"), std::string::npos) << r.brief();
+}
+
+TEST(Calibrate, RejectsBadConfigurationWithTheRule) {
+  CalibrationOptions o;
+  o.max_iterations = 0;
+  try {
+    o.validate();
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("CalibrationOptions.max_iterations = 0: violates max_iterations >= 1"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW(transform_from_string("ln"), ConfigError);
+  EXPECT_EQ(sigma_basis_from_string(to_string(SigmaBasis::kData)), SigmaBasis::kData);
+  EXPECT_EQ(jacobian_method_from_string("central_differences"), JacobianMethod::kCentralDifferences);
+
+  Scene s = short_headline();
+  auto exps = experiments({"gas.T"});
+  Stage st = two_parameter_stage();
+  const CalibrationOptions ok;
+  // a free parameter that an experiment sets
+  auto bad = exps;
+  bad[0].settings.push_back({"wall.k_wall", 10.0});
+  EXPECT_THROW(calibrate(s, units::builtin(), bad, {st}, ok), ConfigError);
+  // an unknown observable
+  auto unknown = exps;
+  unknown[0].observations[0].name = "bed.d55";
+  EXPECT_THROW(calibrate(s, units::builtin(), unknown, {st}, ok), ConfigError);
+  // log transform needs a positive lower bound
+  Stage neg = st;
+  neg.free[1].transform = Transform::kLog;
+  EXPECT_THROW(calibrate(s, units::builtin(), exps, {neg}, ok), ConfigError);
+  // a stage whose observables no experiment has
+  Stage none = st;
+  none.observables = {"bed.d50"};
+  EXPECT_THROW(calibrate(s, units::builtin(), exps, {none}, ok), CalibrationError);
+  EXPECT_EQ(observable_unit(*s.flowsheet, "bed.d95"), "m");
+  EXPECT_EQ(observable_unit(*s.flowsheet, "gas.T"), "K");
+}
+
+}  // namespace
+}  // namespace granuflow
