@@ -86,6 +86,15 @@ DaeSystem::DaeSystem(Flowsheet& fs, bool inline_explicit) : fs_(fs) {
       }
     }
   }
+  // Columns differentiated by AD: all local columns, except an explicit unit's own (the identity).
+  ad_pos_.resize(units.size());
+  for (size_t u = 0; u < units.size(); ++u) {
+    const int off = units[u].offset, ns = static_cast<int>(units[u].spec.states().size());
+    for (size_t j = 0; j < local_cols_[u].size(); ++j) {
+      const int c = local_cols_[u][j];
+      if (!(units[u].spec.is_explicit() && c >= off && c < off + ns)) ad_pos_[u].push_back(j);
+    }
+  }
   col_map_.resize(units.size());
   for (size_t u = 0; u < units.size(); ++u)
     for (size_t j = 0; j < local_cols_[u].size(); ++j) col_map_[u][local_cols_[u][j]] = static_cast<int>(j);
@@ -282,18 +291,13 @@ void DaeSystem::assemble(double t, const double* y, const double* yp, double cj,
     params_as(static_cast<int>(u), pj);
     rj_.assign(ns, Jet(0.0));
     // An explicit unit's residual is x - f: its own columns are the identity, no AD needed.
-    const bool expl = units[u].spec.is_explicit();
-    std::vector<size_t> ad;  // positions in `cols` differentiated by AD
-    for (size_t j = 0; j < cols.size(); ++j) {
-      const bool own = cols[j] >= units[u].offset && cols[j] < units[u].offset + ns;
-      if (expl && own) {
-        const int k = cols[j] - units[u].offset;
-        if (dense) dense[size_t(cols[j]) * dim + cols[j]] += 1.0;
-        else sparse[block_pos_[u][size_t(k) * cols.size() + j]] += 1.0;
-      } else {
-        ad.push_back(j);
+    const std::vector<size_t>& ad = ad_pos_[u];
+    if (units[u].spec.is_explicit())
+      for (int k = 0; k < ns; ++k) {
+        const int col = units[u].offset + k;
+        if (dense) dense[size_t(col) * dim + col] += 1.0;
+        else sparse[block_pos_[u][size_t(k) * cols.size() + col_map_[u].at(col)]] += 1.0;
       }
-    }
     for (size_t a0 = 0; a0 < ad.size(); a0 += kAdChunk) {
       const size_t a1 = std::min(ad.size(), a0 + kAdChunk);
       // Seed column j as direction: d/de F(y + e_j, y' + cj e_j) is column j of dF/dy + cj dF/dy'.

@@ -87,6 +87,7 @@ class DaeSystem {
   std::vector<std::vector<int>> local_cols_; // per unit: global columns its rows depend on
   std::vector<std::vector<int>> block_pos_;  // per unit: row-major [local row][local col] -> position in sparse values
   std::vector<std::unordered_map<int, int>> col_map_;  // per unit: global column -> local column
+  std::vector<std::vector<size_t>> ad_pos_;             // per unit: positions in local_cols_ found by AD
   SparsityPattern pattern_;
   std::vector<Jet> xj_, xdj_, rj_;
   std::vector<double> rbuf_;
