@@ -86,6 +86,22 @@ DaeSystem::DaeSystem(Flowsheet& fs, bool inline_explicit) : fs_(fs) {
       }
     }
   }
+  // Structure of the Schur complement: rows of integrated units that read explicit states, and integrated
+  // columns that explicit units read (Z = J_SS^-1 J_SR is zero elsewhere, explicit-to-explicit reads included).
+  if (inline_) {
+    std::set<int> rows, cols;
+    for (size_t u = 0; u < units.size(); ++u) {
+      const bool expl = units[u].spec.is_explicit();
+      const int off = units[u].offset, ns = static_cast<int>(units[u].spec.states().size());
+      for (int c : local_cols_[u]) {
+        if (!expl && c >= n_)
+          for (int k = 0; k < ns; ++k) rows.insert(off + k);
+        if (expl && c < n_) cols.insert(c);
+      }
+    }
+    schur_rows_.assign(rows.begin(), rows.end());
+    schur_cols_.assign(cols.begin(), cols.end());
+  }
   // Columns differentiated by AD: all local columns, except an explicit unit's own (the identity).
   ad_pos_.resize(units.size());
   for (size_t u = 0; u < units.size(); ++u) {
@@ -259,7 +275,18 @@ void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj,
     const int ov = units[v].offset - n_, nv = static_cast<int>(units[v].spec.states().size());
     z.middleRows(ou, nu).noalias() -= J.block(n_ + ou, n_ + ov, nu, nv) * z.middleRows(ov, nv);
   }
-  out.noalias() = J.topLeftCorner(n_, n_) - J.topRightCorner(n_, m) * z;
+  // Only rows of units that read explicit states and columns that explicit units read can change: multiply
+  // the gathered blocks instead of the whole n x m by m x n product.
+  out = J.topLeftCorner(n_, n_);
+  const int nr = static_cast<int>(schur_rows_.size()), nc = static_cast<int>(schur_cols_.size());
+  if (nr == 0 || nc == 0) return;
+  schur_a_.resize(nr, m);
+  schur_b_.resize(m, nc);
+  for (int i = 0; i < nr; ++i) schur_a_.row(i) = J.block(schur_rows_[i], n_, 1, m);
+  for (int j = 0; j < nc; ++j) schur_b_.col(j) = z.col(schur_cols_[j]);
+  schur_p_.noalias() = schur_a_ * schur_b_;
+  for (int j = 0; j < nc; ++j)
+    for (int i = 0; i < nr; ++i) out(schur_rows_[i], schur_cols_[j]) -= schur_p_(i, j);
 }
 
 void DaeSystem::assemble(double t, const double* y, const double* yp, double cj, int dim, double* dense,

@@ -80,7 +80,8 @@ class DaeSystem {
   std::vector<int> explicit_order_;  // explicit units, each after the explicit units it reads
   std::vector<int> real_units_;      // the others
   std::vector<std::pair<int, int>> explicit_reads_;  // (u, v): explicit unit u reads explicit unit v, in order
-  Eigen::MatrixXd schur_z_;
+  Eigen::MatrixXd schur_z_, schur_a_, schur_b_, schur_p_;
+  std::vector<int> schur_rows_, schur_cols_;  // where the Schur correction can be nonzero
   std::vector<double> y_ext_, yp_ext_, jac_ext_;
   double segment_start_ = 0.0;
   std::vector<std::vector<double>> pvals_;   // per unit, at the last fill time
