@@ -90,8 +90,10 @@ class FluidBed : public UnitBase<FluidBed> {
     };
     for (const auto& p : specs) s.add_param(p);
 
-    for (int i = 0; i < n_; ++i) s.add_state("M_" + std::to_string(i), StateKind::Differential, "kg", 1.0);
-    for (int i = 0; i < n_; ++i) s.add_state("W_" + std::to_string(i), StateKind::Differential, "kg", 0.05);
+    // Tolerance scales of the class inventories are those of the whole bed (about 10 kg solids, 0.5 kg water):
+    // an emptied class needs no more absolute accuracy than the bed it belongs to.
+    for (int i = 0; i < n_; ++i) s.add_state("M_" + std::to_string(i), StateKind::Differential, "kg", 10.0);
+    for (int i = 0; i < n_; ++i) s.add_state("W_" + std::to_string(i), StateKind::Differential, "kg", 0.5);
     sH_ = s.add_state("H", StateKind::Differential, "J", 1e6);
     sT_ = s.add_state("T", StateKind::Algebraic, "K", 300.0);
     sU0_ = s.add_state("u0", StateKind::Algebraic, "m/s", 1.0);

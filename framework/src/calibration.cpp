@@ -808,7 +808,8 @@ CalibrationResult calibrate(const Scene& scene, const Registry<Unit>& reg, const
         r.profiles.push_back(std::move(p));
       }
     }
-    if (r.termination != "CONVERGENCE" && out.status == "ok") {
+    // USER_SUCCESS is the small-change callback above: converged by this calibration's own criterion
+    if (r.termination != "CONVERGENCE" && r.termination != "USER_SUCCESS" && out.status == "ok") {
       out.status = "no_convergence";
       out.message = "stage '" + r.name + "': " + r.message;
     }

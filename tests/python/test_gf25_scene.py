@@ -312,7 +312,7 @@ def test_cli_sweep_two_points_end_to_end(tmp_path):
 def test_cli_sweep_exit_3_only_when_every_point_fails(tmp_path):
     scene = tmp_path / "gf25_few_steps.yaml"
     text = open(SCENE).read()
-    scene.write_text(text.replace("solver: {rtol: 1e-6, atol: 1e-8}", "solver: {rtol: 1e-6, atol: 1e-8, max_steps: 5}"))
+    scene.write_text(text.replace("\nsolver: {", "\nsolver: {max_steps: 5, "))
     path = _two_point_sweep(tmp_path, scene=str(scene))
     p = cli("sweep", path, "--out", tmp_path / "out", "--quiet")
     assert p.returncode == 3, p.stderr
