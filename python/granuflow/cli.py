@@ -33,15 +33,27 @@ def _parse_seconds(text: str) -> float:
     return _core.to_si(v, parts[1] if len(parts) > 1 else "", "s", "--t-end")
 
 
+def parse_sets(items) -> dict:
+    """``--set unit.param=value`` options as {name: value text}; a malformed one is bad input."""
+    overrides = {}
+    for item in items or []:
+        if "=" not in item:
+            raise ValueError_(f"--set '{item}': expected unit.param=value")
+        name, value = item.split("=", 1)
+        overrides[name.strip()] = value.strip()
+    return overrides
+
+
+def check_workers(workers) -> None:
+    if workers is not None and workers < 1:
+        raise ValueError_(f"--workers = {workers}: expected an integer >= 1")
+
+
 def cmd_run(args) -> int:
     from . import load, plots
 
     fs = load(args.scene)
-    for item in args.set or []:
-        if "=" not in item:
-            raise ValueError_(f"--set '{item}': expected unit.param=value")
-        name, value = item.split("=", 1)
-        fs.set(name.strip(), value.strip())
+    fs.update(parse_sets(args.set))
     t_end = _parse_seconds(args.t_end) if args.t_end else None
     if t_end is not None:
         fs.set_t_end(t_end)
@@ -84,14 +96,8 @@ def cmd_sweep(args) -> int:
     from . import sweep as sw
 
     spec = sw.load_sweep(args.sweepfile)
-    overrides = {}
-    for item in args.set or []:
-        if "=" not in item:
-            raise ValueError_(f"--set '{item}': expected unit.param=value")
-        name, value = item.split("=", 1)
-        overrides[name.strip()] = value.strip()
-    if args.workers is not None and args.workers < 1:
-        raise ValueError_(f"--workers = {args.workers}: expected an integer >= 1")
+    overrides = parse_sets(args.set)
+    check_workers(args.workers)
     fs = spec.flowsheet(overrides)
     if args.t_end:
         fs.set_t_end(_parse_seconds(args.t_end))
@@ -179,9 +185,8 @@ def cmd_calibrate(args) -> int:
     if not exps.calibration:
         raise ValueError_(f"{args.experiments}: no run has `use: calibration`")
     options = dict(plan.options)
+    check_workers(args.workers)
     if args.workers is not None:
-        if args.workers < 1:
-            raise ValueError_(f"--workers = {args.workers}: expected an integer >= 1")
         options["num_threads"] = args.workers
     if args.starts and args.starts > 1:
         center = {**{f.name: fs.get(f.name) for s in plan.stages for f in s.free}, **plan.start}
@@ -216,6 +221,17 @@ def cmd_contour(args) -> int:
     return design_space.contour_command(args)
 
 
+def _add_batch_options(p) -> None:
+    """Options shared by the commands that run many points (sweep, contour)."""
+    p.add_argument("--workers", type=int, help="parallel solves (default: number of cores)")
+    p.add_argument("--set", action="append", metavar="UNIT.PARAM=VALUE",
+                   help="override a scene parameter for every point (unit allowed)")
+    p.add_argument("--t-end", help="end time of every run in seconds (or with a unit, e.g. '60 min')")
+    p.add_argument("--executor", default="threads", choices=["threads", "serial"])
+    p.add_argument("--no-progress", action="store_true", help="no progress bar (default: only on a terminal)")
+    p.add_argument("--quiet", action="store_true")
+
+
 def main(argv=None) -> int:
     p = _Parser(prog="granuflow", description="spray fluidized-bed flowsheet simulation")
     sub = p.add_subparsers(dest="cmd", required=True, parser_class=_Parser)
@@ -229,14 +245,8 @@ def main(argv=None) -> int:
     w = sub.add_parser("sweep", help="run a sweep file; write sweep.csv and sweep.json")
     w.add_argument("sweepfile")
     w.add_argument("--out", required=True, help="output folder (created)")
-    w.add_argument("--workers", type=int, help="parallel solves (default: number of cores)")
-    w.add_argument("--set", action="append", metavar="UNIT.PARAM=VALUE",
-                   help="override a scene parameter for every point (unit allowed)")
-    w.add_argument("--t-end", help="end time of every run in seconds (or with a unit, e.g. '60 min')")
-    w.add_argument("--executor", default="threads", choices=["threads", "serial"])
-    w.add_argument("--no-progress", action="store_true", help="no progress bar (default: only on a terminal)")
+    _add_batch_options(w)
     w.add_argument("--fail-fast", action="store_true", help="stop at the first failed point (exit 3)")
-    w.add_argument("--quiet", action="store_true")
     w.set_defaults(func=cmd_sweep)
     k = sub.add_parser("contour", help="contour map of outputs over two parameters; feasible window; CSV and PNG")
     k.add_argument("scene")
@@ -245,13 +255,8 @@ def main(argv=None) -> int:
     k.add_argument("--output", action="append", help="summary key or state/output name (repeatable; default d50_um)")
     k.add_argument("--constraint", action="append", metavar="OUTPUT>=VALUE", help='e.g. "bed_moisture_wet<0.04"')
     k.add_argument("--out", required=True, help="output folder (created)")
-    k.add_argument("--workers", type=int, help="parallel solves (default: number of cores)")
-    k.add_argument("--set", action="append", metavar="UNIT.PARAM=VALUE", help="fixed parameter for every point")
-    k.add_argument("--t-end", help="end time of every run in seconds (or with a unit, e.g. '60 min')")
-    k.add_argument("--executor", default="threads", choices=["threads", "serial"])
+    _add_batch_options(k)
     k.add_argument("--dask", metavar="ADDRESS", help="run on the Dask scheduler at ADDRESS (tcp://host:8786)")
-    k.add_argument("--no-progress", action="store_true", help="no progress bar (default: only on a terminal)")
-    k.add_argument("--quiet", action="store_true")
     k.set_defaults(func=cmd_contour)
     u = sub.add_parser("units", help="list the built-in unit types")
     u.set_defaults(func=cmd_units)

@@ -1287,14 +1287,10 @@ def contour_command(args) -> int:
     from .flowsheet import load
 
     fs = load(args.scene)
-    fixed = {}
-    for item in args.set or []:
-        if "=" not in item:
-            raise ConfigError(f"--set '{item}': expected unit.param=value")
-        k, v = item.split("=", 1)
-        fixed[k.strip()] = v.strip()
-    if args.workers is not None and args.workers < 1:
-        raise ConfigError(f"--workers = {args.workers}: expected an integer >= 1")
+    from .cli import check_workers, parse_sets
+
+    fixed = parse_sets(args.set)
+    check_workers(args.workers)
     cons = parse_constraints(args.constraint or [])
     outputs = list(dict.fromkeys(list(args.output or ["d50_um"]) + [c.output for c in cons]))
     executor: Any = args.executor
