@@ -198,8 +198,7 @@ class FluidBed : public UnitBase<FluidBed> {
     for (int i = 0; i < n_; ++i) X[i] = moisture(c, i);
     const T& t_s = c.x_(sT_);
     T beyond(0.0);
-    // jacobian_part() differentiates the aggregation pair by pair; AD covers the rest
-    if (agg_ != Aggregation::kNone && !c.skip_analytic) aggregation(c, X.data(), dM.data(), dW.data(), &beyond);
+    if (agg_ != Aggregation::kNone) aggregation(c, X.data(), dM.data(), dW.data(), &beyond);
     if (breakage_) {
       for (int k = 0; k < n_; ++k) {
         // Eq. (92) selection times the fragment mass split: linear in M and W (fragments keep the parent's

@@ -305,15 +305,12 @@ void DaeSystem::assemble(double t, const double* y, const double* yp, double cj,
     const auto& cols = local_cols_[u];
     // Analytic Jacobian when the unit supplies one.
     Ctx<double> cd{t, y, yp, pvals_[u].data(), rbuf_.data(), units[u].offset, &units[u].port_index, segment_start_};
-    bool partial = false;
     if (dense) {
       DenseSink sink(dense, dim, units[u].offset);
       if (units[u].unit->jacobian(cd, cj, sink)) continue;
-      partial = units[u].unit->jacobian_part(cd, cj, sink);
     } else {
       SparseSink sink(sparse, block_pos_[u], col_map_[u], static_cast<int>(cols.size()), units[u].name);
       if (units[u].unit->jacobian(cd, cj, sink)) continue;
-      partial = units[u].unit->jacobian_part(cd, cj, sink);
     }
     params_as(static_cast<int>(u), pj);
     rj_.assign(ns, Jet(0.0));
@@ -332,8 +329,7 @@ void DaeSystem::assemble(double t, const double* y, const double* yp, double cj,
         xj_[cols[ad[a]]].v[a - a0] = 1.0;
         xdj_[cols[ad[a]]].v[a - a0] = cj;
       }
-      Ctx<Jet> c{t, xj_.data(), xdj_.data(), pj.data(), rj_.data(), units[u].offset, &units[u].port_index, segment_start_,
-                 partial};
+      Ctx<Jet> c{t, xj_.data(), xdj_.data(), pj.data(), rj_.data(), units[u].offset, &units[u].port_index, segment_start_};
       units[u].unit->residual(c);
       for (size_t a = a0; a < a1; ++a) {
         const size_t j = ad[a];

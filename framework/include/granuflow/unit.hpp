@@ -94,8 +94,6 @@ struct Ctx {
   int offset;            // global index of own state 0
   const std::vector<std::vector<int>>* port_index;  // per port, per field: global state index
   double t_seg = 0.0;    // start of the current integration segment (between breakpoints)
-  bool skip_analytic = false;  // true while the framework differentiates by AD the part a unit's
-                               // jacobian_part() does not cover: eval() then leaves that part out
 
   const T& x_(int k) const { return x[offset + k]; }
   const T& xd(int k) const { return xdot[offset + k]; }
@@ -152,10 +150,6 @@ class Unit {
   virtual void initial(InitCtx<Jet>& c) const = 0;
   // Optional analytic Jacobian of the whole unit; returns false to let the framework use AD.
   virtual bool jacobian(const Ctx<double>& /*c*/, double /*cj*/, JacobianSink& /*sink*/) const { return false; }
-  // Optional analytic Jacobian of part of the residual (e.g. a dense O(N^2) population-balance term whose
-  // derivatives are cheap pair by pair). Returns true if it wrote that part; the framework then adds the AD
-  // Jacobian of eval() run with Ctx::skip_analytic = true.
-  virtual bool jacobian_part(const Ctx<double>& /*c*/, double /*cj*/, JacobianSink& /*sink*/) const { return false; }
   // Times where the unit's equations change discontinuously (spray start/stop) for the current parameters;
   // the simulator stops and re-initializes there. Inside eval(), use Ctx::t_seg (the start of the current
   // segment) to decide which side of such a time the solver is on.
