@@ -202,8 +202,7 @@ Status DaeSystem::residual(double t, const double* y, const double* yp, double* 
   if (inline_) {
     std::copy(y, y + n_, y_ext_.begin());
     std::copy(yp, yp + n_, yp_ext_.begin());
-    std::vector<double> scratch;
-    evaluate_explicit(t, y_ext_.data(), yp_ext_.data(), pvals_, scratch);
+    evaluate_explicit(t, y_ext_.data(), yp_ext_.data(), pvals_, scratch_);  // no allocation per residual
     y = y_ext_.data();
     yp = yp_ext_.data();
   }
@@ -257,8 +256,7 @@ void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj,
   if (!dense) throw std::logic_error("explicit units are inlined only with dense Jacobians");
   std::copy(y, y + n_, y_ext_.begin());
   std::copy(yp, yp + n_, yp_ext_.begin());
-  std::vector<double> scratch;
-  evaluate_explicit(t, y_ext_.data(), yp_ext_.data(), pvals_, scratch);
+  evaluate_explicit(t, y_ext_.data(), yp_ext_.data(), pvals_, scratch_);
   jac_ext_.resize(size_t(n_ext_) * n_ext_);
   assemble(t, y_ext_.data(), yp_ext_.data(), cj, n_ext_, jac_ext_.data(), nullptr);
   // Chain rule through the explicit states: dF_R/dy_R = J_RR - J_RS J_SS^-1 J_SR.

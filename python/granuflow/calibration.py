@@ -245,19 +245,25 @@ def _read_csv(path: str) -> tuple[dict[str, list[float]], dict[str, str]]:
     return cols, {n: u for n, u in header}
 
 
-def load_experiments(path: str | os.PathLike, flowsheet: Flowsheet | None = None) -> ExperimentSet:
-    """Read an experiment file (see the module docstring). Raises ConfigError naming the file and key."""
+def _read_mapping(path: str, allowed: Sequence[str]) -> dict:
+    """A YAML file whose top level is a mapping with only the `allowed` keys."""
     import yaml
 
-    path = os.fspath(path)
-    base = os.path.dirname(os.path.abspath(path))
     with open(path) as f:
         doc = yaml.safe_load(f) or {}
     if not isinstance(doc, dict):
         raise ConfigError(f"{path}: expected a mapping at the top level")
     for k in doc:
-        if k not in _EXP_KEYS:
-            raise ConfigError(f"{path}: unknown key '{k}' (allowed: {', '.join(_EXP_KEYS)})")
+        if k not in allowed:
+            raise ConfigError(f"{path}: unknown key '{k}' (allowed: {', '.join(allowed)})")
+    return doc
+
+
+def load_experiments(path: str | os.PathLike, flowsheet: Flowsheet | None = None) -> ExperimentSet:
+    """Read an experiment file (see the module docstring). Raises ConfigError naming the file and key."""
+    path = os.fspath(path)
+    base = os.path.dirname(os.path.abspath(path))
+    doc = _read_mapping(path, _EXP_KEYS)
     scene = doc.get("scene", "")
     if scene and not os.path.isabs(scene):
         scene = os.path.normpath(os.path.join(base, scene))
@@ -476,16 +482,8 @@ class StagePlan:
 
 def load_stages(path: str | os.PathLike, flowsheet: Flowsheet) -> StagePlan:
     """Read a stage file (see the module docstring)."""
-    import yaml
-
     path = os.fspath(path)
-    with open(path) as f:
-        doc = yaml.safe_load(f) or {}
-    if not isinstance(doc, dict):
-        raise ConfigError(f"{path}: expected a mapping at the top level")
-    for k in doc:
-        if k not in _STAGEFILE_KEYS:
-            raise ConfigError(f"{path}: unknown key '{k}' (allowed: {', '.join(_STAGEFILE_KEYS)})")
+    doc = _read_mapping(path, _STAGEFILE_KEYS)
     start = {k: _to_si(v, flowsheet.spec(k)["unit"], f"{path}: start.{k}") for k, v in (doc.get("start") or {}).items()}
     options = dict(doc.get("options") or {})
     stages: list[Stage] = []

@@ -499,37 +499,36 @@ def load_sweep(path: str | os.PathLike) -> Sweep:
                  variables=variables, points=points, outputs=outputs, set=dict(fixed), t_end=t_end)
 
 
+def _quantity(value, where: str, expected: str) -> tuple[float, str] | None:
+    """(number, unit) of a string such as "60 degC"; None for a plain number. ConfigError names `expected`."""
+    if _is_number(value):
+        return None
+    if isinstance(value, str):
+        try:
+            return _split_quantity(value)
+        except (ValueError, IndexError):
+            pass
+    raise ConfigError(f"{where} = {value!r}: expected {expected}")
+
+
 def _edge_value(fs: Flowsheet, v: Variable, value, where: str) -> float:
     """A point value in the variable's edge unit (numbers are taken as given; strings may carry a unit)."""
     si_unit = fs.spec(v.param)["unit"]
-    if _is_number(value):
+    q = _quantity(value, where, f"a number in {v.unit or si_unit} or a number with a unit")
+    if q is None:
         return float(value)
-    if isinstance(value, str):
-        try:
-            num, unit = _split_quantity(value)
-        except (ValueError, IndexError):
-            raise ConfigError(f"{where} = {value!r}: expected a number in {v.unit or si_unit} "
-                              f"or a number with a unit") from None
-        try:
-            si = _core.to_si(num, unit, si_unit, v.param)
-        except ConfigError as e:
-            raise ConfigError(f"{where} = {value!r}: {' '.join(str(e).split())}") from None
-        a = _core.to_si(0.0, v.unit, si_unit, v.param)  # edge units are affine in SI (degC)
-        b = _core.to_si(1.0, v.unit, si_unit, v.param) - a
-        return (si - a) / b
-    raise ConfigError(f"{where} = {value!r}: expected a number in {v.unit or si_unit} or a number with a unit")
+    try:
+        si = _core.to_si(q[0], q[1], si_unit, v.param)
+    except ConfigError as e:
+        raise ConfigError(f"{where} = {value!r}: {' '.join(str(e).split())}") from None
+    a = _core.to_si(0.0, v.unit, si_unit, v.param)  # edge units are affine in SI (degC)
+    b = _core.to_si(1.0, v.unit, si_unit, v.param) - a
+    return (si - a) / b
 
 
 def _parse_time(value, where: str) -> float:
-    if _is_number(value):
-        return float(value)
-    if isinstance(value, str):
-        try:
-            num, unit = _split_quantity(value)
-        except (ValueError, IndexError):
-            raise ConfigError(f"{where} = {value!r}: expected seconds or a number with a time unit") from None
-        return _core.to_si(num, unit, "s", where)
-    raise ConfigError(f"{where} = {value!r}: expected seconds or a number with a time unit (e.g. '60 min')")
+    q = _quantity(value, where, "seconds or a number with a time unit (e.g. '60 min')")
+    return float(value) if q is None else _core.to_si(q[0], q[1], "s", where)
 
 
 def run_sweep_file(path: str | os.PathLike, **kwargs):

@@ -82,7 +82,7 @@ class DaeSystem {
   std::vector<std::pair<int, int>> explicit_reads_;  // (u, v): explicit unit u reads explicit unit v, in order
   Eigen::MatrixXd schur_z_, schur_a_, schur_b_, schur_p_;
   std::vector<int> schur_rows_, schur_cols_;  // where the Schur correction can be nonzero
-  std::vector<double> y_ext_, yp_ext_, jac_ext_;
+  std::vector<double> y_ext_, yp_ext_, jac_ext_, scratch_;
   double segment_start_ = 0.0;
   std::vector<std::vector<double>> pvals_;   // per unit, at the last fill time
   std::vector<std::vector<int>> local_cols_; // per unit: global columns its rows depend on
