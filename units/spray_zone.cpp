@@ -174,6 +174,8 @@ class SprayZone : public UnitBase<SprayZone> {
     }
     sum.v[5] = 1.0;  // keeps its dependence on T_bed and u0 and also stands for itself
     const int cols[5] = {0, 0, ports[kBed][holdup::T(n_)], ports[kBed][holdup::u0(n_)], ports[kLiquid][liquid::kMdot]};
+    std::vector<double> d_dsum(3 * n_);  // d(output)/d(weight sum), row by row
+    std::vector<int> mass_cols(n_);
     for (int i = 0; i < n_; ++i) {
       J6 out[3];
       class_outputs(i, J6(c.port(kBed, holdup::mass(i)), 0), J6(c.port(kBed, holdup::water(n_, i)), 1), m_liquid, sum,
@@ -185,9 +187,12 @@ class SprayZone : public UnitBase<SprayZone> {
         sink.add(row, col_m, -out[r].v[0]);
         sink.add(row, col_w, -out[r].v[1]);
         for (int d = 2; d < 5; ++d) sink.add(row, cols[d], -out[r].v[d]);
-        for (int j = 0; j < n_; ++j) sink.add(row, ports[kBed][holdup::mass(j)], -out[r].v[5] * dsum_dm[j]);
+        d_dsum[row] = -out[r].v[5];
       }
+      mass_cols[i] = col_m;
     }
+    // every output depends on every M_j through the weight sum: one outer product, not 3 N^2 entries
+    sink.add_outer(3 * n_, d_dsum.data(), n_, mass_cols.data(), dsum_dm.data());
     sink.add(3 * n_, c.offset + 3 * n_, 1.0);
     sink.add(3 * n_, ports[kLiquid][liquid::kT], -1.0);
     return true;

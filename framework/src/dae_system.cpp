@@ -101,6 +101,8 @@ DaeSystem::DaeSystem(Flowsheet& fs, bool inline_explicit) : fs_(fs) {
     }
     schur_rows_.assign(rows.begin(), rows.end());
     schur_cols_.assign(cols.begin(), cols.end());
+    schur_col_pos_.assign(n_, -1);
+    for (size_t j = 0; j < schur_cols_.size(); ++j) schur_col_pos_[schur_cols_[j]] = static_cast<int>(j);
   }
   // Columns differentiated by AD: all local columns, except an explicit unit's own (the identity).
   ad_pos_.resize(units.size());
@@ -220,12 +222,7 @@ Status DaeSystem::residual(double t, const double* y, const double* yp, double* 
 namespace {
 class DenseSink : public JacobianSink {
  public:
-  DenseSink(double* a, int n, int offset) : a_(a), n_(n), offset_(offset) {}
-  void add(int local_row, int global_col, double v) override { a_[size_t(global_col) * n_ + offset_ + local_row] += v; }
-
- private:
-  double* a_;
-  int n_, offset_;
+  DenseSink(double* a, int n, int offset) : JacobianSink(a + offset, size_t(n)) {}
 };
 
 class SparseSink : public JacobianSink {
@@ -233,7 +230,9 @@ class SparseSink : public JacobianSink {
   SparseSink(double* vals, const std::vector<int>& pos, const std::unordered_map<int, int>& col_map, int ncols,
              const std::string& unit)
       : vals_(vals), pos_(pos), col_map_(col_map), ncols_(ncols), unit_(unit) {}
-  void add(int local_row, int global_col, double v) override {
+
+ protected:
+  void add_entry(int local_row, int global_col, double v) override {
     auto it = col_map_.find(global_col);
     if (it == col_map_.end())
       throw std::logic_error("unit '" + unit_ + "' wrote a Jacobian entry outside its declared dependencies");
@@ -249,6 +248,28 @@ class SparseSink : public JacobianSink {
 };
 }  // namespace
 
+// Dense, but keeps an inlined unit's outer products on integrated columns apart: the Schur complement then
+// applies them as rank-one updates instead of through a dense product.
+class DaeSystem::FactoringSink : public JacobianSink {
+ public:
+  FactoringSink(DaeSystem& sys, int unit, double* a, int n, int offset)
+      : JacobianSink(a + offset, size_t(n)), sys_(sys), unit_(unit) {}
+  void add_outer(int n_rows, const double* u, int n_cols, const int* cols, const double* w) override {
+    for (int k = 0; k < n_cols; ++k)
+      if (cols[k] >= sys_.n_) return JacobianSink::add_outer(n_rows, u, n_cols, cols, w);
+    if (sys_.n_outer_ == sys_.outer_.size()) sys_.outer_.emplace_back();
+    OuterTerm& t = sys_.outer_[sys_.n_outer_++];
+    t.unit = unit_;
+    t.u.assign(u, u + n_rows);
+    t.cols.assign(cols, cols + n_cols);
+    t.w.assign(w, w + n_cols);
+  }
+
+ private:
+  DaeSystem& sys_;
+  int unit_;
+};
+
 void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj, double* dense, double* sparse) {
   ++n_jac_;
   fill_params(t);
@@ -258,37 +279,64 @@ void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj,
   std::copy(yp, yp + n_, yp_ext_.begin());
   evaluate_explicit(t, y_ext_.data(), yp_ext_.data(), pvals_, scratch_);
   jac_ext_.resize(size_t(n_ext_) * n_ext_);
-  assemble(t, y_ext_.data(), yp_ext_.data(), cj, n_ext_, jac_ext_.data(), nullptr);
-  // Chain rule through the explicit states: dF_R/dy_R = J_RR - J_RS J_SS^-1 J_SR.
+  n_outer_ = 0;
+  assemble(t, y_ext_.data(), yp_ext_.data(), cj, n_ext_, jac_ext_.data(), nullptr, true);
+  // Chain rule through the explicit states: dF_R/dy_R = J_RR - J_RS J_SS^-1 J_SR, with J_SR = D + sum u_k w_k^T
+  // (D sparse in practice: each explicit state reads few integrated ones, apart from the outer products).
   const int m = n_ext_ - n_;
   Eigen::Map<const Eigen::MatrixXd> J(jac_ext_.data(), n_ext_, n_ext_);
   Eigen::Map<Eigen::MatrixXd> out(dense, n_, n_);
-  // J_SS = I + (blocks where an explicit unit reads another), block unit-lower-triangular in dependency order:
-  // Z = J_SS^-1 J_SR by forward substitution over the explicit units, each block row solved once.
-  Eigen::MatrixXd& z = schur_z_;
-  z = J.bottomLeftCorner(m, n_);
   const auto& units = fs_.units();
+  const int n_terms = static_cast<int>(n_outer_);
+  Eigen::MatrixXd& z = schur_z_;
+  Eigen::MatrixXd& zu = schur_u_;
+  z = J.bottomLeftCorner(m, n_);
+  zu.setZero(m, n_terms);
+  for (int k = 0; k < n_terms; ++k) {
+    const OuterTerm& term = outer_[k];
+    zu.col(k).segment(units[term.unit].offset - n_, static_cast<Eigen::Index>(term.u.size())) =
+        Eigen::Map<const Eigen::VectorXd>(term.u.data(), static_cast<Eigen::Index>(term.u.size()));
+  }
+  // J_SS = I + (blocks where an explicit unit reads another), block unit-lower-triangular in dependency order:
+  // Z = J_SS^-1 [D U] by forward substitution over the explicit units, each block row solved once.
   for (const auto& [u, v] : explicit_reads_) {
     const int ou = units[u].offset - n_, nu = static_cast<int>(units[u].spec.states().size());
     const int ov = units[v].offset - n_, nv = static_cast<int>(units[v].spec.states().size());
-    z.middleRows(ou, nu).noalias() -= J.block(n_ + ou, n_ + ov, nu, nv) * z.middleRows(ov, nv);
+    const auto juv = J.block(n_ + ou, n_ + ov, nu, nv);
+    z.middleRows(ou, nu).noalias() -= juv * z.middleRows(ov, nv);
+    if (n_terms > 0) zu.middleRows(ou, nu).noalias() -= juv * zu.middleRows(ov, nv);
   }
-  // Only rows of units that read explicit states and columns that explicit units read can change: multiply
-  // the gathered blocks instead of the whole n x m by m x n product.
+  // Only rows of units that read explicit states and columns that explicit units read can change.
   out = J.topLeftCorner(n_, n_);
   const int nr = static_cast<int>(schur_rows_.size()), nc = static_cast<int>(schur_cols_.size());
   if (nr == 0 || nc == 0) return;
   schur_a_.resize(nr, m);
-  schur_b_.resize(m, nc);
   for (int i = 0; i < nr; ++i) schur_a_.row(i) = J.block(schur_rows_[i], n_, 1, m);
-  for (int j = 0; j < nc; ++j) schur_b_.col(j) = z.col(schur_cols_[j]);
-  schur_p_.noalias() = schur_a_ * schur_b_;
+  // P = J_RS Z over Z's nonzeros, plus (J_RS U) W^T
+  schur_p_.setZero(nr, nc);
+  for (int j = 0; j < nc; ++j) {
+    const double* zc = z.col(schur_cols_[j]).data();
+    for (int k = 0; k < m; ++k)
+      if (zc[k] != 0.0) schur_p_.col(j).noalias() += zc[k] * schur_a_.col(k);
+  }
+  if (n_terms > 0) {
+    schur_au_.noalias() = schur_a_ * zu;
+    for (int k = 0; k < n_terms; ++k) {
+      const OuterTerm& term = outer_[k];
+      for (size_t c = 0; c < term.cols.size(); ++c) {
+        const int j = schur_col_pos_[term.cols[c]];
+        if (j < 0)
+          throw std::logic_error("unit '" + units[term.unit].name + "' added an outer product on a column it does not read");
+        schur_p_.col(j).noalias() += term.w[c] * schur_au_.col(k);
+      }
+    }
+  }
   for (int j = 0; j < nc; ++j)
     for (int i = 0; i < nr; ++i) out(schur_rows_[i], schur_cols_[j]) -= schur_p_(i, j);
 }
 
 void DaeSystem::assemble(double t, const double* y, const double* yp, double cj, int dim, double* dense,
-                         double* sparse) {
+                         double* sparse, bool factor_outer) {
   const auto& units = fs_.units();
   if (dense) std::fill(dense, dense + size_t(dim) * dim, 0.0);
   if (sparse) std::fill(sparse, sparse + pattern_.nnz(), 0.0);
@@ -303,7 +351,10 @@ void DaeSystem::assemble(double t, const double* y, const double* yp, double cj,
     const auto& cols = local_cols_[u];
     // Analytic Jacobian when the unit supplies one.
     Ctx<double> cd{t, y, yp, pvals_[u].data(), rbuf_.data(), units[u].offset, &units[u].port_index, segment_start_};
-    if (dense) {
+    if (dense && factor_outer && units[u].spec.is_explicit()) {
+      FactoringSink sink(*this, static_cast<int>(u), dense, dim, units[u].offset);
+      if (units[u].unit->jacobian(cd, cj, sink)) continue;
+    } else if (dense) {
       DenseSink sink(dense, dim, units[u].offset);
       if (units[u].unit->jacobian(cd, cj, sink)) continue;
     } else {

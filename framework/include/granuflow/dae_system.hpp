@@ -68,7 +68,9 @@ class DaeSystem {
   void fill_params(double t);
   template <class T>
   void evaluate_explicit(double t, T* x, T* xd, const std::vector<std::vector<T>>& params, std::vector<T>& scratch);
-  void assemble(double t, const double* y, const double* yp, double cj, int dim, double* dense, double* sparse);
+  // With `factor_outer`, explicit units' outer products are collected in outer_ instead of added to `dense`.
+  void assemble(double t, const double* y, const double* yp, double cj, int dim, double* dense, double* sparse,
+                bool factor_outer = false);
   void seed(int id, int u, size_t slot, std::vector<Jet>& pj) const;
   template <class T>
   void params_as(int unit, std::vector<T>& out) const;
@@ -80,8 +82,17 @@ class DaeSystem {
   std::vector<int> explicit_order_;  // explicit units, each after the explicit units it reads
   std::vector<int> real_units_;      // the others
   std::vector<std::pair<int, int>> explicit_reads_;  // (u, v): explicit unit u reads explicit unit v, in order
-  Eigen::MatrixXd schur_z_, schur_a_, schur_b_, schur_p_;
+  class FactoringSink;
+  struct OuterTerm {  // u w^T on the rows of an explicit unit, columns integrated states
+    int unit = -1;
+    std::vector<double> u, w;
+    std::vector<int> cols;
+  };
+  std::vector<OuterTerm> outer_;  // storage reused between Jacobians; the first n_outer_ are current
+  size_t n_outer_ = 0;
+  Eigen::MatrixXd schur_z_, schur_u_, schur_a_, schur_au_, schur_p_;
   std::vector<int> schur_rows_, schur_cols_;  // where the Schur correction can be nonzero
+  std::vector<int> schur_col_pos_;            // integrated column -> position in schur_cols_, or -1
   std::vector<double> y_ext_, yp_ext_, jac_ext_, scratch_;
   double segment_start_ = 0.0;
   std::vector<std::vector<double>> pvals_;   // per unit, at the last fill time

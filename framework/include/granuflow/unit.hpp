@@ -128,10 +128,33 @@ struct InitCtx {
 };
 
 // Receives analytic Jacobian entries dF_row/dx_col + cj dF_row/dxdot_col (row local, col global).
+// A unit's Jacobian has O(N^2) entries for N size classes, so the dense case is an inline store, not a virtual
+// call per entry; other sinks (sparse storage) take the virtual path.
 class JacobianSink {
  public:
   virtual ~JacobianSink() = default;
-  virtual void add(int local_row, int global_col, double value) = 0;
+  void add(int local_row, int global_col, double value) {
+    if (dense_) dense_[size_t(global_col) * ld_ + size_t(local_row)] += value;
+    else add_entry(local_row, global_col, value);
+  }
+  // The outer product u w^T on local rows 0..n_rows-1 and the global columns `cols`: how rows that all depend on
+  // one shared intermediate (a sum over classes) enter. A sink that can keep the product factored does (the
+  // Schur complement of inlined units); the default expands it entry by entry.
+  virtual void add_outer(int n_rows, const double* u, int n_cols, const int* cols, const double* w) {
+    for (int r = 0; r < n_rows; ++r)
+      if (u[r] != 0.0)
+        for (int k = 0; k < n_cols; ++k) add(r, cols[k], u[r] * w[k]);
+  }
+
+ protected:
+  JacobianSink() = default;
+  // Dense column-major storage with leading dimension `ld`, `unit_rows` pointing at the unit's first row.
+  JacobianSink(double* unit_rows, size_t ld) : dense_(unit_rows), ld_(ld) {}
+  virtual void add_entry(int /*local_row*/, int /*global_col*/, double /*value*/) {}
+
+ private:
+  double* dense_ = nullptr;
+  size_t ld_ = 0;
 };
 
 class Unit {
