@@ -71,21 +71,6 @@ DaeSystem::DaeSystem(Flowsheet& fs, bool inline_explicit) : fs_(fs) {
     pattern_.row_idx.insert(pattern_.row_idx.end(), col_rows[c].begin(), col_rows[c].end());
     pattern_.col_ptr[c + 1] = static_cast<int>(pattern_.row_idx.size());
   }
-  block_pos_.resize(units.size());
-  for (size_t u = 0; u < units.size(); ++u) {
-    const int ns = static_cast<int>(units[u].spec.states().size());
-    const auto& cols = local_cols_[u];
-    block_pos_[u].assign(size_t(ns) * cols.size(), -1);
-    for (size_t j = 0; j < cols.size(); ++j) {
-      const int c = cols[j];
-      for (int k = 0; k < ns; ++k) {
-        const int row = units[u].offset + k;
-        auto begin = pattern_.row_idx.begin() + pattern_.col_ptr[c];
-        auto end = pattern_.row_idx.begin() + pattern_.col_ptr[c + 1];
-        block_pos_[u][size_t(k) * cols.size() + j] = static_cast<int>(std::lower_bound(begin, end, row) - pattern_.row_idx.begin());
-      }
-    }
-  }
   // Structure of the Schur complement: rows of integrated units that read explicit states, and integrated
   // columns that explicit units read (Z = J_SS^-1 J_SR is zero elsewhere, explicit-to-explicit reads included).
   if (inline_) {
@@ -113,9 +98,6 @@ DaeSystem::DaeSystem(Flowsheet& fs, bool inline_explicit) : fs_(fs) {
       if (!(units[u].spec.is_explicit() && c >= off && c < off + ns)) ad_pos_[u].push_back(j);
     }
   }
-  col_map_.resize(units.size());
-  for (size_t u = 0; u < units.size(); ++u)
-    for (size_t j = 0; j < local_cols_[u].size(); ++j) col_map_[u][local_cols_[u][j]] = static_cast<int>(j);
   xj_.resize(n_all);
   xdj_.resize(n_all);
   rbuf_.resize(n_all);
@@ -144,6 +126,30 @@ DaeSystem::DaeSystem(Flowsheet& fs, bool inline_explicit) : fs_(fs) {
                                  units[u].spec.states()[k].name + "' is not x - f(inputs)");
     }
   }
+}
+
+// Where each unit's entries go in the sparse values: only sparse assembly needs it, and it costs a binary
+// search per entry of every unit's block, so it is built on first use.
+void DaeSystem::build_sparse_maps() {
+  const auto& units = fs_.units();
+  block_pos_.resize(units.size());
+  for (size_t u = 0; u < units.size(); ++u) {
+    const int ns = static_cast<int>(units[u].spec.states().size());
+    const auto& cols = local_cols_[u];
+    block_pos_[u].assign(size_t(ns) * cols.size(), -1);
+    for (size_t j = 0; j < cols.size(); ++j) {
+      const int c = cols[j];
+      for (int k = 0; k < ns; ++k) {
+        const int row = units[u].offset + k;
+        auto begin = pattern_.row_idx.begin() + pattern_.col_ptr[c];
+        auto end = pattern_.row_idx.begin() + pattern_.col_ptr[c + 1];
+        block_pos_[u][size_t(k) * cols.size() + j] = static_cast<int>(std::lower_bound(begin, end, row) - pattern_.row_idx.begin());
+      }
+    }
+  }
+  col_map_.resize(units.size());
+  for (size_t u = 0; u < units.size(); ++u)
+    for (size_t j = 0; j < local_cols_[u].size(); ++j) col_map_[u][local_cols_[u][j]] = static_cast<int>(j);
 }
 
 // Evaluates the explicit units in order: with their states set to zero, residual = -f.
@@ -311,7 +317,8 @@ void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj,
   const int nr = static_cast<int>(schur_rows_.size()), nc = static_cast<int>(schur_cols_.size());
   if (nr == 0 || nc == 0) return;
   schur_a_.resize(nr, m);
-  for (int i = 0; i < nr; ++i) schur_a_.row(i) = J.block(schur_rows_[i], n_, 1, m);
+  for (int k = 0; k < m; ++k)  // column by column: J is column-major
+    for (int i = 0; i < nr; ++i) schur_a_(i, k) = J(schur_rows_[i], n_ + k);
   // P = J_RS Z over Z's nonzeros, plus (J_RS U) W^T
   schur_p_.setZero(nr, nc);
   for (int j = 0; j < nc; ++j) {
@@ -339,7 +346,10 @@ void DaeSystem::assemble(double t, const double* y, const double* yp, double cj,
                          double* sparse, bool factor_outer) {
   const auto& units = fs_.units();
   if (dense) std::fill(dense, dense + size_t(dim) * dim, 0.0);
-  if (sparse) std::fill(sparse, sparse + pattern_.nnz(), 0.0);
+  if (sparse) {
+    if (block_pos_.empty()) build_sparse_maps();
+    std::fill(sparse, sparse + pattern_.nnz(), 0.0);
+  }
   for (int i = 0; i < dim; ++i) {
     xj_[i] = Jet(y[i]);
     xdj_[i] = Jet(yp[i]);

@@ -66,6 +66,7 @@ class DaeSystem {
 
  private:
   void fill_params(double t);
+  void build_sparse_maps();
   template <class T>
   void evaluate_explicit(double t, T* x, T* xd, const std::vector<std::vector<T>>& params, std::vector<T>& scratch);
   // With `factor_outer`, explicit units' outer products are collected in outer_ instead of added to `dense`.
