@@ -52,40 +52,32 @@ DaeSystem::DaeSystem(Flowsheet& fs, bool inline_explicit) : fs_(fs) {
   pvals_.resize(units.size());
   local_cols_.resize(units.size());
   // Columns each unit's rows can depend on: own states and every field its ports read.
-  std::vector<std::vector<int>> col_rows(n_all);
   for (size_t u = 0; u < units.size(); ++u) {
-    std::set<int> cols;
+    std::vector<int>& cols = local_cols_[u];
     const int ns = static_cast<int>(units[u].spec.states().size());
-    for (int k = 0; k < ns; ++k) cols.insert(units[u].offset + k);
+    for (int k = 0; k < ns; ++k) cols.push_back(units[u].offset + k);
     for (const auto& port : units[u].port_index)
       for (int c : port)
-        if (c >= 0) cols.insert(c);
-    local_cols_[u].assign(cols.begin(), cols.end());
-    for (int c : cols)
-      for (int k = 0; k < ns; ++k) col_rows[c].push_back(units[u].offset + k);
-  }
-  pattern_.n = n_all;
-  pattern_.col_ptr.assign(n_all + 1, 0);
-  for (int c = 0; c < n_all; ++c) {
-    std::sort(col_rows[c].begin(), col_rows[c].end());  // units' row blocks are disjoint: no duplicates
-    pattern_.row_idx.insert(pattern_.row_idx.end(), col_rows[c].begin(), col_rows[c].end());
-    pattern_.col_ptr[c + 1] = static_cast<int>(pattern_.row_idx.size());
+        if (c >= 0) cols.push_back(c);
+    std::sort(cols.begin(), cols.end());
+    cols.erase(std::unique(cols.begin(), cols.end()), cols.end());
   }
   // Structure of the Schur complement: rows of integrated units that read explicit states, and integrated
   // columns that explicit units read (Z = J_SS^-1 J_SR is zero elsewhere, explicit-to-explicit reads included).
   if (inline_) {
-    std::set<int> rows, cols;
+    std::vector<char> col_read(n_, 0);
     for (size_t u = 0; u < units.size(); ++u) {
-      const bool expl = units[u].spec.is_explicit();
-      const int off = units[u].offset, ns = static_cast<int>(units[u].spec.states().size());
-      for (int c : local_cols_[u]) {
-        if (!expl && c >= n_)
-          for (int k = 0; k < ns; ++k) rows.insert(off + k);
-        if (expl && c < n_) cols.insert(c);
+      const auto& cols = local_cols_[u];
+      if (units[u].spec.is_explicit()) {
+        for (int c : cols)
+          if (c < n_) col_read[c] = 1;
+      } else if (!cols.empty() && cols.back() >= n_) {  // sorted: reads an explicit state
+        const int off = units[u].offset, ns = static_cast<int>(units[u].spec.states().size());
+        for (int k = 0; k < ns; ++k) schur_rows_.push_back(off + k);
       }
     }
-    schur_rows_.assign(rows.begin(), rows.end());
-    schur_cols_.assign(cols.begin(), cols.end());
+    for (int c = 0; c < n_; ++c)
+      if (col_read[c]) schur_cols_.push_back(c);
     schur_col_pos_.assign(n_, -1);
     for (size_t j = 0; j < schur_cols_.size(); ++j) schur_col_pos_[schur_cols_[j]] = static_cast<int>(j);
   }
@@ -128,10 +120,22 @@ DaeSystem::DaeSystem(Flowsheet& fs, bool inline_explicit) : fs_(fs) {
   }
 }
 
-// Where each unit's entries go in the sparse values: only sparse assembly needs it, and it costs a binary
-// search per entry of every unit's block, so it is built on first use.
-void DaeSystem::build_sparse_maps() {
+// The sparsity pattern and where each unit's entries go in its values: only sparse Jacobians need them, and
+// they cost a sort per column and a binary search per entry of every unit's block, so they are built on first use.
+void DaeSystem::build_sparse_maps() const {
   const auto& units = fs_.units();
+  const int n_all = n_ext_;
+  std::vector<std::vector<int>> col_rows(n_all);
+  for (size_t u = 0; u < units.size(); ++u)
+    for (int c : local_cols_[u])
+      for (int k = 0; k < static_cast<int>(units[u].spec.states().size()); ++k) col_rows[c].push_back(units[u].offset + k);
+  pattern_.n = n_all;
+  pattern_.col_ptr.assign(n_all + 1, 0);
+  for (int c = 0; c < n_all; ++c) {
+    std::sort(col_rows[c].begin(), col_rows[c].end());  // units' row blocks are disjoint: no duplicates
+    pattern_.row_idx.insert(pattern_.row_idx.end(), col_rows[c].begin(), col_rows[c].end());
+    pattern_.col_ptr[c + 1] = static_cast<int>(pattern_.row_idx.size());
+  }
   block_pos_.resize(units.size());
   for (size_t u = 0; u < units.size(); ++u) {
     const int ns = static_cast<int>(units[u].spec.states().size());
@@ -347,7 +351,7 @@ void DaeSystem::assemble(double t, const double* y, const double* yp, double cj,
   const auto& units = fs_.units();
   if (dense) std::fill(dense, dense + size_t(dim) * dim, 0.0);
   if (sparse) {
-    if (block_pos_.empty()) build_sparse_maps();
+    pattern();  // built on first use
     std::fill(sparse, sparse + pattern_.nnz(), 0.0);
   }
   for (int i = 0; i < dim; ++i) {

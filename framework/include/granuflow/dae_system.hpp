@@ -46,7 +46,10 @@ class DaeSystem {
   Status residual(double t, const double* y, const double* yp, double* r);
   // Dense column-major n x n (ld = n) when `dense` != nullptr, else values in `pattern()` order.
   void jacobian(double t, const double* y, const double* yp, double cj, double* dense, double* sparse_values);
-  const SparsityPattern& pattern() const { return pattern_; }
+  const SparsityPattern& pattern() const {
+    if (pattern_.col_ptr.empty()) build_sparse_maps();
+    return pattern_;
+  }
 
   // Sensitivity residuals r_k = F_y s_k + F_y' s'_k + F_p e_{p_k} for global parameter ids `params`.
   Status sens_residual(double t, const double* y, const double* yp, const std::vector<int>& params,
@@ -66,7 +69,7 @@ class DaeSystem {
 
  private:
   void fill_params(double t);
-  void build_sparse_maps();
+  void build_sparse_maps() const;
   template <class T>
   void evaluate_explicit(double t, T* x, T* xd, const std::vector<std::vector<T>>& params, std::vector<T>& scratch);
   // With `factor_outer`, explicit units' outer products are collected in outer_ instead of added to `dense`.
@@ -98,10 +101,11 @@ class DaeSystem {
   double segment_start_ = 0.0;
   std::vector<std::vector<double>> pvals_;   // per unit, at the last fill time
   std::vector<std::vector<int>> local_cols_; // per unit: global columns its rows depend on
-  std::vector<std::vector<int>> block_pos_;  // per unit: row-major [local row][local col] -> position in sparse values
-  std::vector<std::unordered_map<int, int>> col_map_;  // per unit: global column -> local column
+  // Sparse structure, built on first use (dense runs never need it).
+  mutable std::vector<std::vector<int>> block_pos_;  // per unit: row-major [local row][local col] -> position in sparse values
+  mutable std::vector<std::unordered_map<int, int>> col_map_;  // per unit: global column -> local column
   std::vector<std::vector<size_t>> ad_pos_;             // per unit: positions in local_cols_ found by AD
-  SparsityPattern pattern_;
+  mutable SparsityPattern pattern_;
   std::vector<Jet> xj_, xdj_, rj_;
   std::vector<double> rbuf_;
   long n_res_ = 0, n_jac_ = 0;
