@@ -73,6 +73,8 @@ void make_linear_solver(bool dense, const DaeSystem& sys, N_Vector y, SUNContext
   const int n = sys.size();
   if (dense) {
     a.m = SUNDenseMatrix(n, n, ctx);
+    // DaeSystem::jacobian writes all n^2 entries, so IDA's zeroing before each evaluation is skipped.
+    a.m->ops->zero = [](SUNMatrix) -> int { return 0; };
     ls.s = detail::make_eigen_dense_solver(ctx);
   } else {
     a.m = SUNSparseMatrix(n, n, sys.pattern().nnz(), CSC_MAT, ctx);
