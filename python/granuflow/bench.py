@@ -7,6 +7,9 @@ demo flowsheet (median of repeated runs).
 <build>/tests/bench/granuflow_bench_pbm (next to this package) and the NumPy/SciPy baseline
 tests/bench/scipy_fixed_pivot.py on the same cases; ``--json`` prints one record per run (keys PBM_KEYS plus
 ``code``), otherwise a summary: work-precision envelopes and the speed ratio at equal error vs SciPy LSODA.
+``granuflow bench scene [--json] [--repeats N]``: wall time of the 60-min headline scene (paper 001) at 10, 20 and
+40 size classes, with and without breakage, with solver statistics, d50,3 and moisture at 60 min, and the ratio
+to issue 4's reference point (an independent SciPy BDF implementation: 0.10 s at 10 classes, 0.17 s at 40).
 """
 from __future__ import annotations
 
@@ -75,6 +78,70 @@ def bench_core(repeats: int) -> list[dict]:
                     "steps": res.stats["steps"], "repeats": repeats,
                     "command": "granuflow bench core", **_meta()})
     return records
+
+
+# -------------------------------------------------------------------------------------------------------- scene
+# Issue 4's reference point, measured on this project's 2-core machine: the same equations and defaults in
+# Python/SciPy (BDF, finite-difference Jacobian, rtol 1e-6), seconds per 60-min run.
+SCIPY_REFERENCE_S = {10: 0.10, 40: 0.17}
+
+
+def scene_variant_text(path: str, classes: int, breakage: bool = True) -> str:
+    """The headline scene with `classes` size classes (bed and spray zone), breakage on or off."""
+    import yaml
+
+    with open(path, encoding="utf-8") as f:
+        doc = yaml.safe_load(f)
+    units = doc["units"]
+    units["spray_zone"].setdefault("settings", {})["classes"] = classes
+    units["bed"].setdefault("settings", {})["classes"] = classes
+    if not breakage:
+        units["bed"]["settings"]["breakage"] = "none"
+    return yaml.safe_dump(doc, sort_keys=False)
+
+
+def bench_scene(repeats: int, classes=(10, 20, 40)) -> list[dict]:
+    from . import load_text
+
+    scene = os.path.join(_repo_root(), "flowsheets", "stoeckl_gf25_batch.yaml")
+    records = []
+    for n in classes:
+        for breakage in (True, False):
+            fs = load_text(scene_variant_text(scene, n, breakage), f"stoeckl_gf25_batch_{n}")
+            res = fs.simulate()  # warm-up: first-touch allocations
+            walls = []
+            for _ in range(repeats):
+                t0 = time.perf_counter()
+                res = fs.simulate()
+                walls.append(time.perf_counter() - t0)
+            summary = res.summary
+            wall = statistics.median(walls)
+            ref = SCIPY_REFERENCE_S.get(n) if breakage else None
+            records.append({
+                "bench": "scene", "classes": n, "breakage": breakage, "unknowns": res.stats["states"],
+                "inlined_states": res.stats["explicit_states"], "wall_ms_median": wall * 1e3,
+                "wall_ms_min": min(walls) * 1e3, "repeats": repeats,
+                **{k: res.stats[k] for k in ("steps", "residuals", "jacobians", "error_test_failures",
+                                             "nonlinear_failures")},
+                "d50_um": summary["d50_um"], "bed_moisture": summary["bed_moisture"],
+                "scipy_reference_ms": ref * 1e3 if ref else None, "speedup_vs_reference": ref / wall if ref else None,
+                "command": "granuflow bench scene", **_meta()})
+    return records
+
+
+def scene_summary(records) -> list[str]:
+    r0 = records[0]
+    lines = [f"Headline scene, 60 min, rtol/atol of the scene file: median of {r0['repeats']} runs "
+             f"({r0['cores']} cores, commit {r0['commit']}); times are for information only.",
+             "  classes breakage  unknowns+inlined  wall ms  steps residuals Jacobians   d50 um  moisture"
+             "  vs SciPy reference"]
+    for r in records:
+        ref = (f"x{r['speedup_vs_reference']:.1f} ({r['scipy_reference_ms']:.0f} ms)"
+               if r["speedup_vs_reference"] else "")
+        lines.append(f"  {r['classes']:7d} {'on' if r['breakage'] else 'off':8s} {r['unknowns']:8d} + {r['inlined_states']:<6d}"
+                     f" {r['wall_ms_median']:8.2f} {r['steps']:6d} {r['residuals']:9d} {r['jacobians']:9d}"
+                     f" {r['d50_um']:8.1f} {r['bed_moisture']:9.4f}  {ref}")
+    return lines
 
 
 # ---------------------------------------------------------------------------------------------------------- pbm
@@ -394,7 +461,12 @@ def sweep_summary(records) -> list[str]:
 def main(args) -> int:
     if args.what == "sweep":  # design-space throughput (bench_sweep above)
         return _main_sweep(args)
-    if args.what == "pbm":
+    if args.what == "scene":
+        records = bench_scene(args.repeats)
+        if not args.json:
+            print("\n".join(scene_summary(records)))
+            return 0
+    elif args.what == "pbm":
         records = bench_pbm(quick=getattr(args, "quick", False), repeats=args.repeats, progress=not args.json)
         if not args.json:
             print("\n".join(pbm_summary(records)))

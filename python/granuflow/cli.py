@@ -264,7 +264,7 @@ def main(argv=None) -> int:
     d.add_argument("scene")
     d.set_defaults(func=cmd_describe)
     b = sub.add_parser("bench", help="benchmarks: speed against error (never pass/fail on time)")
-    b.add_argument("what", choices=["core", "pbm", "sweep"])
+    b.add_argument("what", choices=["core", "pbm", "scene", "sweep"])
     b.add_argument("--json", action="store_true", help="print JSON records")
     b.add_argument("--repeats", type=int, default=7)
     b.add_argument("--quick", action="store_true", help="pbm: a reduced set (q 1, 2, 4; rtol 1e-4, 1e-6)")

@@ -108,3 +108,24 @@ def test_missing_executable_is_a_clear_error(monkeypatch, tmp_path):
     monkeypatch.setattr(bench, "HERE", str(tmp_path / "python" / "granuflow"))
     with pytest.raises(FileNotFoundError, match=r"granuflow_bench_pbm does not exist .*ninja -C"):
         bench.bench_pbm(quick=True)
+
+
+def test_bench_scene_reports_each_variant_with_the_scene_physics():
+    """`granuflow bench scene`: one record per class count and breakage switch, from the headline scene itself."""
+    p = granuflow_cli("bench", "scene", "--json", "--repeats", "1")
+    assert p.returncode == 0, p.stderr
+    recs = [json.loads(line) for line in p.stdout.splitlines()]
+    assert [(r["classes"], r["breakage"]) for r in recs] == [(n, b) for n in (10, 20, 40) for b in (True, False)]
+    for r in recs:
+        n = r["classes"]
+        # unknowns: M_i, W_i and 29 lumped states; inlined: the spray zone's 3 N + 1 and the droplets' 4
+        assert (r["unknowns"], r["inlined_states"]) == (2 * n + 29, 3 * n + 5), r
+        assert r["wall_ms_median"] > 0 and r["steps"] > 0 and r["jacobians"] > 0
+        assert 0.02 < r["bed_moisture"] < 0.2, r
+        assert (r["speedup_vs_reference"] is not None) == (r["breakage"] and n in (10, 40))
+    by = {(r["classes"], r["breakage"]): r for r in recs}
+    for n in (10, 20, 40):  # breakage is what holds d50 near 450-500 um; without it the bed grows to the top class
+        assert by[(n, True)]["d50_um"] < 0.6 * by[(n, False)]["d50_um"]
+    # the 10-class variant is the scene file unchanged
+    scene = gf.load(os.path.join(ROOT, "flowsheets", "stoeckl_gf25_batch.yaml")).simulate()
+    assert by[(10, True)]["d50_um"] == pytest.approx(scene.summary["d50_um"], rel=1e-12)
