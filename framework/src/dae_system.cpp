@@ -61,7 +61,9 @@ DaeSystem::DaeSystem(Flowsheet& fs, bool inline_explicit) : fs_(fs) {
         if (c >= 0) cols.push_back(c);
     std::sort(cols.begin(), cols.end());
     cols.erase(std::unique(cols.begin(), cols.end()), cols.end());
+    fill_ += double(ns) * double(cols.size());  // units' row blocks are disjoint
   }
+  fill_ /= std::max(1.0, double(n_all) * double(n_all));
   // Structure of the Schur complement: rows of integrated units that read explicit states, and integrated
   // columns that explicit units read (Z = J_SS^-1 J_SR is zero elsewhere, explicit-to-explicit reads included).
   if (inline_) {

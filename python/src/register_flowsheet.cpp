@@ -82,7 +82,7 @@ py::dict time_residual(Scene& s, int repeats, int dense_limit) {
   const int n = sys.size();
   std::vector<double> y, yp(n, 0.0), r(n);
   sys.initial_values(y);
-  const bool dense = n <= dense_limit;
+  const bool dense = sys.inlined() || n <= dense_limit;  // inlined explicit units need the dense path
   std::vector<double> jd(dense ? size_t(n) * n : 0), js(dense ? 0 : sys.pattern().nnz());
   auto median = [&](auto&& f) {
     std::vector<double> t;

@@ -359,3 +359,18 @@ def test_table1_files_differ_only_in_the_upper_temperature_level():
     corners = {(V, T, S) for V in (600, 800) for T in (40, 80) for S in (60, 120)}
     faces = {(600, 60, 90), (800, 60, 90), (700, 40, 90), (700, 80, 90), (700, 60, 60), (700, 60, 120)}
     assert levels == corners | faces | {(700, 60, 90)}
+
+
+def test_linear_solver_choice_follows_the_jacobian_fill():
+    """`linear_solver: auto` stays dense (spray zone inlined) past dense_limit while the Jacobian is mostly full
+    (200 classes: aggregation couples every class pair), and is sparse for a long chain of tanks."""
+    from granuflow import bench
+
+    fine = gf.load_text(bench.scene_variant_text(SCENE, 200), "gf25_200")
+    res = fine.simulate(t_end=600, t_out=[0, 600])
+    assert res.stats["linear_solver"].startswith("dense")
+    assert (res.stats["states"], res.stats["explicit_states"]) == (2 * 200 + 29, 3 * 200 + 5)
+    assert all(v < 1e-9 for v in res.summary["balance"].values())
+    chain = gf.load_text(bench.tank_chain_text(250), "chain")
+    res = chain.simulate()
+    assert res.stats["states"] > 1000 and res.stats["linear_solver"].startswith("sparse")

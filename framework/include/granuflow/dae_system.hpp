@@ -32,6 +32,8 @@ class DaeSystem {
   int size() const { return n_; }              // unknowns of the integrator
   int full_size() const { return n_ext_; }     // every state of the flowsheet, explicit ones last
   bool inlined() const { return inline_; }
+  // Fraction of the entries of the Jacobian over all states that can be nonzero (the units' blocks).
+  double fill() const { return fill_; }
   // The full state vector (explicit states evaluated) from the integrator's y, y'; explicit states' y' = 0.
   void extend(double t, const double* y, const double* yp, double* y_full, double* yp_full);
   // Sensitivities of all states from those of the unknowns (explicit ones by forward AD).
@@ -83,6 +85,7 @@ class DaeSystem {
   int n_;                       // unknowns
   int n_ext_;                   // all states
   bool inline_ = false;
+  double fill_ = 0.0;
   std::vector<int> explicit_order_;  // explicit units, each after the explicit units it reads
   std::vector<int> real_units_;      // the others
   std::vector<std::pair<int, int>> explicit_reads_;  // (u, v): explicit unit u reads explicit unit v, in order
