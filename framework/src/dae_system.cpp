@@ -80,6 +80,9 @@ DaeSystem::DaeSystem(Flowsheet& fs, bool inline_explicit) : fs_(fs) {
     }
     for (int c = 0; c < n_; ++c)
       if (col_read[c]) schur_cols_.push_back(c);
+    for (int i = 0; i < static_cast<int>(schur_rows_.size()); ++i)  // runs of consecutive rows, copied as blocks
+      if (i > 0 && schur_rows_[i] == schur_rows_[i - 1] + 1) ++std::get<2>(schur_row_runs_.back());
+      else schur_row_runs_.push_back({i, schur_rows_[i], 1});
     schur_col_pos_.assign(n_, -1);
     for (size_t j = 0; j < schur_cols_.size(); ++j) schur_col_pos_[schur_cols_[j]] = static_cast<int>(j);
   }
@@ -323,8 +326,7 @@ void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj,
   const int nr = static_cast<int>(schur_rows_.size()), nc = static_cast<int>(schur_cols_.size());
   if (nr == 0 || nc == 0) return;
   schur_a_.resize(nr, m);
-  for (int k = 0; k < m; ++k)  // column by column: J is column-major
-    for (int i = 0; i < nr; ++i) schur_a_(i, k) = J(schur_rows_[i], n_ + k);
+  for (const auto& [pos, row, len] : schur_row_runs_) schur_a_.middleRows(pos, len) = J.block(row, n_, len, m);
   // P = J_RS Z over Z's nonzeros, plus (J_RS U) W^T
   schur_p_.setZero(nr, nc);
   for (int j = 0; j < nc; ++j) {
@@ -345,7 +347,8 @@ void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj,
     }
   }
   for (int j = 0; j < nc; ++j)
-    for (int i = 0; i < nr; ++i) out(schur_rows_[i], schur_cols_[j]) -= schur_p_(i, j);
+    for (const auto& [pos, row, len] : schur_row_runs_)
+      out.col(schur_cols_[j]).segment(row, len) -= schur_p_.col(j).segment(pos, len);
 }
 
 void DaeSystem::assemble(double t, const double* y, const double* yp, double cj, int dim, double* dense,

@@ -4,6 +4,7 @@
 #pragma once
 #include <Eigen/Dense>
 #include <string>
+#include <tuple>
 #include <unordered_map>
 #include <vector>
 
@@ -100,6 +101,7 @@ class DaeSystem {
   Eigen::MatrixXd schur_z_, schur_u_, schur_a_, schur_au_, schur_p_;
   std::vector<int> schur_rows_, schur_cols_;  // where the Schur correction can be nonzero
   std::vector<int> schur_col_pos_;            // integrated column -> position in schur_cols_, or -1
+  std::vector<std::tuple<int, int, int>> schur_row_runs_;  // (position in schur_rows_, first row, length)
   std::vector<double> y_ext_, yp_ext_, jac_ext_, scratch_;
   double segment_start_ = 0.0;
   std::vector<std::vector<double>> pvals_;   // per unit, at the last fill time
