@@ -30,8 +30,12 @@ TEST(PbmBreakage, MatrixColumnsConserveVolumeForEveryLawAndScheme) {
         double dv = A[size_t(n + kernels::kVolumeBelow) * n + k];
         for (int i = 0; i < n; ++i) {
           dv += A[size_t(i) * n + k] * g.pivot(i);
-          if (i > k) EXPECT_EQ(A[size_t(i) * n + k], 0.0) << "fragment above its parent";
-          if (i != k) EXPECT_GE(A[size_t(i) * n + k], 0.0) << scheme << " " << law;
+          if (i > k) {
+            EXPECT_EQ(A[size_t(i) * n + k], 0.0) << "fragment above its parent";
+          }
+          if (i != k) {
+            EXPECT_GE(A[size_t(i) * n + k], 0.0) << scheme << " " << law;
+          }
         }
         EXPECT_NEAR(dv / g.pivot(k), 0.0, 1e-14) << scheme << " " << law << " parent " << k;
       }
