@@ -7,9 +7,10 @@ demo flowsheet (median of repeated runs).
 <build>/tests/bench/granuflow_bench_pbm (next to this package) and the NumPy/SciPy baseline
 tests/bench/scipy_fixed_pivot.py on the same cases; ``--json`` prints one record per run (keys PBM_KEYS plus
 ``code``), otherwise a summary: work-precision envelopes and the speed ratio at equal error vs SciPy LSODA.
-``granuflow bench scene [--json] [--repeats N]``: wall time of the 60-min headline scene (paper 001) at 10, 20 and
-40 size classes, with and without breakage, with solver statistics, d50,3 and moisture at 60 min, and the ratio
-to issue 4's reference point (an independent SciPy BDF implementation: 0.10 s at 10 classes, 0.17 s at 40).
+``granuflow bench scene [--json] [--repeats N] [--no-scipy]``: wall time of the 60-min headline scene (paper 001)
+at 10, 20 and 40 size classes, with and without breakage, with solver statistics and results at 60 min, against
+the SciPy implementation tests/bench/scipy_gf25_batch.py (BDF, finite-difference Jacobian) run on the same variant
+in the same run, and against issue 4's reference point (0.10 s at 10 classes, 0.17 s at 40).
 """
 from __future__ import annotations
 
@@ -81,9 +82,10 @@ def bench_core(repeats: int) -> list[dict]:
 
 
 # -------------------------------------------------------------------------------------------------------- scene
-# Issue 4's reference point, measured on this project's 2-core machine: the same equations and defaults in
-# Python/SciPy (BDF, finite-difference Jacobian, rtol 1e-6), seconds per 60-min run.
-SCIPY_REFERENCE_S = {10: 0.10, 40: 0.17}
+# Issue 4's reference point, measured once on this project's 2-core machine by an independent Python/SciPy
+# implementation (BDF, finite-difference Jacobian, rtol 1e-6), seconds per 60-min run. The bench also runs the
+# repository's own SciPy implementation (tests/bench/scipy_gf25_batch.py) in the same run for a fair ratio.
+ISSUE_REFERENCE_S = {10: 0.10, 40: 0.17}
 
 
 def scene_variant_text(path: str, classes: int, breakage: bool = True) -> str:
@@ -100,13 +102,29 @@ def scene_variant_text(path: str, classes: int, breakage: bool = True) -> str:
     return yaml.safe_dump(doc, sort_keys=False)
 
 
-def bench_scene(repeats: int, classes=(10, 20, 40)) -> list[dict]:
+def scipy_scene_script() -> str:
+    """tests/bench/scipy_gf25_batch.py of the source tree; FileNotFoundError if missing."""
+    script = os.path.join(_source_dir(_build_dir()), "tests", "bench", "scipy_gf25_batch.py")
+    if not os.path.exists(script):
+        raise FileNotFoundError(f"the SciPy implementation of the headline scene {script} does not exist (source "
+                                f"tree of {_build_dir()}); pass scipy=False to time granuflow only")
+    return script
+
+
+def bench_scene(repeats: int, classes=(10, 20, 40), scipy: bool = True, scipy_repeats: int = 3,
+                progress: bool = False) -> list[dict]:
+    """Wall time of the 60-min headline scene (median of ``repeats``), solver statistics and results, per class
+    count with and without breakage; with ``scipy``, the SciPy implementation on the same variant right after
+    it (median of ``scipy_repeats``), its results and the speed ratio measured in this run."""
     from . import load_text
 
     scene = os.path.join(_repo_root(), "flowsheets", "stoeckl_gf25_batch.yaml")
+    script = scipy_scene_script() if scipy else None
     records = []
     for n in classes:
         for breakage in (True, False):
+            if progress:
+                print(f"scene: {n} classes, breakage {'on' if breakage else 'off'}", file=sys.stderr, flush=True)
             fs = load_text(scene_variant_text(scene, n, breakage), f"stoeckl_gf25_batch_{n}")
             res = fs.simulate()  # warm-up: first-touch allocations
             walls = []
@@ -116,31 +134,43 @@ def bench_scene(repeats: int, classes=(10, 20, 40)) -> list[dict]:
                 walls.append(time.perf_counter() - t0)
             summary = res.summary
             wall = statistics.median(walls)
-            ref = SCIPY_REFERENCE_S.get(n) if breakage else None
-            records.append({
+            ref = ISSUE_REFERENCE_S.get(n) if breakage else None
+            rec = {
                 "bench": "scene", "classes": n, "breakage": breakage, "unknowns": res.stats["states"],
                 "inlined_states": res.stats["explicit_states"], "wall_ms_median": wall * 1e3,
                 "wall_ms_min": min(walls) * 1e3, "repeats": repeats,
                 **{k: res.stats[k] for k in ("steps", "residuals", "jacobians", "error_test_failures",
                                              "nonlinear_failures")},
-                "d50_um": summary["d50_um"], "bed_moisture": summary["bed_moisture"],
-                "scipy_reference_ms": ref * 1e3 if ref else None, "speedup_vs_reference": ref / wall if ref else None,
-                "command": "granuflow bench scene", **_meta()})
+                **{k: summary[k] for k in ("d10_um", "d50_um", "d90_um", "bed_moisture", "T_gas_out_K")},
+                "issue_reference_ms": ref * 1e3 if ref else None,
+                "speedup_vs_issue_reference": ref / wall if ref else None,
+                "command": "granuflow bench scene", **_meta()}
+            if script:
+                flags = ["--classes", str(n), "--repeats", str(int(scipy_repeats))] + ([] if breakage else ["--no-breakage"])
+                sp = _json_lines([sys.executable, script, "--json", *flags], "scipy_gf25_batch.py")[0]
+                rec.update({"scipy_ms_median": sp["wall_s_median"] * 1e3, "scipy_nfev": sp.get("nfev"),
+                            "scipy_njev": sp.get("njev"), "speedup_vs_scipy": sp["wall_s_median"] / wall,
+                            **{f"scipy_{k}": sp[k] for k in ("d10_um", "d50_um", "d90_um", "bed_moisture",
+                                                             "T_gas_out_K")}})
+            records.append(rec)
     return records
 
 
 def scene_summary(records) -> list[str]:
     r0 = records[0]
+    same_run = "scipy_ms_median" in r0
     lines = [f"Headline scene, 60 min, rtol/atol of the scene file: median of {r0['repeats']} runs "
              f"({r0['cores']} cores, commit {r0['commit']}); times are for information only.",
              "  classes breakage  unknowns+inlined  wall ms  steps residuals Jacobians   d50 um  moisture"
-             "  vs SciPy reference"]
+             + ("   SciPy ms  SciPy d50  speedup" if same_run else "") + "  vs issue reference"]
     for r in records:
-        ref = (f"x{r['speedup_vs_reference']:.1f} ({r['scipy_reference_ms']:.0f} ms)"
-               if r["speedup_vs_reference"] else "")
+        ref = (f"x{r['speedup_vs_issue_reference']:.1f} ({r['issue_reference_ms']:.0f} ms)"
+               if r["speedup_vs_issue_reference"] else "")
+        sp = (f" {r['scipy_ms_median']:10.1f} {r['scipy_d50_um']:10.1f} {'x%.1f' % r['speedup_vs_scipy']:>8s}"
+              if same_run else "")
         lines.append(f"  {r['classes']:7d} {'on' if r['breakage'] else 'off':8s} {r['unknowns']:8d} + {r['inlined_states']:<6d}"
                      f" {r['wall_ms_median']:8.2f} {r['steps']:6d} {r['residuals']:9d} {r['jacobians']:9d}"
-                     f" {r['d50_um']:8.1f} {r['bed_moisture']:9.4f}  {ref}")
+                     f" {r['d50_um']:8.1f} {r['bed_moisture']:9.4f}{sp}  {ref}")
     return lines
 
 
@@ -462,7 +492,8 @@ def main(args) -> int:
     if args.what == "sweep":  # design-space throughput (bench_sweep above)
         return _main_sweep(args)
     if args.what == "scene":
-        records = bench_scene(args.repeats)
+        records = bench_scene(args.repeats, scipy=not args.no_scipy, scipy_repeats=max(1, min(3, args.repeats)),
+                              progress=not args.json)
         if not args.json:
             print("\n".join(scene_summary(records)))
             return 0

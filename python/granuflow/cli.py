@@ -268,6 +268,7 @@ def main(argv=None) -> int:
     b.add_argument("--json", action="store_true", help="print JSON records")
     b.add_argument("--repeats", type=int, default=7)
     b.add_argument("--quick", action="store_true", help="pbm: a reduced set (q 1, 2, 4; rtol 1e-4, 1e-6)")
+    b.add_argument("--no-scipy", action="store_true", help="scene: time granuflow only")
     b.set_defaults(func=cmd_bench)
     c = sub.add_parser("calibrate", help="staged calibration against experiments; report, tables, parity plots")
     c.add_argument("experiments", help="experiment file (YAML, see granuflow.calibration)")
