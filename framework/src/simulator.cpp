@@ -93,6 +93,21 @@ void check(int flag, const char* call) {
   if (flag < 0) throw std::runtime_error(std::string(call) + " failed with flag " + std::to_string(flag));
 }
 
+// A dense Jacobian kept for reuse, the way CVODE keeps df/dy: IDA sets its Newton matrix up again whenever
+// cj = alpha / h moves by 25 %, and with every differential state's residual of the form y'_k - f(y) (all
+// units' contract, checked on the first evaluation of a run) only the diagonal of the differential states
+// depends on cj. An evaluation at most kMaxAge steps old is reused with cj updated, unless Newton (of the states
+// or of their sensitivities) has failed to converge since; IDACalcIC and each segment start from a fresh one.
+struct JacobianCache {
+  static constexpr long kMaxAge = 20;
+  std::vector<double> jac;         // column-major n x n, evaluated at cj
+  std::vector<int> differential;   // indices of the differential states
+  double cj = 0.0;
+  long step = 0, conv_fails = 0;
+  bool valid = false;
+  int reusable = -1;               // -1 unknown (checked on the first evaluation), 0 no, 1 yes
+};
+
 // State shared by the IDAS callbacks.
 struct IdaUser {
   DaeSystem* sys;
@@ -101,6 +116,8 @@ struct IdaUser {
   std::string last_error;
   std::vector<const double*> yS, ypS;
   std::vector<double*> rS;
+  void* mem = nullptr;             // the IDA integrator, when Jacobians may be reused (simulate, dense)
+  JacobianCache cache;
 };
 
 int ida_res(realtype t, N_Vector y, N_Vector yp, N_Vector r, void* ud) {
@@ -118,7 +135,48 @@ int ida_jac(realtype t, realtype cj, N_Vector y, N_Vector yp, N_Vector, SUNMatri
   auto* u = static_cast<IdaUser*>(ud);
   try {
     if (u->dense) {
-      u->sys->jacobian(t, N_VGetArrayPointer(y), N_VGetArrayPointer(yp), cj, SUNDenseMatrix_Data(J), nullptr);
+      double* a = SUNDenseMatrix_Data(J);
+      const int n = u->sys->size();
+      JacobianCache& k = u->cache;
+      long step = 0, fails = 0;
+      if (u->mem) {
+        IDAGetNumSteps(u->mem, &step);
+        IDAGetNumNonlinSolvConvFails(u->mem, &fails);
+        long sens_fails = 0;  // the staggered sensitivity corrector shares the Newton matrix
+        if (!u->sens_params.empty() && IDAGetSensNumNonlinSolvConvFails(u->mem, &sens_fails) == IDA_SUCCESS)
+          fails += sens_fails;
+      }
+      if (u->mem && k.valid && k.reusable == 1 && fails == k.conv_fails && step - k.step < JacobianCache::kMaxAge) {
+        std::copy(k.jac.begin(), k.jac.end(), a);
+        for (int i : k.differential) a[size_t(i) * n + i] += cj - k.cj;
+        return 0;
+      }
+      u->sys->jacobian(t, N_VGetArrayPointer(y), N_VGetArrayPointer(yp), cj, a, nullptr);
+      if (!u->mem) return 0;
+      if (k.reusable < 0) {  // dF/dy' must be the identity on the differential states, zero elsewhere
+        std::vector<double> shifted(size_t(n) * n);
+        u->sys->jacobian(t, N_VGetArrayPointer(y), N_VGetArrayPointer(yp), cj + 1.0, shifted.data(), nullptr);
+        const auto id = u->sys->differential_id();
+        k.reusable = 1;
+        for (int c = 0; c < n && k.reusable; ++c)
+          for (int r = 0; r < n; ++r) {
+            const double d = shifted[size_t(c) * n + r] - a[size_t(c) * n + r];
+            const double expect = (r == c && id[r] == 1.0) ? 1.0 : 0.0;
+            if (std::abs(d - expect) > 1e-9 * (1.0 + std::abs(a[size_t(c) * n + r]))) {
+              k.reusable = 0;
+              break;
+            }
+          }
+        for (int i = 0; i < n; ++i)
+          if (id[i] == 1.0) k.differential.push_back(i);
+      }
+      if (k.reusable == 1) {
+        k.jac.assign(a, a + size_t(n) * n);
+        k.cj = cj;
+        k.step = step;
+        k.conv_fails = fails;
+        k.valid = true;
+      }
     } else {
       const auto& pat = u->sys->pattern();
       sunindextype* cp = SUNSparseMatrix_IndexPointers(J);
@@ -213,6 +271,7 @@ SimResult simulate(Flowsheet& fs, const SimOptions& opt) {
   user.dense = dense;
 
   void* mem = IDACreate(C.ctx);
+  if (dense) user.mem = mem;
   std::unique_ptr<void, void (*)(void*)> mem_guard(mem, [](void* m) { IDAFree(&m); });
   check(IDAInit(mem, ida_res, 0.0, y.v, yp.v), "IDAInit");
   check(IDASVtolerances(mem, opt.rtol, atol.v), "IDASVtolerances");
@@ -349,6 +408,7 @@ SimResult simulate(Flowsheet& fs, const SimOptions& opt) {
       ++res.stats.reinits;
     }
     if (ns > 0) check(IDASensToggleOff(mem), "IDASensToggleOff");
+    user.cache.valid = false;  // a segment starts from a fresh Jacobian
     // IDACalcIC's Newton matrix is dF/dy + dF/dy' / h_ic with h_ic = 1e-3 (tout1 - t0); the exact one for its
     // unknowns (y' differential, y algebraic) lacks dF/dy of the differential states, so a long h_ic slows
     // Newton (headline scene, tout1 at the segment end: 55 residuals), while a very short one loosens the test
@@ -358,6 +418,7 @@ SimResult simulate(Flowsheet& fs, const SimOptions& opt) {
     int flag = IDACalcIC(mem, IDA_YA_YDP_INIT, tout1);
     if (flag < 0) fail(flag, "consistent initialization (IDACalcIC)");
     check(IDAGetConsistentIC(mem, y.v, yp.v), "IDAGetConsistentIC");
+    user.cache.valid = false;  // evaluated at IDACalcIC's iterates
     if (ns > 0) sens_initial_conditions(t0);
     while (iout < t_out.size() && t_out[iout] <= t0 + 1e-12 * std::max(1.0, t0)) {
       if (seg == 0) record(t_out[iout]);
