@@ -22,6 +22,8 @@
 
 namespace granuflow {
 
+// A differential state k has the residual y'_k - f(y, p, t) (no other dependence on y'): the simulator relies on it to
+// reuse Jacobians across steps, and checks it on the first evaluation of each run (falling back to fresh ones).
 enum class StateKind { Differential, Algebraic };
 enum class Status { kOk = 0, kRecoverable = 1, kFatal = -1 };
 
