@@ -72,20 +72,13 @@ void CalibrationOptions::validate() const {
 }
 
 std::string observable_unit(const Flowsheet& fs, const std::string& name) {
-  const auto outs = fs.output_names();
-  for (size_t i = 0; i < outs.size(); ++i)
-    if (outs[i] == name) {
-      // outputs are laid out unit by unit in declaration order
-      int k = 0;
-      for (const auto& u : fs.units())
-        for (const auto& o : u.spec.outputs()) {
-          if (k == static_cast<int>(i)) return o.unit;
-          ++k;
-        }
-    }
+  for (const auto& u : fs.units())
+    for (const auto& o : u.spec.outputs())
+      if (u.name + "." + o.name == name) return o.unit;
   const auto states = fs.state_names();
   for (size_t i = 0; i < states.size(); ++i)
     if (states[i] == name) return fs.state_spec(static_cast<int>(i)).unit;
+  const auto outs = fs.output_names();
   std::string some;
   for (size_t i = 0; i < outs.size() && i < 12; ++i) some += (some.empty() ? "" : ", ") + outs[i];
   throw ConfigError("observable '" + name + "' is neither a reported output nor a state of flowsheet '" + fs.name() +
@@ -118,6 +111,28 @@ void parallel_for(int n, int threads, F&& f) {
   for (auto& t : pool) t.join();
   for (auto& e : errors)
     if (e) std::rethrow_exception(e);
+}
+
+// What Observation and Experiment promise (calibration.hpp): the loss indexes values by times and divides by σ.
+void validate_experiments(const std::vector<Experiment>& exps) {
+  for (const auto& e : exps) {
+    if (!(e.t_end >= 0) || !std::isfinite(e.t_end))
+      throw ConfigError(violation("experiment '" + e.name + "'.t_end", e.t_end, "s", "0 <= t_end < inf"));
+    for (const auto& o : e.observations) {
+      const std::string w = "experiment '" + e.name + "': observation " + o.name;
+      if (o.t.size() != o.value.size())
+        throw ConfigError(w + ": " + std::to_string(o.t.size()) + " times but " + std::to_string(o.value.size()) +
+                          " values");
+      if ((o.sigma_abs > 0) == (o.sigma_rel > 0))
+        throw ConfigError(w + ": give exactly one of sigma_abs > 0, sigma_rel > 0 (got " + std::to_string(o.sigma_abs) +
+                          ", " + std::to_string(o.sigma_rel) + ")");
+      if (!(o.sigma_abs >= 0 && o.sigma_rel >= 0) || !std::isfinite(o.sigma_abs) || !std::isfinite(o.sigma_rel))
+        throw ConfigError(w + ": sigma must be finite and >= 0");
+      for (size_t i = 0; i < o.t.size(); ++i)
+        if (!(o.t[i] >= 0) || !std::isfinite(o.t[i]) || (i > 0 && !(o.t[i] > o.t[i - 1])))
+          throw ConfigError(violation(w + ".t[" + std::to_string(i) + "]", o.t[i], "s", "t >= 0, increasing"));
+    }
+  }
 }
 
 // The free parameters of a stage and the map θ <-> p.
@@ -449,7 +464,6 @@ struct StageRun {
 
   // All residuals and the Jacobian (rows stacked by experiment) at θ.
   void evaluate(const std::vector<double>& theta, std::vector<double>& r, std::vector<double>* J, int threads) {
-    const int n = space.size();
     std::vector<std::vector<double>> rr(costs.size()), jj(costs.size());
     parallel_for(static_cast<int>(costs.size()), threads, [&](int i) {
       rr[i].resize(models[i]->rows());
@@ -465,7 +479,6 @@ struct StageRun {
       r.insert(r.end(), rr[i].begin(), rr[i].end());
       if (J) J->insert(J->end(), jj[i].begin(), jj[i].end());
     }
-    (void)n;
   }
 
   ceres::Solver::Summary solve(std::vector<double>& theta, const CalibrationOptions& opt, int max_iterations) {
@@ -719,9 +732,7 @@ Profile profile_parameter(const Scene& scene, const Registry<Unit>& reg, const s
       p[e.name] = to_p(th);
       double cost;
       if (sub.free.empty()) {
-        Stage one = stage;
-        std::map<std::string, double> q = p;
-        StageRun run(scene, reg, exps, one, o, q);
+        StageRun run(scene, reg, exps, stage, o, p);
         run.set_sigmas(sigmas);
         std::vector<double> r, thv{th};
         run.evaluate(thv, r, nullptr, o.num_threads);
@@ -780,6 +791,7 @@ CalibrationResult calibrate(const Scene& scene, const Registry<Unit>& reg, const
                             const std::vector<Stage>& stages, const CalibrationOptions& opt,
                             const std::map<std::string, double>& start) {
   opt.validate();
+  validate_experiments(exps);
   const auto t0 = Clock::now();
   if (stages.empty()) throw ConfigError("calibrate: no stages");
   if (exps.empty()) throw ConfigError("calibrate: no experiments");
@@ -879,6 +891,7 @@ std::string CalibrationResult::full_report() const {
 std::vector<Prediction> predict(const Scene& scene, const Registry<Unit>& reg, const std::vector<Experiment>& exps,
                                 const std::map<std::string, double>& params, const CalibrationOptions& opt) {
   opt.validate();
+  validate_experiments(exps);
   std::vector<std::vector<Prediction>> per(exps.size());
   parallel_for(static_cast<int>(exps.size()), opt.num_threads, [&](int i) {
     const Experiment& e = exps[i];
@@ -976,6 +989,7 @@ StageProblem::StageProblem(const Scene& scene, const Registry<Unit>& reg, const 
     : impl_(new Impl) {
   try {
     opt.validate();
+    validate_experiments(exps);
     impl_->opt = opt;
     impl_->start = start;
     for (const auto& f : stage.free)

@@ -31,6 +31,11 @@ void consistent_sensitivities(DaeSystem& sys, bool dense, double t, const double
   Eigen::MatrixXd rhs(n, np);
   for (size_t k = 0; k < np; ++k)
     for (int i = 0; i < n; ++i) rhs(i, k) = -rs[k][i];
+  auto singular = [t] {
+    return SolverError("consistent initial sensitivities: singular matrix [F_y(:, alg) | F_y'(:, diff)] at t = " +
+                           std::to_string(t) + " s (is the DAE index 1?)",
+                       t, "", 0.0);
+  };
   Eigen::MatrixXd u;
   if (dense) {
     Eigen::MatrixXd j0(n, n), j1(n, n);
@@ -54,12 +59,10 @@ void consistent_sensitivities(DaeSystem& sys, bool dense, double t, const double
     m.setFromTriplets(trip.begin(), trip.end());
     Eigen::SparseLU<Eigen::SparseMatrix<double>> lu;
     lu.compute(m);
-    if (lu.info() != Eigen::Success)
-      throw SolverError("consistent initial sensitivities: singular matrix [F_y(:, alg) | F_y'(:, diff)] at t = " +
-                            std::to_string(t) + " s (is the DAE index 1?)",
-                        t, "", 0.0);
+    if (lu.info() != Eigen::Success) throw singular();
     u = lu.solve(rhs);
   }
+  if (!u.allFinite()) throw singular();  // PartialPivLU does not report a zero pivot: never pass NaN on to IDAS
   for (size_t k = 0; k < np; ++k)
     for (int i = 0; i < n; ++i) {
       if (id[i] > 0) {

@@ -18,35 +18,29 @@ DaeSystem::DaeSystem(Flowsheet& fs, bool inline_explicit) : fs_(fs) {
   n_ = inline_ ? n_ext_ - fs_.n_explicit_states() : n_ext_;
   const auto& units = fs_.units();
   // Explicit units in dependency order (one reading another's states comes after it).
+  std::vector<std::set<int>> reads(units.size());  // per explicit unit: the other explicit units it reads
   std::vector<int> pending;
-  for (size_t u = 0; u < units.size(); ++u) (units[u].spec.is_explicit() ? pending : real_units_).push_back(int(u));
+  for (size_t u = 0; u < units.size(); ++u) {
+    if (!units[u].spec.is_explicit()) continue;
+    pending.push_back(int(u));
+    for (const auto& port : units[u].port_index)
+      for (int c : port)
+        if (c >= 0 && units[fs_.state_unit(c)].spec.is_explicit() && fs_.state_unit(c) != int(u))
+          reads[u].insert(fs_.state_unit(c));
+  }
+  auto ordered = [&](int v) {
+    return std::find(explicit_order_.begin(), explicit_order_.end(), v) != explicit_order_.end();
+  };
   while (!pending.empty()) {
-    bool progressed = false;
-    for (size_t i = 0; i < pending.size(); ++i) {
-      const int u = pending[i];
-      bool ready = true;
-      for (const auto& port : units[u].port_index)
-        for (int c : port)
-          if (c >= 0 && fs_.units()[fs_.state_unit(c)].spec.is_explicit() && fs_.state_unit(c) != u &&
-              std::find(explicit_order_.begin(), explicit_order_.end(), fs_.state_unit(c)) == explicit_order_.end())
-            ready = false;
-      if (ready) {
-        // record which earlier explicit units it reads, for the forward substitution of the Schur complement
-        std::set<int> reads;
-        for (const auto& port : units[u].port_index)
-          for (int c : port)
-            if (c >= 0 && fs_.units()[fs_.state_unit(c)].spec.is_explicit() && fs_.state_unit(c) != u)
-              reads.insert(fs_.state_unit(c));
-        for (int v : reads) explicit_reads_.push_back({u, v});
-        explicit_order_.push_back(u);
-        pending.erase(pending.begin() + i);
-        progressed = true;
-        break;
-      }
-    }
-    if (!progressed)
+    const auto next = std::find_if(pending.begin(), pending.end(),
+                                   [&](int u) { return std::all_of(reads[u].begin(), reads[u].end(), ordered); });
+    if (next == pending.end())
       throw ConfigError("explicit units read each other in a loop (" + units[pending.front()].name +
                         " ...): give one of them states");
+    // the Schur complement's forward substitution runs over these reads
+    for (int v : reads[*next]) explicit_reads_.push_back({*next, v});
+    explicit_order_.push_back(*next);
+    pending.erase(next);
   }
   const int n_all = n_ext_;
   pvals_.resize(units.size());
@@ -95,6 +89,7 @@ DaeSystem::DaeSystem(Flowsheet& fs, bool inline_explicit) : fs_(fs) {
       if (!(units[u].spec.is_explicit() && c >= off && c < off + ns)) ad_pos_[u].push_back(j);
     }
   }
+  pj_.resize(units.size());
   xj_.resize(n_all);
   xdj_.resize(n_all);
   rbuf_.resize(n_all);
@@ -103,7 +98,7 @@ DaeSystem::DaeSystem(Flowsheet& fs, bool inline_explicit) : fs_(fs) {
   reconfigure();
   // An explicit unit's residual must be exactly x - f with f independent of x: check the slope once.
   if (inline_) {
-    std::vector<double> y0, yp0(n_ext_, 0.0), r0(n_ext_), r1(n_ext_);
+    std::vector<double> yp0(n_ext_, 0.0), r0(n_ext_), r1(n_ext_);
     for (size_t u = 0; u < units.size(); ++u) {
       InitCtx<double> c{pvals_[u].data(), y_ext_.data() + units[u].offset};
       units[u].unit->initial(c);
@@ -181,8 +176,7 @@ void DaeSystem::extend(double t, const double* y, const double* yp, double* y_fu
   std::copy(yp, yp + n_, yp_full);
   if (!inline_) return;
   fill_params(t);
-  std::vector<double> scratch;
-  evaluate_explicit(t, y_full, yp_full, pvals_, scratch);
+  evaluate_explicit(t, y_full, yp_full, pvals_, scratch_);
 }
 
 void DaeSystem::reconfigure() {
@@ -363,7 +357,6 @@ void DaeSystem::assemble(double t, const double* y, const double* yp, double cj,
     xj_[i] = Jet(y[i]);
     xdj_[i] = Jet(yp[i]);
   }
-  std::vector<Jet> pj;
   for (size_t u = 0; u < units.size(); ++u) {
     const int ns = static_cast<int>(units[u].spec.states().size());
     if (ns == 0) continue;
@@ -380,6 +373,7 @@ void DaeSystem::assemble(double t, const double* y, const double* yp, double cj,
       SparseSink sink(sparse, block_pos_[u], col_map_[u], static_cast<int>(cols.size()), units[u].name);
       if (units[u].unit->jacobian(cd, cj, sink)) continue;
     }
+    std::vector<Jet>& pj = pj_[u];
     params_as(static_cast<int>(u), pj);
     rj_.assign(ns, Jet(0.0));
     // An explicit unit's residual is x - f: its own columns are the identity, no AD needed.
@@ -425,31 +419,36 @@ void DaeSystem::seed(int id, int u, size_t slot, std::vector<Jet>& pj) const {
   }
 }
 
+// Loads directions [d0, d1) into the Jets: the unknowns' values and sensitivities (y' ones zero without `ypS`),
+// and every unit's parameters seeded with the directions of the parameters they are or follow.
+void DaeSystem::load_directions(const double* y, const double* yp, const std::vector<int>& params, size_t d0,
+                                size_t d1, const double* const* yS, const double* const* ypS) {
+  for (int i = 0; i < n_; ++i) {
+    xj_[i] = Jet(y[i]);
+    xdj_[i] = Jet(yp[i]);
+    for (size_t d = d0; d < d1; ++d) {
+      xj_[i].v[d - d0] = yS[d][i];
+      if (ypS) xdj_[i].v[d - d0] = ypS[d][i];
+    }
+  }
+  for (size_t u = 0; u < pj_.size(); ++u) {
+    params_as(static_cast<int>(u), pj_[u]);
+    for (size_t d = d0; d < d1; ++d) seed(params[d], static_cast<int>(u), d - d0, pj_[u]);
+  }
+}
+
 Status DaeSystem::sens_residual(double t, const double* y, const double* yp, const std::vector<int>& params,
                                 const double* const* yS, const double* const* ypS, double* const* rS) {
   fill_params(t);
   const auto& units = fs_.units();
-  std::vector<std::vector<Jet>> pj(units.size());
-  std::vector<Jet> scratch;
   rj_.assign(n_ext_, Jet(0.0));
   for (size_t d0 = 0; d0 < params.size(); d0 += kAdChunk) {
     const size_t d1 = std::min(params.size(), d0 + kAdChunk);
-    for (int i = 0; i < n_; ++i) {
-      xj_[i] = Jet(y[i]);
-      xdj_[i] = Jet(yp[i]);
-      for (size_t d = d0; d < d1; ++d) {
-        xj_[i].v[d - d0] = yS[d][i];
-        xdj_[i].v[d - d0] = ypS[d][i];
-      }
-    }
-    for (size_t u = 0; u < units.size(); ++u) {
-      params_as(static_cast<int>(u), pj[u]);
-      for (size_t d = d0; d < d1; ++d) seed(params[d], static_cast<int>(u), d - d0, pj[u]);
-    }
-    if (inline_) evaluate_explicit(t, xj_.data(), xdj_.data(), pj, scratch);
+    load_directions(y, yp, params, d0, d1, yS, ypS);
+    if (inline_) evaluate_explicit(t, xj_.data(), xdj_.data(), pj_, jet_scratch_);
     for (size_t u = 0; u < units.size(); ++u) {
       if (inline_ && units[u].spec.is_explicit()) continue;
-      Ctx<Jet> c{t, xj_.data(), xdj_.data(), pj[u].data(), rj_.data() + units[u].offset, units[u].offset,
+      Ctx<Jet> c{t, xj_.data(), xdj_.data(), pj_[u].data(), rj_.data() + units[u].offset, units[u].offset,
                  &units[u].port_index, segment_start_};
       const Status s = units[u].unit->residual(c);
       if (s != Status::kOk) return s;
@@ -468,21 +467,10 @@ void DaeSystem::extend_sensitivities(double t, const double* y, const double* yp
   for (size_t d = 0; d < params.size(); ++d) std::copy(yS[d], yS[d] + n_, yS_full[d]);
   if (!inline_) return;
   fill_params(t);
-  const auto& units = fs_.units();
-  std::vector<std::vector<Jet>> pj(units.size());
-  std::vector<Jet> scratch;
   for (size_t d0 = 0; d0 < params.size(); d0 += kAdChunk) {
     const size_t d1 = std::min(params.size(), d0 + kAdChunk);
-    for (int i = 0; i < n_; ++i) {
-      xj_[i] = Jet(y[i]);
-      xdj_[i] = Jet(yp[i]);
-      for (size_t d = d0; d < d1; ++d) xj_[i].v[d - d0] = yS[d][i];
-    }
-    for (size_t u = 0; u < units.size(); ++u) {
-      params_as(static_cast<int>(u), pj[u]);
-      for (size_t d = d0; d < d1; ++d) seed(params[d], static_cast<int>(u), d - d0, pj[u]);
-    }
-    evaluate_explicit(t, xj_.data(), xdj_.data(), pj, scratch);
+    load_directions(y, yp, params, d0, d1, yS, nullptr);
+    evaluate_explicit(t, xj_.data(), xdj_.data(), pj_, jet_scratch_);
     for (size_t d = d0; d < d1; ++d)
       for (int i = n_; i < n_ext_; ++i) yS_full[d][i] = xj_[i].v[d - d0];
   }

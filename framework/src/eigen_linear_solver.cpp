@@ -1,7 +1,6 @@
 #include "eigen_linear_solver.hpp"
 
 #include <Eigen/Dense>
-#include <cmath>
 #include <nvector/nvector_serial.h>
 #include <sunmatrix/sunmatrix_dense.h>
 

@@ -68,13 +68,19 @@ std::vector<double> output_sensitivities(Flowsheet& fs, const SimResult& r, cons
     const double hi = std::min(p + h, spec.upper), lo = std::max(p - h, spec.lower);
     if (!(hi > lo)) continue;
     std::vector<double> zhi(nt * no), zlo(nt * no);
-    for (int side = 0; side < 2; ++side) {
-      fs.set_param_value(id, side == 0 ? hi : lo);
-      sys.reconfigure();
-      for (size_t it = 0; it < nt; ++it) {
-        sys.set_segment_start(segment_start(r.t[it]));
-        sys.report(r.t[it], &r.y[it * ns], &r.yp[it * ns], (side == 0 ? zhi : zlo).data() + it * no);
+    try {
+      for (int side = 0; side < 2; ++side) {
+        fs.set_param_value(id, side == 0 ? hi : lo);
+        sys.reconfigure();
+        for (size_t it = 0; it < nt; ++it) {
+          sys.set_segment_start(segment_start(r.t[it]));
+          sys.report(r.t[it], &r.y[it * ns], &r.yp[it * ns], (side == 0 ? zhi : zlo).data() + it * no);
+        }
       }
+    } catch (...) {  // the caller's flowsheet keeps its parameter value whatever a unit throws
+      fs.set_param_value(id, p);
+      sys.reconfigure();
+      throw;
     }
     fs.set_param_value(id, p);
     for (size_t it = 0; it < nt; ++it)

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <set>
 #include <sstream>
 
@@ -109,6 +110,7 @@ class Loader {
     if (root["links"]) {
       const YAML::Node l = root["links"];
       if (!l.IsMap()) fail("links", "expected a mapping of unit.param -> unit.param it follows");
+      check_unique(l, "links");
       for (const auto& kv : l) {
         const std::string target = kv.first.as<std::string>();
         try {
@@ -129,6 +131,7 @@ class Loader {
     if (root["summary"]) {
       const YAML::Node sm = root["summary"];
       if (!sm.IsMap()) fail("summary", "expected a mapping of summary key -> unit.state or unit.output");
+      check_unique(sm, "summary");
       const auto states = fs.state_names();
       const auto outputs = fs.output_names();
       for (const auto& kv : sm) {
@@ -199,7 +202,7 @@ class Loader {
   void load_output(const YAML::Node& o, SimOptions& opt) const {
     if (!o.IsMap()) fail("output", "expected a mapping with 'n' or 'times'");
     check_keys(o, "output", {"n", "times"});
-    if (o["n"]) opt.n_out = static_cast<int>(number(o["n"], "output.n"));
+    if (o["n"]) opt.n_out = whole_number(o["n"], "output.n");
     if (o["times"]) {
       if (!o["times"].IsSequence()) fail("output.times", "expected a list of times");
       for (size_t i = 0; i < o["times"].size(); ++i)
@@ -213,18 +216,29 @@ class Loader {
     if (end == text.c_str() || *end != '\0' || !std::isfinite(v)) fail(at, "'" + text + "' is not a number");
     return v;
   }
+  // A count. Its range is SimOptions::validate()'s to check, but a fraction or a number beyond int cannot be
+  // held by the option at all (the cast would truncate it, or be undefined).
+  int whole_number(const YAML::Node& n, const std::string& at) const {
+    constexpr int kMax = std::numeric_limits<int>::max();
+    const double v = number(n, at);
+    if (v != std::floor(v) || std::abs(v) > kMax)
+      fail(at, "'" + n.Scalar() + "' is not a whole number between -" + std::to_string(kMax) + " and " +
+                   std::to_string(kMax));
+    return static_cast<int>(v);
+  }
   void load_solver(const YAML::Node& s, SimOptions& opt) const {
     if (!s.IsMap()) fail("solver", "expected a mapping");
     check_keys(s, "solver", {"rtol", "atol", "max_steps", "max_step", "linear_solver", "dense_limit"});
     if (s["rtol"]) opt.rtol = number(s["rtol"], "solver.rtol");
     if (s["atol"]) opt.atol = number(s["atol"], "solver.atol");
-    if (s["max_steps"]) opt.max_steps = static_cast<long>(number(s["max_steps"], "solver.max_steps"));
+    if (s["max_steps"]) opt.max_steps = whole_number(s["max_steps"], "solver.max_steps");
     if (s["max_step"]) opt.max_step = quantity(s["max_step"], "solver.max_step", "s");
     if (s["linear_solver"]) opt.linear_solver = scalar(s["linear_solver"], "solver.linear_solver");
-    if (s["dense_limit"]) opt.dense_limit = static_cast<int>(number(s["dense_limit"], "solver.dense_limit"));
+    if (s["dense_limit"]) opt.dense_limit = whole_number(s["dense_limit"], "solver.dense_limit");
   }
   void load_inputs(const YAML::Node& in, Flowsheet& fs) const {
     if (!in.IsMap()) fail("inputs", "expected a mapping of unit.param -> {times, values, interp}");
+    check_unique(in, "inputs");
     for (const auto& kv : in) {
       const std::string q = kv.first.as<std::string>(), at = "inputs." + q;
       try {
@@ -279,9 +293,13 @@ Scene load_scene_text(const std::string& text, const std::string& label, const R
   } catch (const YAML::Exception& e) {
     throw ConfigError(label + ": not valid YAML: " + e.what());
   }
-  Scene s = Loader(label, units).load(root);
-  s.text = text;
-  return s;
+  try {
+    Scene s = Loader(label, units).load(root);
+    s.text = text;
+    return s;
+  } catch (const YAML::Exception& e) {  // e.g. a key that is a list: valid YAML, but no scene
+    throw ConfigError(label + ": " + e.what());
+  }
 }
 
 Scene clone_scene(const Scene& src, const Registry<Unit>& units) {

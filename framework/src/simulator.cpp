@@ -110,6 +110,7 @@ struct JacobianCache {
 
 // State shared by the IDAS callbacks.
 struct IdaUser {
+  IdaUser(DaeSystem* s, bool d, std::vector<int> params = {}) : sys(s), dense(d), sens_params(std::move(params)) {}
   DaeSystem* sys;
   bool dense;
   std::vector<int> sens_params;
@@ -267,8 +268,7 @@ SimResult simulate(Flowsheet& fs, const SimOptions& opt) {
     id.data()[i] = ids[i];
   }
 
-  IdaUser user{&sys, true, sens_ids, {}, {}, {}, {}};
-  user.dense = dense;
+  IdaUser user(&sys, dense, sens_ids);
 
   void* mem = IDACreate(C.ctx);
   if (dense) user.mem = mem;
@@ -480,32 +480,36 @@ int kin_res(N_Vector u, N_Vector f, void* ud) {
 
 int kin_jac(N_Vector u, N_Vector, SUNMatrix J, void* ud, N_Vector, N_Vector) {
   auto* k = static_cast<KinUser*>(ud);
-  if (k->dense) {
-    k->sys->jacobian(k->t, N_VGetArrayPointer(u), k->zeros.data(), 0.0, SUNDenseMatrix_Data(J), nullptr);
-    const auto n = SUNDenseMatrix_Rows(J);
-    for (int p : k->pinned) {
-      for (sunindextype c = 0; c < n; ++c) SUNDenseMatrix_Data(J)[c * n + p] = 0.0;
-      SUNDenseMatrix_Data(J)[sunindextype(p) * n + p] = 1.0;
+  try {  // an exception must not unwind through KINSOL's C frames
+    if (k->dense) {
+      k->sys->jacobian(k->t, N_VGetArrayPointer(u), k->zeros.data(), 0.0, SUNDenseMatrix_Data(J), nullptr);
+      const auto n = SUNDenseMatrix_Rows(J);
+      for (int p : k->pinned) {
+        for (sunindextype c = 0; c < n; ++c) SUNDenseMatrix_Data(J)[c * n + p] = 0.0;
+        SUNDenseMatrix_Data(J)[sunindextype(p) * n + p] = 1.0;
+      }
+    } else {
+      const auto& pat = k->sys->pattern();
+      for (int c = 0; c <= pat.n; ++c) SUNSparseMatrix_IndexPointers(J)[c] = pat.col_ptr[c];
+      for (int i = 0; i < pat.nnz(); ++i) SUNSparseMatrix_IndexValues(J)[i] = pat.row_idx[i];
+      k->sys->jacobian(k->t, N_VGetArrayPointer(u), k->zeros.data(), 0.0, nullptr, SUNSparseMatrix_Data(J));
+      // The diagonal is in the pattern (a unit depends on its own states), so pinning stays inside it.
+      for (int p : k->pinned)
+        for (int c = 0; c < pat.n; ++c)
+          for (int i = pat.col_ptr[c]; i < pat.col_ptr[c + 1]; ++i)
+            if (pat.row_idx[i] == p) SUNSparseMatrix_Data(J)[i] = (c == p) ? 1.0 : 0.0;
     }
-  } else {
-    const auto& pat = k->sys->pattern();
-    for (int c = 0; c <= pat.n; ++c) SUNSparseMatrix_IndexPointers(J)[c] = pat.col_ptr[c];
-    for (int i = 0; i < pat.nnz(); ++i) SUNSparseMatrix_IndexValues(J)[i] = pat.row_idx[i];
-    k->sys->jacobian(k->t, N_VGetArrayPointer(u), k->zeros.data(), 0.0, nullptr, SUNSparseMatrix_Data(J));
-    // The diagonal is in the pattern (a unit depends on its own states), so pinning stays inside it.
-    for (int p : k->pinned)
-      for (int c = 0; c < pat.n; ++c)
-        for (int i = pat.col_ptr[c]; i < pat.col_ptr[c + 1]; ++i)
-          if (pat.row_idx[i] == p) SUNSparseMatrix_Data(J)[i] = (c == p) ? 1.0 : 0.0;
+    return 0;
+  } catch (const std::exception& e) {
+    k->last_error = e.what();
+    return -1;
   }
-  return 0;
 }
 
 void kin_err(int code, const char* module, const char* function, char* msg, void* ud) {
   if (code >= 0) return;
   static_cast<KinUser*>(ud)->last_error = std::string(module) + "." + function + ": " + msg;
 }
-}  // namespace
 
 // Algebraic states solved for the given differential states (IDACalcIC), used to start Newton from a point
 // where recycle flows are consistent rather than from structurally singular guesses.
@@ -516,7 +520,7 @@ void consistent_initial_values(DaeSystem& sys, bool dense, double t, std::vector
   std::copy(y0.begin(), y0.end(), y.data());
   const auto ids = sys.differential_id();
   std::copy(ids.begin(), ids.end(), id.data());
-  IdaUser user{&sys, dense, {}, {}, {}, {}, {}};
+  IdaUser user(&sys, dense);
   void* mem = IDACreate(C.ctx);
   std::unique_ptr<void, void (*)(void*)> guard(mem, [](void* m) { IDAFree(&m); });
   check(IDAInit(mem, ida_res, t, y.v, yp.v), "IDAInit");
@@ -533,6 +537,7 @@ void consistent_initial_values(DaeSystem& sys, bool dense, double t, std::vector
   if (IDACalcIC(mem, IDA_YA_YDP_INIT, t + 1.0) >= 0 && IDAGetConsistentIC(mem, y.v, yp.v) >= 0)
     y0.assign(y.data(), y.data() + n);
 }
+}  // namespace
 
 SteadyResult solve_steady_state(Flowsheet& fs, const SteadyOptions& opt, const std::vector<double>* guess) {
   opt.validate();
@@ -545,12 +550,13 @@ SteadyResult solve_steady_state(Flowsheet& fs, const SteadyOptions& opt, const s
   NVec u(n, C.ctx), su(n, C.ctx), sf(n, C.ctx);
   std::vector<double> y0;
   sys.initial_values(y0);
-  if (!guess) consistent_initial_values(sys, dense, opt.t, y0);
   if (guess) {
     if (static_cast<int>(guess->size()) != n)
       throw ConfigError("steady-state guess has " + std::to_string(guess->size()) + " values, the flowsheet " +
                         std::to_string(n) + " states");
     y0 = *guess;
+  } else {
+    consistent_initial_values(sys, dense, opt.t, y0);
   }
   std::copy(y0.begin(), y0.end(), u.data());
   const auto sc = sys.scales();
@@ -560,14 +566,23 @@ SteadyResult solve_steady_state(Flowsheet& fs, const SteadyOptions& opt, const s
   // Pure accumulators (a differential state no equation depends on, e.g. the mass collected by a product sink)
   // have no steady state: hold them at their initial value and drop their own equation.
   {
-    std::vector<double> jac(size_t(n) * n);
-    sys.jacobian(opt.t, y0.data(), user.zeros.data(), 0.0, jac.data(), nullptr);
-    const auto id = sys.differential_id();
-    for (int c = 0; c < n; ++c) {
-      bool zero = id[c] > 0;
-      for (int r = 0; r < n && zero; ++r) zero = jac[size_t(c) * n + r] == 0.0;
-      if (zero) user.pinned.push_back(c), user.pinned_value.push_back(y0[c]);
+    // Column c of dF/dy is zero: on the sparse path, only its pattern entries can be nonzero (no dense n^2 copy).
+    std::vector<char> nonzero(n, 0);
+    if (dense) {
+      std::vector<double> jac(size_t(n) * n);
+      sys.jacobian(opt.t, y0.data(), user.zeros.data(), 0.0, jac.data(), nullptr);
+      for (int c = 0; c < n; ++c)
+        for (int r = 0; r < n && !nonzero[c]; ++r) nonzero[c] = jac[size_t(c) * n + r] != 0.0;
+    } else {
+      const SparsityPattern& pat = sys.pattern();
+      std::vector<double> vals(pat.nnz());
+      sys.jacobian(opt.t, y0.data(), user.zeros.data(), 0.0, nullptr, vals.data());
+      for (int c = 0; c < n; ++c)
+        for (int q = pat.col_ptr[c]; q < pat.col_ptr[c + 1] && !nonzero[c]; ++q) nonzero[c] = vals[q] != 0.0;
     }
+    const auto id = sys.differential_id();
+    for (int c = 0; c < n; ++c)
+      if (id[c] > 0 && !nonzero[c]) user.pinned.push_back(c), user.pinned_value.push_back(y0[c]);
   }
   void* mem = KINCreate(C.ctx);
   std::unique_ptr<void, void (*)(void*)> guard(mem, [](void* m) { KINFree(&m); });
@@ -593,12 +608,18 @@ SteadyResult solve_steady_state(Flowsheet& fs, const SteadyOptions& opt, const s
     std::string msg = std::string("steady-state solve (KINSOL) failed after ") + std::to_string(it) +
                       " iterations: " + (name ? name : "") + (user.last_error.empty() ? "" : " (" + user.last_error + ")");
     free(name);
-    // Name the unit with the largest scaled residual at the last iterate.
+    // Name the unit with the largest residual at the last iterate (if the residual itself throws there, the
+    // solver failure is still what the caller gets).
     std::vector<double> rr(n);
-    sys.residual(opt.t, u.data(), user.zeros.data(), rr.data());
     int iw = 0;
-    for (int i = 1; i < n; ++i)
-      if (std::abs(rr[i]) > std::abs(rr[iw])) iw = i;
+    try {
+      sys.residual(opt.t, u.data(), user.zeros.data(), rr.data());
+      auto size = [&](int i) { return std::isfinite(rr[i]) ? std::abs(rr[i]) : HUGE_VAL; };
+      for (int i = 1; i < n; ++i)
+        if (size(i) > size(iw)) iw = i;
+    } catch (...) {
+      throw SolverError(msg, opt.t, "?", HUGE_VAL);
+    }
     throw SolverError(msg + " at " + sys.describe_row(iw), opt.t, fs.units()[fs.state_unit(iw)].name, std::abs(rr[iw]));
   }
   r.y.assign(u.data(), u.data() + n);

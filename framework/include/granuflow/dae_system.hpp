@@ -79,6 +79,8 @@ class DaeSystem {
   void assemble(double t, const double* y, const double* yp, double cj, int dim, double* dense, double* sparse,
                 bool factor_outer = false);
   void seed(int id, int u, size_t slot, std::vector<Jet>& pj) const;
+  void load_directions(const double* y, const double* yp, const std::vector<int>& params, size_t d0, size_t d1,
+                       const double* const* yS, const double* const* ypS);
   template <class T>
   void params_as(int unit, std::vector<T>& out) const;
 
@@ -88,7 +90,6 @@ class DaeSystem {
   bool inline_ = false;
   double fill_ = 0.0;
   std::vector<int> explicit_order_;  // explicit units, each after the explicit units it reads
-  std::vector<int> real_units_;      // the others
   std::vector<std::pair<int, int>> explicit_reads_;  // (u, v): explicit unit u reads explicit unit v, in order
   class FactoringSink;
   struct OuterTerm {  // u w^T on the rows of an explicit unit, columns integrated states
@@ -111,7 +112,8 @@ class DaeSystem {
   mutable std::vector<std::unordered_map<int, int>> col_map_;  // per unit: global column -> local column
   std::vector<std::vector<size_t>> ad_pos_;             // per unit: positions in local_cols_ found by AD
   mutable SparsityPattern pattern_;
-  std::vector<Jet> xj_, xdj_, rj_;
+  std::vector<Jet> xj_, xdj_, rj_, jet_scratch_;
+  std::vector<std::vector<Jet>> pj_;  // per unit: parameters as Jets (seeded for sensitivities)
   std::vector<double> rbuf_;
   long n_res_ = 0, n_jac_ = 0;
 };

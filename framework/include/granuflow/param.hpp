@@ -26,7 +26,7 @@ using SettingValue = std::variant<long, double, bool, std::string>;
 struct SettingSpec {
   std::string name;
   SettingType type;
-  SettingValue value;                // default
+  SettingValue value;                // the value in use: the default unless the scene gives one
   std::vector<std::string> choices;  // for String: the allowed values (empty = any)
   double lower = -1e300;             // for Int and Real
   double upper = 1e300;
