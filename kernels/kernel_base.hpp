@@ -45,6 +45,13 @@ struct ClassState {
   const T* liquid_fraction = nullptr;
 };
 
+// The reference volume of the power-law kernels (sum, product, Kapur; power-law and linear selection). It only
+// keeps the rate coefficient in 1/s; v_ref = 1 m^3 with coefficient 1 is the dimensionless textbook form of the
+// analytic cases (VERIFY.md).
+inline ParamSpec reference_volume_param() {
+  return {"v_ref", "m3", 1.0, 1e-30, 1e6, "reference volume", "scaling choice; VERIFY.md analytic cases use 1"};
+}
+
 class KernelBase {
  public:
   virtual ~KernelBase() = default;

@@ -1,6 +1,7 @@
 #include "chamber_gas.hpp"
 
 #include "granuflow/properties.hpp"
+#include "kernels/paper001_defaults.hpp"
 
 namespace granuflow::units {
 namespace {
@@ -13,7 +14,8 @@ class ChamberGas : public UnitBase<ChamberGas> {
  public:
   std::string type() const override { return "chamber_gas"; }
   void declare(UnitSpec& s, Settings&) override {
-    s.add_param({"m_gas", "kg", 1.53, 1e-3, 1e4, "dry-air hold-up of the chamber", "paper 001, Table 7; PAPER001_DECISIONS"});
+    s.add_param({"m_gas", "kg", kernels::paper001::defaults::kGasHoldup, 1e-3, 1e4, "dry-air hold-up of the chamber",
+                 "paper 001, Table 7; PAPER001_DECISIONS"});
     s.add_param({"Y0", "kg/kg", 0.005, 0.0, 0.5, "initial humidity", "PAPER001_DECISIONS: gas at inlet state"});
     s.add_param({"T0", "K", 333.15, 250.0, 600.0, "initial temperature", "PAPER001_DECISIONS: gas at inlet state"});
     s.add_state("water", StateKind::Differential, "kg", 0.01);

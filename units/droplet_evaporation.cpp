@@ -1,7 +1,5 @@
 #include "droplet_evaporation.hpp"
 
-#include <algorithm>
-
 #include "granuflow/properties.hpp"
 #include "kernels/drying/paper001_drying.hpp"
 
@@ -16,10 +14,11 @@ class DropletEvaporation : public UnitBase<DropletEvaporation> {
  public:
   std::string type() const override { return "droplet_evaporation"; }
   void declare(UnitSpec& s, Settings&) override {
-    s.add_param({"k_evap", "kg/m2", 3e-3, 0.0, 10.0,
+    namespace def = kernels::paper001::defaults;
+    s.add_param({"k_evap", "kg/m2", def::kEvaporationCoefficient, 0.0, 10.0,
                  "evaporation coefficient per droplet surface and unit humidity difference", "paper 001, Table 8"});
-    s.add_param({"d_drop", "m", 30e-6, 1e-6, 1e-3, "droplet diameter", "paper 001, Table 9"});
-    s.add_param({"rho_l", "kg/m3", 1000.0, 500.0, 2000.0, "liquid density", "paper 001, Table 6"});
+    s.add_param({"d_drop", "m", def::kDropletDiameter, 1e-6, 1e-3, "droplet diameter", "paper 001, Table 9"});
+    s.add_param({"rho_l", "kg/m3", def::kLiquidDensity, 500.0, 2000.0, "liquid density", "paper 001, Table 6"});
     s.add_param({"multiplier", "-", 1.0, 0.0, 100.0, "scales Eq. (66) (option; 1 = as published)", "PAPER001_DECISIONS"});
     s.add_state("m_evap", StateKind::Algebraic, "kg/s", 1e-4);
     s.add_state("m_dep", StateKind::Algebraic, "kg/s", 1e-3);
@@ -64,7 +63,7 @@ class DropletEvaporation : public UnitBase<DropletEvaporation> {
   void init(InitCtx<T>& c) const {
     c.x0[kEvap] = T(0.0);
     c.x0[kDep] = T(0.0);
-    c.x0[kT] = T(283.15);
+    c.x0[kT] = T(kernels::paper001::defaults::kSprayTemperature);
     c.x0[kW] = T(0.0);
   }
   void report(const Ctx<double>& c, double* out) const override {

@@ -1,5 +1,6 @@
 #include "fluid_bed.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <tuple>
 #include <type_traits>
@@ -11,6 +12,7 @@
 #include "size_grid_settings.hpp"
 #include "kernels/breakage/paper001_breakage_laws.hpp"
 #include "kernels/discretization/grid.hpp"
+#include "kernels/discretization/psd.hpp"
 #include "kernels/drying/paper001_drying.hpp"
 #include "kernels/limited.hpp"
 #include "kernels/particle_geometry.hpp"
@@ -53,6 +55,8 @@ class FluidBed : public UnitBase<FluidBed> {
     per_volume_ = st.get_choice("beta0_basis", "absolute", {"absolute", "per_m3"},
                                 "beta0 for absolute particle numbers (default) or per m^3 of vessel") == "per_m3";
     grid_ = std::make_unique<kernels::Grid>(kernels::Grid::from_diameter_pivots(d));
+    sd_.resize(n_);
+    sj_.resize(n_);
 
     const std::string t7 = "paper 001, Table 7", t6 = "paper 001, Table 6", t9 = "paper 001, Table 9",
                       t10 = "paper 001, Table 10", t8 = "paper 001, Table 8", dec = "PAPER001_DECISIONS";
@@ -146,8 +150,8 @@ class FluidBed : public UnitBase<FluidBed> {
     for (int j = 0; j < n_; ++j)
       for (int k = j; k < n_; ++k) {
         const double v = x[j] + x[k];
-        Pair pr{j, k, -1, 0.0, 0.0};
-        if (v >= x[n_ - 1]) {
+        Pair pr{j, k, -1, 0.0, v >= x[n_ - 1]};
+        if (pr.beyond) {
           pr.a = n_ - 1;
           pr.frac_upper = 0.0;  // all mass to the top class
         } else {
@@ -158,63 +162,93 @@ class FluidBed : public UnitBase<FluidBed> {
           // mass fractions of the aggregate landing on a and a + 1
           pr.frac_upper = nu * x[a + 1] / v;
         }
-        pr.beyond = v >= x[n_ - 1] ? 1.0 : 0.0;
         pairs_.push_back(pr);
       }
     // Eq. (37) per pair depends on parameters only: once per run for residuals and Jacobians
     cf_.resize(pairs_.size());
     for (size_t q = 0; q < pairs_.size(); ++q)
       cf_[q] = p1::collision_frequency(dp[pairs_[q].j], dp[pairs_[q].k], p[kLnBeta0], p[kTauSpray]);
-    // Breakage: selection rate per unit k_break (Eq. (92)) and the mass split of a parent's fragments over the
-    // cells below it (Eq. (93) read as a cumulative mass fraction); fines below the first edge go to class 0.
-    shape_.assign(n_, 0.0);
-    frag_.assign(size_t(n_) * n_, 0.0);
-    for (int k = 0; k < n_; ++k) {
-      shape_[k] = p1::breakage_rate(dp[k], size_unit_, 1.0, p[kDMinBreak], p[kFMat], p[kEMin]);
-      double below = 0.0;
-      for (int c = 0; c <= k; ++c) {
-        const double upper = c == k ? dp[k] : de[c + 1];
-        const double b = p1::cumulative_fragment_distribution(upper, dp[k], p[kQFrag], p[kDFragMin]);
-        frag_[size_t(c) * n_ + k] = b - below;
-        below = b;
-      }
-      frag_[size_t(k) * n_ + k] -= 1.0;  // the parent leaves class k
-    }
     particle_mass_.resize(n_);
     surface_per_mass_.resize(n_);
+    shape_.resize(n_);
+    frag_.resize(size_t(n_) * n_);
+    material_tables(p, particle_mass_.data(), surface_per_mass_.data(), shape_.data(), frag_.data());
+  }
+
+  // Tables fixed by the parameters: particle mass and surface per mass of each class, the breakage selection
+  // rate per unit k_break (Eq. (92)) and the mass split of a parent's fragments over the cells below it (Eq. (93)
+  // read as a cumulative mass fraction; fines below the first edge go to class 0).
+  template <class T>
+  void material_tables(const T* p, T* pm, T* spm, T* shape, T* frag) const {
+    const auto& x = grid_->pivots();
+    const auto& de = grid_->diameter_edges();
+    const auto& dp = grid_->diameter_pivots();
     for (int i = 0; i < n_; ++i) {
-      particle_mass_[i] = p[kRhoS] * (1.0 - p[kEps]) * x[i];
-      surface_per_mass_[i] = kernels::sphere_surface(dp[i]) / particle_mass_[i];
+      pm[i] = p[kRhoS] * (1.0 - p[kEps]) * x[i];
+      spm[i] = kernels::sphere_surface(dp[i]) / pm[i];
     }
-    // Initial log-normal mass distribution over the cells; tails beyond the grid folded into the end classes.
-    init_frac_.assign(n_, 0.0);
-    auto cdf = [&](double d) { return 0.5 * std::erfc(-std::log(d / p[kD50]) / (std::log(p[kSigma]) * std::sqrt(2.0))); };
-    for (int i = 0; i < n_; ++i) init_frac_[i] = (i == n_ - 1 ? 1.0 : cdf(de[i + 1])) - (i == 0 ? 0.0 : cdf(de[i]));
+    for (int k = 0; k < n_; ++k) {
+      shape[k] = p1::breakage_rate(T(dp[k]), size_unit_, T(1.0), p[kDMinBreak], p[kFMat], p[kEMin]);
+      T below(0.0);
+      for (int c = 0; c < n_; ++c) {
+        if (c > k) {
+          frag[size_t(c) * n_ + k] = T(0.0);
+          continue;
+        }
+        const double upper = c == k ? dp[k] : de[c + 1];
+        const T b = p1::cumulative_fragment_distribution(T(upper), T(dp[k]), p[kQFrag], p[kDFragMin]);
+        frag[size_t(c) * n_ + k] = b - below;
+        below = b;
+      }
+      frag[size_t(k) * n_ + k] -= 1.0;  // the parent leaves class k
+    }
+  }
+  // The tables for the residual: cached in configure() for doubles; Jets recompute them, so that sensitivities
+  // to rho_s, eps_intra and the breakage parameters carry through (as for cf_).
+  template <class T>
+  struct Tables {
+    const T *pm, *spm, *shape, *frag;
+  };
+  template <class T>
+  Tables<T> tables(const T* p) const {
+    if constexpr (std::is_same_v<T, double>) {
+      return {particle_mass_.data(), surface_per_mass_.data(), shape_.data(), frag_.data()};
+    } else {
+      Scratch<T>& w = scratch<T>();
+      material_tables(p, w.pm.data(), w.spm.data(), w.shape.data(), w.frag.data());
+      return {w.pm.data(), w.spm.data(), w.shape.data(), w.frag.data()};
+    }
   }
 
   template <class T>
   Status eval(const Ctx<T>& c) const {
-    std::vector<T> dM(n_, T(0.0)), dW(n_, T(0.0)), X(n_);
+    Scratch<T>& w = scratch<T>();
+    std::fill(w.dM.begin(), w.dM.end(), T(0.0));
+    std::fill(w.dW.begin(), w.dW.end(), T(0.0));
+    T* dM = w.dM.data();
+    T* dW = w.dW.data();
+    T* X = w.X.data();
+    T* dry = w.dry.data();
     for (int i = 0; i < n_; ++i) X[i] = moisture(c, i);
     const T& t_s = c.x_(sT_);
+    const Tables<T> tb = tables(c.p);
     T beyond(0.0);
-    if (agg_ != Aggregation::kNone) aggregation(c, X.data(), dM.data(), dW.data(), &beyond);
+    if (agg_ != Aggregation::kNone) aggregation(c, X, tb.pm, dM, dW, &beyond);
     if (breakage_) {
       for (int k = 0; k < n_; ++k) {
         // Eq. (92) selection times the fragment mass split: linear in M and W (fragments keep the parent's
         // moisture, PAPER001_DECISIONS)
-        const T sk = c.par(kKBreak) * shape_[k];
+        const T sk = c.par(kKBreak) * tb.shape[k];
         for (int cl = 0; cl <= k; ++cl) {
-          const double f = frag_[size_t(cl) * n_ + k];
+          const T& f = tb.frag[size_t(cl) * n_ + k];
           dM[cl] += sk * f * c.x_(k);
           dW[cl] += sk * f * c.x_(n_ + k);
         }
       }
     }
     int reg_eta = 0, reg_a = 0;
-    std::vector<T> dry(n_);
     T q_vs(0.0);
-    transfer(c, dry.data(), &q_vs, &reg_eta, &reg_a);
+    transfer(c, tb, dry, &q_vs, &reg_eta, &reg_a);
     T m_vap(0.0), h_dep(0.0);
     const bool wet = c.connected(kWet);
     for (int i = 0; i < n_; ++i) {
@@ -242,9 +276,18 @@ class FluidBed : public UnitBase<FluidBed> {
   template <class T>
   void init(InitCtx<T>& c) const {
     const T dry = c.p[kBedMass] / (1.0 + c.p[kX0]);
-    T heat_capacity(0.0);
+    // Initial log-normal mass distribution over the cells, tails beyond the grid folded into the end classes;
+    // in T, so that initial sensitivities to d50_0 and sigma_0 are exact.
+    const auto& de = grid_->diameter_edges();
+    auto cdf = [&](int e) {
+      using std::erfc, std::log;
+      return T(0.5 * erfc(-log(de[e] / c.p[kD50]) / (log(c.p[kSigma]) * std::sqrt(2.0))));
+    };
+    T heat_capacity(0.0), below(0.0);
     for (int i = 0; i < n_; ++i) {
-      c.x0[i] = dry * init_frac_[i];
+      const T upto = i == n_ - 1 ? T(1.0) : cdf(i + 1);
+      c.x0[i] = dry * (upto - below);
+      below = upto;
       c.x0[n_ + i] = c.x0[i] * c.p[kX0];
       heat_capacity += c.x0[i] * c.p[kCpS] + c.x0[n_ + i] * c.p[kCpL];
     }
@@ -280,6 +323,7 @@ class FluidBed : public UnitBase<FluidBed> {
       }
     }
     const double scale = per_volume_ ? 1.0 / c.par(kVVessel) : 1.0;
+    const double beta_constant = agg_ == Aggregation::kConstant ? std::exp(c.par(kLnBeta0)) : 0.0;
     const int col_t = c.offset + sT_;
     auto col_m = [&](int i) { return c.offset + i; };
     auto col_w = [&](int i) { return c.offset + n_ + i; };
@@ -299,7 +343,7 @@ class FluidBed : public UnitBase<FluidBed> {
         db_dxk = cf * pg * (1.0 - sticky[j]) * ds_dx[k];
         db_dt = cf * pg * ((1.0 - sticky[k]) * ds_dt[j] + (1.0 - sticky[j]) * ds_dt[k]);
       } else {
-        beta = std::exp(c.par(kLnBeta0));
+        beta = beta_constant;
       }
       const double nn = s * number[j] * number[k];
       const double e = beta * nn;  // events per second
@@ -327,7 +371,7 @@ class FluidBed : public UnitBase<FluidBed> {
           sink.add(rows[r].row, de[t].col, -rows[r].cm * de[t].v);
           sink.add(n_ + rows[r].row, de[t].col, -rows[r].cw * de[t].v);
         }
-      if (pr.beyond > 0)
+      if (pr.beyond)
         for (int t = 0; t < nd; ++t) sink.add(sTop_, de[t].col, -m_agg * de[t].v);
       // water rows through X_j = W_j / (M_j + floor) and X_k
       for (auto [cls, mc] : {std::pair{j, mj}, std::pair{k, mk}}) {
@@ -371,13 +415,13 @@ class FluidBed : public UnitBase<FluidBed> {
     const int cols[7] = {0, 0, col_ts, c.offset + sU0_, ports[kGasProbe][gas::kY], ports[kGasProbe][gas::kP],
                          ports[kGasProbe][gas::kT]};
     const GasSide<J8> g = gas_side(J8(c.x_(sT_), 2), J8(c.port(kGasProbe, gas::kT), 6), J8(c.port(kGasProbe, gas::kY), 4),
-                                   J8(c.port(kGasProbe, gas::kP), 5), J8(c.x_(sU0_), 3), J8(value_of(area_ratio(c)), 7),
+                                   J8(c.port(kGasProbe, gas::kP), 5), J8(c.x_(sU0_), 3), J8(value_of(area_ratio(c, surface_per_mass_.data())), 7),
                                    par.data());
     std::vector<double> ddry_dratio(n_);
     double dvap_dratio = 0, dq_dratio = 0;
     for (int i = 0; i < n_; ++i) {
       J8 dry, q;
-      class_transfer(i, J8(c.x_(i), 0), J8(c.x_(n_ + i), 1), g, par.data(), &dry, &q);
+      class_transfer(i, J8(c.x_(i), 0), J8(c.x_(n_ + i), 1), J8(particle_mass_[i]), g, par.data(), &dry, &q);
       for (auto [row, f, sign] : {std::tuple{n_ + i, &dry, 1.0}, std::tuple{sVap_, &dry, -1.0}, std::tuple{sQ_, &q, -1.0}}) {
         sink.add(row, col_m(i), sign * f->v[0]);
         sink.add(row, col_w(i), sign * f->v[1]);
@@ -443,7 +487,8 @@ class FluidBed : public UnitBase<FluidBed> {
       n += c.x_(i) / particle_mass_[i];
     }
     const double q[] = {0.1, 0.5, 0.9, 0.05, 0.16, 0.25, 0.75, 0.84, 0.95};  // order of o_quantiles_
-    for (size_t k = 0; k < o_quantiles_.size(); ++k) out[o_quantiles_[k]] = quantile(mass, q[k]);
+    for (size_t k = 0; k < o_quantiles_.size(); ++k)
+      out[o_quantiles_[k]] = kernels::characteristic_diameter_of_mass(grid_->diameter_edges(), mass.data(), q[k]);
     out[o_moisture_] = w / m;
     out[o_moisture_wet_] = w / (m + w);
     out[o_particles_] = n;
@@ -451,7 +496,7 @@ class FluidBed : public UnitBase<FluidBed> {
     std::vector<double> dry(n_);
     double qv = 0;
     int reg_eta = 0, reg_a = 0;
-    transfer(c, dry.data(), &qv, &reg_eta, &reg_a);
+    transfer(c, tables(c.p), dry.data(), &qv, &reg_eta, &reg_a);
     out[o_reg_eta_] = reg_eta;
     out[o_reg_a_] = reg_a;
     out[o_balance_] = w;
@@ -464,10 +509,26 @@ class FluidBed : public UnitBase<FluidBed> {
   }
 
  private:
+  // Per scalar type work arrays of the residual, sized once in declare() (the unit is evaluated by one solver
+  // at a time, as pbm_batch's).
+  template <class T>
+  struct Scratch {
+    std::vector<T> dM, dW, X, dry, number, fwet, sticky, pm, spm, shape, frag;
+    void resize(int n) {
+      for (auto* v : {&dM, &dW, &X, &dry, &number, &fwet, &sticky, &pm, &spm, &shape}) v->assign(n, T(0.0));
+      frag.assign(size_t(n) * n, T(0.0));
+    }
+  };
+  template <class T>
+  Scratch<T>& scratch() const {
+    if constexpr (std::is_same_v<T, double>) return sd_;
+    else return sj_;
+  }
+
   struct Pair {
     int j, k, a;
     double frac_upper;  // mass fraction of the aggregate landing on pivot a + 1
-    double beyond;      // 1 if the aggregate is beyond the top pivot (kept in the top class)
+    bool beyond;        // the aggregate is beyond the top pivot (kept in the top class)
   };
 
   // Moisture of class i, kg/kg dry; the floor keeps an emptied class finite.
@@ -487,20 +548,29 @@ class FluidBed : public UnitBase<FluidBed> {
   // Eqs. (21)-(24) with the kernel of Eq. (39) (or a constant one) on the mass-based fixed pivot; water moves
   // with the solid mass: an agglomerate carries the mass-weighted loading of its partners.
   template <class T>
-  void aggregation(const Ctx<T>& c, const T* X, T* dM, T* dW, T* beyond) const {
+  void aggregation(const Ctx<T>& c, const T* X, const T* pm, T* dM, T* dW, T* beyond) const {
+    // Without a wetting port no surface is wet: psi_geom = 0 (Eq. (40)) makes every glass-transition beta 0.
+    if (agg_ == Aggregation::kGlassTransition && !c.connected(kWet)) return;
     const auto& d = grid_->diameter_pivots();
-    std::vector<T> number(n_), fwet(n_), sticky(n_);
-    const bool wet = c.connected(kWet);
+    Scratch<T>& w = scratch<T>();
+    T* number = w.number.data();
+    T* fwet = w.fwet.data();
+    T* sticky = w.sticky.data();
     for (int i = 0; i < n_; ++i) {
-      number[i] = c.x_(i) / particle_mass_[i];
+      number[i] = c.x_(i) / pm[i];
       if (agg_ == Aggregation::kGlassTransition) {
-        fwet[i] = wet ? c.port(kWet, wetting::fwet(n_, i)) : T(0.0);
-        const T xwet = wet ? c.port(kWet, wetting::Xwet(n_, i)) : X[i];
-        const T tg = p1::gordon_taylor(xwet, c.par(kGtK), c.par(kTgL), c.par(kTgS));              // Eq. (54)
+        fwet[i] = c.port(kWet, wetting::fwet(n_, i));
+        const T& xwet = c.port(kWet, wetting::Xwet(n_, i));
+        const T tg = p1::gordon_taylor(xwet, c.par(kGtK), c.par(kTgL), c.par(kTgS));                  // Eq. (54)
         sticky[i] = p1::sticky_probability(c.x_(sT_), tg, c.par(kStickySlope), c.par(kStickyOffset));  // Eq. (53)
       }
     }
     const T scale = per_volume_ ? T(1.0 / c.par(kVVessel)) : T(1.0);
+    T beta_constant(0.0);
+    if (agg_ == Aggregation::kConstant) {
+      using std::exp;
+      beta_constant = exp(c.par(kLnBeta0));
+    }
     for (size_t q = 0; q < pairs_.size(); ++q) {
       const Pair& pr = pairs_[q];
       const int j = pr.j, k = pr.k;
@@ -512,12 +582,11 @@ class FluidBed : public UnitBase<FluidBed> {
         beta = p1::agglomeration_kernel(cf, p1::geometric_success_factor(fwet[j], fwet[k]),
                                         p1::physical_success_factor(sticky[j], sticky[k]));          // Eq. (39)
       } else {
-        using std::exp;
-        beta = exp(c.par(kLnBeta0));
+        beta = beta_constant;
       }
       // events per second: 1/2 beta N_j^2 for like pairs, beta N_j N_k otherwise (Eq. (21) and (24))
       const T events = (j == k ? 0.5 : 1.0) * scale * beta * number[j] * number[k];
-      const T mj = events * particle_mass_[j], mk = events * particle_mass_[k];
+      const T mj = events * pm[j], mk = events * pm[k];
       const T m_agg = mj + mk, w_agg = mj * X[j] + mk * X[k];
       dM[j] -= mj;
       dM[k] -= mk;
@@ -530,7 +599,7 @@ class FluidBed : public UnitBase<FluidBed> {
         dM[pr.a + 1] += up * m_agg;
         dW[pr.a + 1] += up * w_agg;
       }
-      if (pr.beyond > 0) *beyond += m_agg;
+      if (pr.beyond) *beyond += m_agg;
     }
   }
 
@@ -563,9 +632,10 @@ class FluidBed : public UnitBase<FluidBed> {
   // Drying rate (Eqs. (70)-(80)) and gas-to-solid heat flow (Eqs. (85)-(89)) of class i; returns whether the
   // Eq. (80) regularization replaced the literal equation.
   template <class T>
-  bool class_transfer(int i, const T& m, const T& w, const GasSide<T>& g, const T* par, T* dry, T* q) const {
+  bool class_transfer(int i, const T& m, const T& w, const T& particle_mass, const GasSide<T>& g, const T* par, T* dry,
+                      T* q) const {
     const T di(grid_->diameter_pivots()[i]);
-    const T area = kernels::class_surface(T(m / particle_mass_[i]), di);  // N_i pi d_i^2 (PAPER001_DECISIONS)
+    const T area = kernels::class_surface(T(m / particle_mass), di);  // N_i pi d_i^2 (PAPER001_DECISIONS)
     const T re0 = tr::particle_reynolds_number(g.u0, di, g.nu);                                  // Eq. (76)
     const T shb = tr::bulk_sherwood(tr::sherwood_single(re0, g.sc), re0, g.sc, g.ratio, par[kShCorr]);  // (74), (75)
     const T j = p1::drying_mass_flux(g.rho_da, tr::mass_transfer_coefficient(shb, par[kDv], di), g.y_sat, g.y);  // (72), (73)
@@ -577,44 +647,26 @@ class FluidBed : public UnitBase<FluidBed> {
   }
 
   // A_p / A_inlet of Eqs. (74), (87): total particle surface of the bed over the cross-section; its derivative
-  // with respect to M_i is the constant surface_per_mass_[i] / A_bed.
+  // with respect to M_i is the constant surface per mass spm[i] / A_bed.
   template <class T>
-  T area_ratio(const Ctx<T>& c) const {
+  T area_ratio(const Ctx<T>& c, const T* spm) const {
     T surface(0.0);
-    for (int i = 0; i < n_; ++i) surface += c.x_(i) * surface_per_mass_[i];
+    for (int i = 0; i < n_; ++i) surface += c.x_(i) * spm[i];
     return tr::bed_area_ratio(surface, c.par(kABed));
   }
 
   // Drying and heat transfer of every class; counts the regularizations that replaced the literal equations.
   template <class T>
-  void transfer(const Ctx<T>& c, T* dry, T* q, int* reg_eta, int* reg_a) const {
+  void transfer(const Ctx<T>& c, const Tables<T>& tb, T* dry, T* q, int* reg_eta, int* reg_a) const {
     const GasSide<T> g = gas_side(c.x_(sT_), c.port(kGasProbe, gas::kT), c.port(kGasProbe, gas::kY),
-                                  c.port(kGasProbe, gas::kP), c.x_(sU0_), area_ratio(c), c.p);
+                                  c.port(kGasProbe, gas::kP), c.x_(sU0_), area_ratio(c, tb.spm), c.p);
     *reg_a += g.activity_capped + g.saturation_capped;
     *q = T(0.0);
     for (int i = 0; i < n_; ++i) {
       T qi;
-      *reg_eta += class_transfer(i, c.x_(i), c.x_(n_ + i), g, c.p, &dry[i], &qi);
+      *reg_eta += class_transfer(i, c.x_(i), c.x_(n_ + i), tb.pm[i], g, c.p, &dry[i], &qi);
       *q += qi;
     }
-  }
-
-  // Diameter below which a fraction q of the mass lies: the cumulative mass Q3 is known at the cell edges and
-  // interpolated linearly in ln d between them (mass spread log-uniformly inside a cell).
-  double quantile(const std::vector<double>& mass, double q) const {
-    const auto& e = grid_->diameter_edges();
-    double total = 0;
-    for (double m : mass) total += m;
-    double below = 0;
-    for (int i = 0; i < n_; ++i) {
-      const double next = below + mass[i] / total;
-      if (next >= q && mass[i] > 0) {
-        const double f = (q - below) / (next - below);
-        return std::exp(std::log(e[i]) + f * (std::log(e[i + 1]) - std::log(e[i])));
-      }
-      below = next;
-    }
-    return e[n_];
   }
 
   int n_ = def::kSizeClasses;
@@ -628,7 +680,9 @@ class FluidBed : public UnitBase<FluidBed> {
   p1::BreakageSizeUnit size_unit_ = p1::BreakageSizeUnit::kMicrometre;
   std::unique_ptr<kernels::Grid> grid_;
   std::vector<Pair> pairs_;
-  std::vector<double> shape_, frag_, particle_mass_, surface_per_mass_, init_frac_, cf_;
+  std::vector<double> shape_, frag_, particle_mass_, surface_per_mass_, cf_;
+  mutable Scratch<double> sd_;
+  mutable Scratch<Jet> sj_;
 };
 
 }  // namespace

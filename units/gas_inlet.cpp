@@ -32,6 +32,7 @@ class GasInlet : public UnitBase<GasInlet> {
     s.add_output("balance_water_in", "kg");
     s.add_output("balance_energy_in", "J");
   }
+  // Dry-air mass flow of the volume flow V_dot on the chosen basis (PAPER001_DECISIONS: inlet state by default).
   template <class T>
   T dry_mass_flow(const T* p) const {
     const T t_basis = normal_basis_ ? T(props::kT0) : p[kT];

@@ -1,6 +1,7 @@
 #include "liquid_feed.hpp"
 
 #include "granuflow/properties.hpp"
+#include "kernels/paper001_defaults.hpp"
 
 namespace granuflow::units {
 namespace {
@@ -9,14 +10,15 @@ class LiquidFeed : public UnitBase<LiquidFeed> {
  public:
   std::string type() const override { return "liquid_feed"; }
   void declare(UnitSpec& s, Settings&) override {
-    s.add_param({"mdot", "kg/s", 0.1, 0.0, 1e3, "liquid mass flow", ""});
-    s.add_param({"T", "K", 293.15, 200.0, 700.0, "liquid temperature", ""});
-    s.add_param({"w", "kg/kg", 0.0, 0.0, 1.0, "dissolved-solids mass fraction", ""});
+    s.add_param({"mdot", "kg/s", 0.1, 0.0, 1e3, "liquid mass flow", "operating input"});
+    s.add_param({"T", "K", 293.15, 200.0, 700.0, "liquid temperature", "operating input"});
+    s.add_param({"w", "kg/kg", 0.0, 0.0, 1.0, "dissolved-solids mass fraction", "operating input"});
     s.add_state("mdot", StateKind::Algebraic, "kg/s", 0.1);
     s.add_state("T", StateKind::Algebraic, "K", 300.0);
     s.add_state("w", StateKind::Algebraic, "kg/kg", 1.0);
     s.provide_all(s.add_port("out", StreamKind::Liquid, PortDir::Out), 0);
-    s.add_param({"cp", "J/(kg K)", 4180.0, 1.0, 1e5, "heat capacity for the enthalpy account (above 0 degC)", ""});
+    s.add_param({"cp", "J/(kg K)", kernels::paper001::defaults::kLiquidCp, 1.0, 1e5,
+                 "heat capacity for the enthalpy account (above 0 degC)", "water, paper 001, Table 6"});
     // Cumulative amounts fed, so balances close from states rather than from quadrature of outputs.
     s.add_state("mass_in", StateKind::Differential, "kg", 100.0);
     s.add_state("solute_in", StateKind::Differential, "kg", 1.0);

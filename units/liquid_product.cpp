@@ -1,6 +1,7 @@
 #include "liquid_product.hpp"
 
 #include "granuflow/properties.hpp"
+#include "kernels/paper001_defaults.hpp"
 
 namespace granuflow::units {
 namespace {
@@ -9,7 +10,8 @@ class LiquidProduct : public UnitBase<LiquidProduct> {
  public:
   std::string type() const override { return "liquid_product"; }
   void declare(UnitSpec& s, Settings&) override {
-    s.add_param({"cp", "J/(kg K)", 4180.0, 1.0, 1e5, "heat capacity used for the enthalpy account", ""});
+    s.add_param({"cp", "J/(kg K)", kernels::paper001::defaults::kLiquidCp, 1.0, 1e5,
+                 "heat capacity used for the enthalpy account", "water, paper 001, Table 6"});
     s.add_state("mass", StateKind::Differential, "kg", 100.0);
     s.add_state("solute", StateKind::Differential, "kg", 1.0);
     s.add_state("enthalpy", StateKind::Differential, "J", 1e8);

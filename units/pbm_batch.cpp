@@ -22,6 +22,7 @@
 #include "kernels/discretization/initial_distribution.hpp"
 #include "kernels/discretization/psd.hpp"
 #include "kernels/registry.hpp"
+#include "size_grid_settings.hpp"
 
 namespace granuflow::units {
 namespace {
@@ -151,10 +152,9 @@ void PbmBatch::declare_grid(Settings& st) {
     const double d_min = st.get_real("d_min", 50e-6, 1e-9, 1.0, "smallest pivot diameter, m");
     const double d_max = st.get_real("d_max", 1000e-6, 1e-9, 1.0, "largest pivot diameter, m");
     const long classes = st.get_int("classes", 10, 2, 2000, "number of classes");
-    if (!(d_max > d_min)) throw ConfigError(violation(st.where() + ".d_max", d_max, "m", "d_max > d_min"));
-    std::vector<double> d(classes);
-    for (long i = 0; i < classes; ++i) d[i] = d_min * std::pow(d_max / d_min, double(i) / double(classes - 1));
-    grid_ = std::make_unique<Grid>(Grid::from_diameter_pivots(d));
+    if (!(d_max > d_min))
+      throw ConfigError(violation(st.where() + ".d_max", d_max, "m", "d_max > d_min (" + std::to_string(d_min) + ")"));
+    grid_ = std::make_unique<Grid>(Grid::from_diameter_pivots(log_spaced(d_min, d_max, static_cast<int>(classes))));
   }
   n_ = grid_->size();
 }
@@ -195,13 +195,14 @@ void PbmBatch::declare(UnitSpec& s, Settings& st) {
   binning_ = binning_from_string(st.get_choice("initial_binning", "moments", {"moments", "number", "mass"},
                                                "how cell integrals go on the pivots"));
 
-  p_rho_ = s.add_param({"rho", "kg/m3", 1000.0, 1e-3, 1e5, "particle density (mass <-> volume)", ""});
+  p_rho_ = s.add_param(
+      {"rho", "kg/m3", 1000.0, 1e-3, 1e5, "particle density (mass <-> volume)", "material property (user)"});
   p_init_ = static_cast<int>(s.params().size());
   if (initial_ == Initial::kExponential) {
     s.add_param({"N0", "-", 1.0, 0.0, 1e30, "initial particle number", "VERIFY.md"});
     s.add_param({"v0", "m3", 1.0, 1e-30, 1e6, "initial mean particle volume", "VERIFY.md"});
   } else {
-    s.add_param({"mass0", "kg", 1.0, 0.0, 1e6, "initial particle mass", ""});
+    s.add_param({"mass0", "kg", 1.0, 0.0, 1e6, "initial particle mass", "initial state (user)"});
     s.add_param({"d50_3", "m", 200e-6, 1e-9, 1.0, "initial mass median diameter", "PAPER001_DECISIONS"});
     s.add_param({"sigma_g", "-", 1.5, 1.0001, 10.0, "initial geometric standard deviation", "PAPER001_DECISIONS"});
   }
@@ -227,12 +228,16 @@ void PbmBatch::declare(UnitSpec& s, Settings& st) {
         st.get_choice("growth_scheme", "fv_koren", reg.growth_schemes.names(), "growth scheme"), st.where());
 
   // Per-class state the kernels read; a batch unit has it as (uniform) parameters.
-  if (needs_.moisture) p_field_[0] = s.add_param({"X", "kg/kg", 0.0, 0.0, 10.0, "liquid loading of the particles", ""});
+  const std::string batch_value = "batch value for every class (user)";
+  if (needs_.moisture)
+    p_field_[0] = s.add_param({"X", "kg/kg", 0.0, 0.0, 10.0, "liquid loading of the particles", batch_value});
   if (needs_.spot_moisture)
     p_field_[1] = s.add_param({"X_spot", "kg/kg", 0.0, 0.0, 10.0, "moisture of the wet spots", "paper 001, Eq. (55)"});
-  if (needs_.temperature) p_field_[2] = s.add_param({"T", "K", 293.15, 200.0, 700.0, "particle temperature", ""});
+  if (needs_.temperature)
+    p_field_[2] = s.add_param({"T", "K", 293.15, 200.0, 700.0, "particle temperature", batch_value});
   if (needs_.liquid_fraction)
-    p_field_[3] = s.add_param({"liquid_fraction", "-", 0.0, 0.0, 1.0, "liquid volume / particle volume", ""});
+    p_field_[3] = s.add_param({"liquid_fraction", "-", 0.0, 0.0, 1.0, "liquid volume / particle volume",
+                               "paper 002, Eq. (13); " + batch_value});
 
   for (int i = 0; i < n_; ++i) s.add_state("N_" + std::to_string(i), StateKind::Differential, "-", number_scale);
   const double v_mid = grid_->pivot(n_ / 2);

@@ -1,5 +1,6 @@
 #include "spray_zone.hpp"
 
+#include <type_traits>
 #include <vector>
 
 #include "granuflow/flowsheet.hpp"
@@ -24,6 +25,8 @@ class SprayZone : public UnitBase<SprayZone> {
   void declare(UnitSpec& s, Settings& settings) override {
     d_ = log_spaced_pivots(settings);
     n_ = static_cast<int>(d_.size());
+    sd_.resize(n_);
+    sj_.resize(n_);
     split_ = p1::liquid_split_from_string(settings.get_choice(
         "liquid_split", "class_surface", {"class_surface", "literal"},
         "Eq. (44) weights: N_i tau_i d_i^2 (default, PAPER001_DECISIONS) or tau_i d_i^2 as printed"));
@@ -138,13 +141,12 @@ class SprayZone : public UnitBase<SprayZone> {
   void closures(const Ctx<T>& c, T* m_dep, T* fwet, T* xwet, int* ws_floored, int* vol_capped) const {
     const T& u0 = c.port(kBed, holdup::u0(n_));
     const GasProps<T> g = gas_props(c.port(kBed, holdup::T(n_)));
-    std::vector<ClassFlow<T>> f;
-    f.reserve(n_);
+    std::vector<ClassFlow<T>>& f = scratch<T>().flow;
     T sum(0.0);
     for (int i = 0; i < n_; ++i) {
-      f.push_back(class_flow(i, u0, g, c.p));
-      *ws_floored += f.back().ws_floored;
-      sum += split_weight(i, c.port(kBed, holdup::mass(i)), f.back(), c.p);
+      f[i] = class_flow(i, u0, g, c.p);
+      *ws_floored += f[i].ws_floored;
+      sum += split_weight(i, c.port(kBed, holdup::mass(i)), f[i], c.p);
     }
     const T& m_liquid = c.port(kLiquid, liquid::kMdot);
     for (int i = 0; i < n_; ++i)
@@ -200,9 +202,12 @@ class SprayZone : public UnitBase<SprayZone> {
 
   template <class T>
   Status eval(const Ctx<T>& c) const {
-    std::vector<T> m_dep(n_), fwet(n_), xwet(n_);
+    Scratch<T>& w = scratch<T>();
+    T* m_dep = w.m_dep.data();
+    T* fwet = w.fwet.data();
+    T* xwet = w.xwet.data();
     int a = 0, b = 0;
-    closures(c, m_dep.data(), fwet.data(), xwet.data(), &a, &b);
+    closures(c, m_dep, fwet, xwet, &a, &b);
     for (int i = 0; i < n_; ++i) {
       c.res(i) = c.x_(i) - m_dep[i];
       c.res(n_ + i) = c.x_(n_ + i) - fwet[i];
@@ -214,7 +219,7 @@ class SprayZone : public UnitBase<SprayZone> {
   template <class T>
   void init(InitCtx<T>& c) const {
     for (int i = 0; i < 3 * n_; ++i) c.x0[i] = T(0.0);
-    c.x0[3 * n_] = T(283.15);
+    c.x0[3 * n_] = T(def::kSprayTemperature);
   }
   void report(const Ctx<double>& c, double* out) const override {
     std::vector<double> m_dep(n_), fwet(n_), dx(n_);
@@ -231,10 +236,27 @@ class SprayZone : public UnitBase<SprayZone> {
   }
 
  private:
+  // Per scalar type work arrays of the residual, sized once in declare() (one solver evaluates the unit at a time).
+  template <class T>
+  struct Scratch {
+    std::vector<ClassFlow<T>> flow;
+    std::vector<T> m_dep, fwet, xwet;
+    void resize(int n) {
+      flow.resize(n);
+      m_dep.resize(n), fwet.resize(n), xwet.resize(n);
+    }
+  };
+  template <class T>
+  Scratch<T>& scratch() const {
+    if constexpr (std::is_same_v<T, double>) return sd_;
+    else return sj_;
+  }
   static constexpr double kMassFloor = 1e-12;  // kg: keeps X = W / M finite for an emptied class
   int n_ = def::kSizeClasses;
   std::vector<double> d_;
   p1::LiquidSplit split_ = p1::LiquidSplit::kClassSurface;
+  mutable Scratch<double> sd_;
+  mutable Scratch<Jet> sj_;
 };
 
 }  // namespace

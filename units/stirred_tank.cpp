@@ -1,6 +1,7 @@
 #include "stirred_tank.hpp"
 
 #include "granuflow/properties.hpp"
+#include "kernels/paper001_defaults.hpp"
 
 namespace granuflow::units {
 namespace {
@@ -9,11 +10,12 @@ class StirredTank : public UnitBase<StirredTank> {
  public:
   std::string type() const override { return "stirred_tank"; }
   void declare(UnitSpec& s, Settings&) override {
-    s.add_param({"mass", "kg", 100.0, 1e-6, 1e9, "liquid hold-up", ""});
-    s.add_param({"cp", "J/(kg K)", 4180.0, 1.0, 1e5, "heat capacity of the liquid", ""});
-    s.add_param({"Q", "W", 0.0, -1e9, 1e9, "heating duty", ""});
-    s.add_param({"T0", "K", 293.15, 200.0, 700.0, "initial temperature", ""});
-    s.add_param({"w0", "kg/kg", 0.0, 0.0, 1.0, "initial solute mass fraction", ""});
+    s.add_param({"mass", "kg", 100.0, 1e-6, 1e9, "liquid hold-up", "operating input"});
+    s.add_param({"cp", "J/(kg K)", kernels::paper001::defaults::kLiquidCp, 1.0, 1e5, "heat capacity of the liquid",
+                 "water, paper 001, Table 6"});
+    s.add_param({"Q", "W", 0.0, -1e9, 1e9, "heating duty", "operating input"});
+    s.add_param({"T0", "K", 293.15, 200.0, 700.0, "initial temperature", "initial state (user)"});
+    s.add_param({"w0", "kg/kg", 0.0, 0.0, 1.0, "initial solute mass fraction", "initial state (user)"});
     const int m = s.add_state("mdot", StateKind::Algebraic, "kg/s", 0.1);
     const int t = s.add_state("T", StateKind::Differential, "K", 300.0);
     const int w = s.add_state("w", StateKind::Differential, "kg/kg", 1.0);

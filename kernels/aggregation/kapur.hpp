@@ -12,7 +12,7 @@ class KapurKernel : public PairKernel<KapurKernel> {
  public:
   std::vector<ParamSpec> params() const override {
     return {{"beta0", "1/s", 1.0, 0.0, 1e6, "rate coefficient", "Kapur 1972"},
-            {"v_ref", "m3", 1.0, 1e-30, 1e6, "reference volume", ""},
+            reference_volume_param(),
             {"a", "-", 1.0, 0.0, 5.0, "exponent of the sum of the volumes", "Kapur 1972"},
             {"b", "-", 0.0, 0.0, 5.0, "exponent of the product of the volumes", "Kapur 1972"}};
   }

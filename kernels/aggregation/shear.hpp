@@ -11,7 +11,7 @@ class ShearKernel : public PairKernel<ShearKernel> {
  public:
   std::vector<ParamSpec> params() const override {
     return {{"shear_rate", "1/s", 1.0, 0.0, 1e6, "shear rate of the flow", "Smoluchowski 1917"},
-            {"volume", "m3", 1.0, 1e-12, 1e6, "volume shared by the particles", ""}};
+            {"volume", "m3", 1.0, 1e-12, 1e6, "volume shared by the particles", "per-pair basis (absolute numbers)"}};
   }
   template <class T>
   T pair(const ClassState<T>& s, int i, int j, const T* p) const {

@@ -10,7 +10,7 @@ class SumKernel : public PairKernel<SumKernel> {
  public:
   std::vector<ParamSpec> params() const override {
     return {{"beta0", "1/s", 1.0, 0.0, 1e6, "rate coefficient at u + v = v_ref", "Golovin 1963"},
-            {"v_ref", "m3", 1.0, 1e-30, 1e6, "reference volume", ""}};
+            reference_volume_param()};
   }
   template <class T>
   T pair(const ClassState<T>& s, int i, int j, const T* p) const {

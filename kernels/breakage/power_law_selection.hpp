@@ -11,9 +11,9 @@ namespace granuflow::kernels {
 class PowerLawSelection : public PerClassRate<PowerLawSelection> {
  public:
   std::vector<ParamSpec> params() const override {
-    return {{"s0", "1/s", 1.0, 0.0, 1e6, "selection rate at v = v_ref", ""},
-            {"v_ref", "m3", 1.0, 1e-30, 1e6, "reference volume", ""},
-            {"a", "-", 1.0, -5.0, 5.0, "exponent on the particle volume", ""}};
+    return {{"s0", "1/s", 1.0, 0.0, 1e6, "selection rate at v = v_ref", "Austin 1971 (power-law selection)"},
+            reference_volume_param(),
+            {"a", "-", 1.0, -5.0, 5.0, "exponent on the particle volume", "Austin 1971 (power-law selection)"}};
   }
   template <class T>
   T rate(const ClassState<T>& s, int i, const T* p) const {
@@ -27,7 +27,7 @@ class LinearSelection : public PerClassRate<LinearSelection> {
  public:
   std::vector<ParamSpec> params() const override {
     return {{"s0", "1/s", 1.0, 0.0, 1e6, "selection rate at v = v_ref", "Ziff & McGrady 1985"},
-            {"v_ref", "m3", 1.0, 1e-30, 1e6, "reference volume", ""}};
+            reference_volume_param()};
   }
   template <class T>
   T rate(const ClassState<T>& s, int i, const T* p) const {

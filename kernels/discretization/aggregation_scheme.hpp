@@ -45,4 +45,49 @@ bool skip_empty(const T& v) {
   else return false;
 }
 
+// The pair loop both schemes share (paper 001, Eqs. (21), (24)): for every pair j <= k, numbered p along the
+// row-major upper triangle, the event rate r = 1/2 beta_jj N_j^2 (j = k) or beta_jk N_j N_k; the partners' deaths
+// are subtracted from out here and birth(p, r) places the aggregates.
+template <class T, class Birth>
+void for_each_event(int n, const T* N, const T* beta, T* out, Birth&& birth) {
+  size_t p = 0;
+  for (int j = 0; j < n; ++j) {
+    if (skip_empty(N[j])) {
+      p += n - j;
+      continue;
+    }
+    const T* bj = beta + size_t(j) * n;
+    T death = bj[j] * N[j] * N[j];  // the j = k pair: 1/2 beta N_j^2 events, two particles each
+    birth(p++, T(0.5 * death));
+    for (int k = j + 1; k < n; ++k, ++p) {
+      const T r = bj[k] * N[j] * N[k];
+      death += r;
+      out[k] -= r;
+      birth(p, r);
+    }
+    out[j] -= death;
+  }
+}
+
+// Derivative of for_each_event with respect to N (J row-major, n columns): the deaths' part is added to J here;
+// birth(p, j, k, dr/dN_j, dr/dN_k) places the births' part (for j = k only dr/dN_j = beta N_j, and dr/dN_k = 0).
+template <class Birth>
+void for_each_event_jacobian(int n, const double* N, const double* beta, double* J, Birth&& birth) {
+  size_t p = 0;
+  for (int j = 0; j < n; ++j) {
+    const double* bj = beta + size_t(j) * n;
+    const double djj = bj[j] * N[j];  // r = 1/2 beta N_j^2: dr/dN_j = beta N_j; class j loses 2 r
+    J[size_t(j) * n + j] -= 2.0 * djj;
+    birth(p++, j, j, djj, 0.0);
+    for (int k = j + 1; k < n; ++k, ++p) {
+      const double dj = bj[k] * N[k], dk = bj[k] * N[j];  // dr/dN_j, dr/dN_k of r = beta N_j N_k
+      J[size_t(j) * n + j] -= dj;
+      J[size_t(j) * n + k] -= dk;
+      J[size_t(k) * n + j] -= dj;
+      J[size_t(k) * n + k] -= dk;
+      birth(p, j, k, dj, dk);
+    }
+  }
+}
+
 }  // namespace granuflow::kernels

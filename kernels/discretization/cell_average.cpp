@@ -20,34 +20,16 @@ void CellAverageAggregation::add_jacobian(const double* N, const double* beta, d
   std::vector<double> B(n + 1, 0.0), V(n + 1, 0.0);
   db_.assign(size_t(n + 1) * n, 0.0);
   dv_.assign(size_t(n + 1) * n, 0.0);
-  size_t p = 0;
-  for (int j = 0; j < n; ++j) {
-    const double* bj = beta + size_t(j) * n;
-    {
-      const int c = cell_[p];
-      const double djj = bj[j] * N[j];  // d(1/2 beta N_j^2)/dN_j
-      B[c] += 0.5 * djj * N[j];
-      V[c] += 0.5 * vsum_[p] * djj * N[j];
-      J[size_t(j) * n + j] -= 2.0 * djj;
-      db_[size_t(c) * n + j] += djj;
-      dv_[size_t(c) * n + j] += vsum_[p] * djj;
-      ++p;
-    }
-    for (int k = j + 1; k < n; ++k, ++p) {
-      const int c = cell_[p];
-      const double dj = bj[k] * N[k], dk = bj[k] * N[j];
-      B[c] += dj * N[j];
-      V[c] += vsum_[p] * dj * N[j];
-      J[size_t(j) * n + j] -= dj;
-      J[size_t(j) * n + k] -= dk;
-      J[size_t(k) * n + j] -= dj;
-      J[size_t(k) * n + k] -= dk;
-      double* dbc = &db_[size_t(c) * n];
-      double* dvc = &dv_[size_t(c) * n];
-      dbc[j] += dj, dbc[k] += dk;
-      dvc[j] += vsum_[p] * dj, dvc[k] += vsum_[p] * dk;
-    }
-  }
+  for_each_event_jacobian(n, N, beta, J, [&](size_t p, int j, int k, double dj, double dk) {
+    const int c = cell_[p];
+    const double h = j == k ? 0.5 : 1.0;  // r = h beta N_j N_k
+    B[c] += h * dj * N[j];
+    V[c] += h * vsum_[p] * dj * N[j];
+    double* dbc = &db_[size_t(c) * n];
+    double* dvc = &dv_[size_t(c) * n];
+    dbc[j] += dj, dbc[k] += dk;
+    dvc[j] += vsum_[p] * dj, dvc[k] += vsum_[p] * dk;
+  });
   SplitRow rows[3];
   for (int c = 0; c < n; ++c) {
     const int m = split_rows(*grid_, side(c, B[c], V[c]), rows);

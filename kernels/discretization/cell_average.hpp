@@ -19,26 +19,10 @@ class CellAverageAggregation : public AggregationSchemeT<CellAverageAggregation>
     auto& V = scratch<T>().v;
     B.assign(n_ + 1, T(0.0));
     V.assign(n_ + 1, T(0.0));
-    size_t p = 0;
-    for (int j = 0; j < n_; ++j) {
-      if (skip_empty(N[j])) {
-        p += n_ - j;
-        continue;
-      }
-      const T* bj = beta + size_t(j) * n_;
-      T death = bj[j] * N[j] * N[j];
-      B[cell_[p]] += 0.5 * death;
-      V[cell_[p]] += (0.5 * vsum_[p]) * death;
-      ++p;
-      for (int k = j + 1; k < n_; ++k, ++p) {
-        const T r = bj[k] * N[j] * N[k];
-        death += r;
-        out[k] -= r;
-        B[cell_[p]] += r;
-        V[cell_[p]] += vsum_[p] * r;
-      }
-      out[j] -= death;
-    }
+    for_each_event(n_, N, beta, out, [&](size_t p, const T& r) {
+      B[cell_[p]] += r;
+      V[cell_[p]] += vsum_[p] * r;
+    });
     for (int c = 0; c < n_; ++c)
       if (!skip_empty(B[c])) split_between(*grid_, side(c, B[c], V[c]), B[c], V[c], out);
     out[n_ + kNumberAbove] += B[n_];  // aggregates beyond the top edge leave whole

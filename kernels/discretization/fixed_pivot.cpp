@@ -31,23 +31,10 @@ void FixedPivotAggregation::add_jacobian(const double* N, const double* beta, do
         if (w.row >= 0) J[size_t(w.row) * n + col] += w.w * d;
     }
   };
-  size_t p = 0;
-  for (int j = 0; j < n; ++j) {
-    const double* bj = beta + size_t(j) * n;
-    // j = k: r = 1/2 beta N_j^2, dr/dN_j = beta N_j; class j loses 2 r.
-    const double djj = bj[j] * N[j];
-    J[size_t(j) * n + j] -= 2.0 * djj;
-    add_birth(p++, j, djj);
-    for (int k = j + 1; k < n; ++k, ++p) {
-      const double dj = bj[k] * N[k], dk = bj[k] * N[j];  // dr/dN_j, dr/dN_k of r = beta N_j N_k
-      J[size_t(j) * n + j] -= dj;
-      J[size_t(j) * n + k] -= dk;
-      J[size_t(k) * n + j] -= dj;
-      J[size_t(k) * n + k] -= dk;
-      add_birth(p, j, dj);
-      add_birth(p, k, dk);
-    }
-  }
+  for_each_event_jacobian(n, N, beta, J, [&](size_t p, int j, int k, double dj, double dk) {
+    add_birth(p, j, dj);
+    if (k != j) add_birth(p, k, dk);
+  });
 }
 
 }  // namespace granuflow::kernels

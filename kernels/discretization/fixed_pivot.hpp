@@ -13,23 +13,7 @@ class FixedPivotAggregation : public AggregationSchemeT<FixedPivotAggregation> {
 
   template <class T>
   void rates(const T* N, const T* beta, T* out) const {
-    size_t p = 0;
-    for (int j = 0; j < n_; ++j) {
-      if (skip_empty(N[j])) {
-        p += n_ - j;
-        continue;
-      }
-      const T* bj = beta + size_t(j) * n_;
-      T death = bj[j] * N[j] * N[j];  // the j = k pair: 1/2 beta N_j^2 events, two particles each
-      scatter(p++, 0.5 * death, out);
-      for (int k = j + 1; k < n_; ++k, ++p) {
-        const T r = bj[k] * N[j] * N[k];
-        death += r;
-        out[k] -= r;
-        scatter(p, r, out);
-      }
-      out[j] -= death;
-    }
+    for_each_event(n_, N, beta, out, [&](size_t p, const T& r) { scatter(p, r, out); });
   }
 
  private:

@@ -99,18 +99,26 @@ void FvGrowth::face_rates(const T* G, const std::vector<Face<T>>& fc, T* out) co
 }
 
 template <class T>
-T FvGrowth::rates(const T* N, const GrowthTerms<T>& g, T* out) const {
+void FvGrowth::faces_and_growth(const T* N, const GrowthTerms<T>& g, std::vector<Face<T>>& fc, std::vector<T>& G,
+                                std::vector<T>& inv_integral) const {
   const int nf = n_ + 1;
-  std::vector<Face<T>> fc(nf);
-  std::vector<T> G, inv;
+  fc.resize(nf);
   if (g.normalized) {
     // Volume-normalized laws grow (a_k >= 0, s_k >= 0): upwind from below.
     for (int f = 0; f < nf; ++f) fc[f] = face(N, f, true);
-    growth_at_faces(fc, g, G, inv);
+    growth_at_faces(fc, g, G, inv_integral);
   } else {
-    growth_at_faces(fc, g, G, inv);  // phi is not needed for absolute laws
+    growth_at_faces(fc, g, G, inv_integral);  // phi is not needed for absolute laws
     for (int f = 0; f < nf; ++f) fc[f] = face(N, f, !(G[f] < 0.0));
   }
+}
+
+template <class T>
+T FvGrowth::rates(const T* N, const GrowthTerms<T>& g, T* out) const {
+  const int nf = n_ + 1;
+  std::vector<Face<T>> fc;
+  std::vector<T> G, inv;
+  faces_and_growth(N, g, fc, G, inv);
   face_rates(G.data(), fc, out);
   T W(0.0);
   for (int f = 0; f < nf; ++f) W += G[f] * fc[f].phi * dx_face_[f];
@@ -124,15 +132,9 @@ Jet FvGrowth::add_rates(const Jet* N, const GrowthTerms<Jet>& g, Jet* out) const
 
 void FvGrowth::add_jacobian(const double* N, const GrowthTerms<double>& g, double* J, double* dW) const {
   const int n = n_, nf = n_ + 1;
-  std::vector<Face<double>> fc(nf);
+  std::vector<Face<double>> fc;
   std::vector<double> G, inv;
-  if (g.normalized) {
-    for (int f = 0; f < nf; ++f) fc[f] = face(N, f, true);
-    growth_at_faces(fc, g, G, inv);
-  } else {
-    growth_at_faces(fc, g, G, inv);
-    for (int f = 0; f < nf; ++f) fc[f] = face(N, f, !(G[f] < 0.0));
-  }
+  faces_and_growth(N, g, fc, G, inv);
   // dF_f/dN_l = G_f dphi_f/dN_l + phi_f dG_f/dN_l; the second term only for normalized laws, where
   // dG_f/dN_l = -sum_k a_k s_kf / I_k^2 dI_k/dN_l and dI_k/dN_l = sum_f' s_kf' dx_f' dphi_f'/dN_l.
   std::vector<double> dF(size_t(nf) * n, 0.0);

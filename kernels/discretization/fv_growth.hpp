@@ -57,6 +57,10 @@ class FvGrowth {
   Face<T> face(const T* N, int f, bool upward) const;
   template <class T>
   void face_rates(const T* G, const std::vector<Face<T>>& fc, T* out) const;
+  // Face densities (upwind by the sign of G) and the growth rates at the faces, shared by rates and Jacobian.
+  template <class T>
+  void faces_and_growth(const T* N, const GrowthTerms<T>& g, std::vector<Face<T>>& fc, std::vector<T>& G,
+                        std::vector<T>& inv_integral) const;
   template <class T>
   T rates(const T* N, const GrowthTerms<T>& g, T* out) const;
   template <class T>

@@ -33,12 +33,17 @@ void mass_density(const Grid& g, const double* N, double rho, double* out) {
 }
 
 double characteristic_diameter(const Grid& g, const double* N, double x) {
+  std::vector<double> volume(g.size());
+  for (int i = 0; i < g.size(); ++i) volume[i] = N[i] * g.pivot(i);
+  return characteristic_diameter_of_mass(g.diameter_edges(), volume.data(), x);
+}
+
+double characteristic_diameter_of_mass(const std::vector<double>& d, const double* mass, double x) {
   if (!(x > 0 && x < 1)) throw ConfigError(violation("characteristic diameter fraction", x, "", "0 < x < 1"));
-  const int n = g.size();
+  const int n = static_cast<int>(d.size()) - 1;
   std::vector<double> q(n + 1, 0.0);
-  for (int i = 0; i < n; ++i) q[i + 1] = q[i] + std::max(0.0, N[i]) * g.pivot(i);
+  for (int i = 0; i < n; ++i) q[i + 1] = q[i] + std::max(0.0, mass[i]);
   if (!(q[n] > 0)) return std::nan("");
-  const auto& d = g.diameter_edges();
   for (int i = 0; i < n; ++i) {
     const double lo = q[i] / q[n], hi = q[i + 1] / q[n];
     if (hi >= x && hi > lo) return d[i] * std::pow(d[i + 1] / d[i], (x - lo) / (hi - lo));

@@ -5,6 +5,8 @@
 // interpolated linearly in ln d inside a cell (the class's mass spread uniformly over ln d):
 //     d_x = d_i (d_{i+1} / d_i)^((x - Q3(d_i)) / (Q3(d_{i+1}) - Q3(d_i))).
 #pragma once
+#include <vector>
+
 #include "discretization/grid.hpp"
 
 namespace granuflow::kernels {
@@ -19,5 +21,8 @@ void volume_density(const Grid& g, const double* N, double* out);
 void mass_density(const Grid& g, const double* N, double rho, double* out);
 // Mass-based characteristic diameter d_{x,3}, m; NaN for an empty population.
 double characteristic_diameter(const Grid& g, const double* N, double x);
+// The same from the mass (or volume) of each of the n cells between the n + 1 diameter edges (m); negative
+// amounts count as empty.
+double characteristic_diameter_of_mass(const std::vector<double>& diameter_edges, const double* mass, double x);
 
 }  // namespace granuflow::kernels
