@@ -16,4 +16,4 @@ from .result import Result
 
 __version__ = "0.1.0"
 __all__ = ["load", "load_text", "Flowsheet", "Result", "ConfigError", "SolverError", "CalibrationError",
-           "unit_types", "__version__"]
+           "unit_types", "register_kernel", "aggregation_kernels", "__version__"]

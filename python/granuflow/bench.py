@@ -27,7 +27,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 
 
 def _repo_root() -> str:
-    # build/python/granuflow -> repo root is recorded by CMake next to the launcher; fall back to cwd
+    # the working folder when run from the repository, else the repository holding python/granuflow
     for cand in (os.getcwd(), os.path.abspath(os.path.join(HERE, "..", "..", ".."))):
         if os.path.exists(os.path.join(cand, "flowsheets")):
             return cand
@@ -102,13 +102,18 @@ def scene_variant_text(path: str, classes: int, breakage: bool = True) -> str:
     return yaml.safe_dump(doc, sort_keys=False)
 
 
+def _bench_script(name: str, what: str, hint: str) -> str:
+    """tests/bench/<name> of the source tree; FileNotFoundError naming ``what`` and ``hint`` if missing."""
+    script = os.path.join(_source_dir(_build_dir()), "tests", "bench", name)
+    if not os.path.exists(script):
+        raise FileNotFoundError(f"{what} {script} does not exist (source tree of {_build_dir()}); {hint}")
+    return script
+
+
 def scipy_scene_script() -> str:
     """tests/bench/scipy_gf25_batch.py of the source tree; FileNotFoundError if missing."""
-    script = os.path.join(_source_dir(_build_dir()), "tests", "bench", "scipy_gf25_batch.py")
-    if not os.path.exists(script):
-        raise FileNotFoundError(f"the SciPy implementation of the headline scene {script} does not exist (source "
-                                f"tree of {_build_dir()}); pass scipy=False to time granuflow only")
-    return script
+    return _bench_script("scipy_gf25_batch.py", "the SciPy implementation of the headline scene",
+                         "pass scipy=False to time granuflow only")
 
 
 def bench_scene(repeats: int, classes=(10, 20, 40), scipy: bool = True, scipy_repeats: int = 3,
@@ -230,10 +235,7 @@ def bench_pbm(*, quick: bool = False, repeats: int = 5, scipy: bool = True, case
         print(f"running {exe} {' '.join(flags)}", file=sys.stderr, flush=True)
     records = _json_lines([exe, "--json", *flags], "granuflow_bench_pbm")
     if scipy:
-        script = os.path.join(_source_dir(_build_dir()), "tests", "bench", "scipy_fixed_pivot.py")
-        if not os.path.exists(script):
-            raise FileNotFoundError(f"the SciPy baseline {script} does not exist (source tree of "
-                                    f"{_build_dir()}); pass scipy=False to run granuflow only")
+        script = _bench_script("scipy_fixed_pivot.py", "the SciPy baseline", "pass scipy=False to run granuflow only")
         if progress:
             print(f"running {sys.executable} {script} {' '.join(flags)}", file=sys.stderr, flush=True)
         records += _json_lines([sys.executable, script, "--json", *flags], "scipy_fixed_pivot.py")
@@ -463,16 +465,6 @@ def bench_sweep(*, n: int = 25, repeats: int = 3, workers: int = 2, dask: bool =
     return records
 
 
-def _main_sweep(args) -> int:
-    records = bench_sweep(repeats=args.repeats, progress=not args.json)
-    if args.json:
-        for r in records:
-            print(json.dumps(r))
-    else:
-        print("\n".join(sweep_summary(records)))
-    return 0
-
-
 def sweep_summary(records) -> list[str]:
     r0 = records[0]
     lines = [f"Contour map {r0['grid']} (d50,3 after 60 min over inlet T x spray rate, GF25 batch scene), median of "
@@ -488,27 +480,23 @@ def sweep_summary(records) -> list[str]:
     return lines
 
 
+def _core_summary(records) -> list[str]:
+    return ["  ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}" for k, v in r.items()
+                      if k not in ("machine", "cpu", "python", "date")) for r in records]
+
+
 def main(args) -> int:
-    if args.what == "sweep":  # design-space throughput (bench_sweep above)
-        return _main_sweep(args)
-    if args.what == "scene":
+    if args.what == "sweep":  # design-space throughput
+        records, summary = bench_sweep(repeats=args.repeats, progress=not args.json), sweep_summary
+    elif args.what == "scene":
         records = bench_scene(args.repeats, scipy=not args.no_scipy, scipy_repeats=max(1, min(3, args.repeats)),
                               progress=not args.json)
-        if not args.json:
-            print("\n".join(scene_summary(records)))
-            return 0
+        summary = scene_summary
     elif args.what == "pbm":
         records = bench_pbm(quick=getattr(args, "quick", False), repeats=args.repeats, progress=not args.json)
-        if not args.json:
-            print("\n".join(pbm_summary(records)))
-            return 0
+        summary = pbm_summary
     else:
-        records = bench_core(args.repeats)
-    if args.json:
-        for r in records:
-            print(json.dumps(r))
-    else:
-        for r in records:
-            print("  ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}" for k, v in r.items()
-                            if k not in ("machine", "cpu", "python", "date")))
+        records, summary = bench_core(args.repeats), _core_summary
+    for line in [json.dumps(r) for r in records] if args.json else summary(records):
+        print(line)
     return 0

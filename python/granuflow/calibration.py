@@ -57,8 +57,8 @@ Python::
 
     from granuflow import calibration as cal
     exps = cal.load_experiments("flowsheets/calibration/synthetic_gf25_table1.yaml")
-    plan = cal.load_stages("flowsheets/calibration/stages_paper001.yaml")
     fs = exps.flowsheet()
+    plan = cal.load_stages("flowsheets/calibration/stages_paper001.yaml", fs)
     res = cal.calibrate(fs, exps.calibration, plan.stages, start=plan.start, options=plan.options)
     rep = cal.report(fs, res, exps.calibration, exps.validation)
     rep.fit                      # R², RMSE per output and set;  res.estimates, res.correlation, res.history
@@ -71,8 +71,6 @@ import csv
 import json
 import math
 import os
-import sys
-import time
 from dataclasses import dataclass, field
 from typing import Any, Iterable, Mapping, Sequence
 
@@ -80,6 +78,8 @@ import numpy as np
 
 from . import _core
 from .flowsheet import Flowsheet, load
+from .plots import _plt
+from .sweep import _affine, _progress_bar, _split_quantity
 
 ConfigError = _core.ConfigError
 CalibrationError = _core.CalibrationError
@@ -110,9 +110,8 @@ _FREE_KEYS = ("transform", "lower", "upper", "logarithmic")
 # quantities
 # ------------------------------------------------------------------------------------------------
 def _split(text: str) -> tuple[float, str]:
-    parts = str(text).strip().split(None, 1)
     try:
-        return float(parts[0]), (parts[1].strip() if len(parts) > 1 else "")
+        return _split_quantity(str(text))
     except (ValueError, IndexError):
         raise ConfigError(f"'{text}': expected a number, optionally followed by a unit") from None
 
@@ -136,9 +135,8 @@ def _difference_to_si(value: Any, si_unit: str, where: str, unit: str = "") -> f
 
 
 def _from_si(values: np.ndarray, unit: str, si_unit: str) -> np.ndarray:
-    a = _core.to_si(1.0, unit, si_unit, "unit") - _core.to_si(0.0, unit, si_unit, "unit")
-    b = _core.to_si(0.0, unit, si_unit, "unit")
-    return (np.asarray(values, dtype=float) - b) / a
+    a, b = _affine(unit, si_unit, "unit")
+    return (np.asarray(values, dtype=float) - a) / b
 
 
 # ------------------------------------------------------------------------------------------------
@@ -245,18 +243,26 @@ def _read_csv(path: str) -> tuple[dict[str, list[float]], dict[str, str]]:
     return cols, {n: u for n, u in header}
 
 
+def _check_mapping(doc: Any, allowed: Sequence[str], where: str) -> dict:
+    """`doc` itself, checked to be a mapping with only the `allowed` keys."""
+    if not isinstance(doc, dict):
+        raise ConfigError(f"{where}: expected a mapping with keys {', '.join(allowed)}, got {doc!r}")
+    for k in doc:
+        if k not in allowed:
+            raise ConfigError(f"{where}: unknown key '{k}' (allowed: {', '.join(allowed)})")
+    return doc
+
+
 def _read_mapping(path: str, allowed: Sequence[str]) -> dict:
     """A YAML file whose top level is a mapping with only the `allowed` keys."""
     import yaml
 
     with open(path) as f:
-        doc = yaml.safe_load(f) or {}
-    if not isinstance(doc, dict):
-        raise ConfigError(f"{path}: expected a mapping at the top level")
-    for k in doc:
-        if k not in allowed:
-            raise ConfigError(f"{path}: unknown key '{k}' (allowed: {', '.join(allowed)})")
-    return doc
+        try:
+            doc = yaml.safe_load(f) or {}
+        except yaml.YAMLError as e:
+            raise ConfigError(f"{path}: not valid YAML ({' '.join(str(e).split())})") from None
+    return _check_mapping(doc, allowed, path)
 
 
 def load_experiments(path: str | os.PathLike, flowsheet: Flowsheet | None = None) -> ExperimentSet:
@@ -271,27 +277,28 @@ def load_experiments(path: str | os.PathLike, flowsheet: Flowsheet | None = None
     if fs is None:
         raise ConfigError(f"{path}: give `scene:` or pass a flowsheet")
     sc = fs._scene
-    defaults = doc.get("sigma", {}) or {}
+    defaults = doc.get("sigma") or {}
+    if not isinstance(defaults, dict):
+        raise ConfigError(f"{path}: sigma: expected a mapping observable -> {{abs: value [unit]}} or {{rel: fraction}}, "
+                          f"got {defaults!r}")
     runs = doc.get("runs")
     if not isinstance(runs, list) or not runs:
         raise ConfigError(f"{path}: `runs` must be a non-empty list")
     exps = []
     names = set()
     for i, run in enumerate(runs):
-        where = f"{path}: runs[{i}]"
-        if not isinstance(run, dict):
-            raise ConfigError(f"{where}: expected a mapping")
-        for k in run:
-            if k not in _RUN_KEYS:
-                raise ConfigError(f"{where}: unknown key '{k}' (allowed: {', '.join(_RUN_KEYS)})")
+        _check_mapping(run, _RUN_KEYS, f"{path}: runs[{i}]")
         name = str(run.get("name", f"run{i + 1}"))
         if name in names:
-            raise ConfigError(f"{where}: duplicate run name '{name}'")
+            raise ConfigError(f"{path}: runs[{i}]: duplicate run name '{name}'")
         names.add(name)
         where = f"{path}: run {name}"
         use = run.get("use", "calibration")
         if use not in ("calibration", "validation"):
             raise ConfigError(f"{where}.use = '{use}': not one of calibration, validation")
+        for k in ("set", "sigma"):
+            if not isinstance(run.get(k) or {}, dict):
+                raise ConfigError(f"{where}.{k}: expected a mapping, got {run[k]!r}")
         settings = {}
         for k, v in (run.get("set") or {}).items():
             settings[k] = _to_si(v, fs.spec(k)["unit"], f"{where}.set.{k}")
@@ -300,7 +307,13 @@ def load_experiments(path: str | os.PathLike, flowsheet: Flowsheet | None = None
             cols, units = _read_csv(data if os.path.isabs(data) else os.path.join(base, data))
         elif isinstance(data, dict):
             units = dict(data.get("units", {}) or {})
-            cols = {k: [math.nan if x is None else float(x) for x in v] for k, v in data.items() if k != "units"}
+            cols = {}
+            for k, v in data.items():
+                if k == "units":
+                    continue
+                if not isinstance(v, list) or not all(x is None or isinstance(x, (int, float)) for x in v):
+                    raise ConfigError(f"{where}.data.{k}: expected a list of numbers (null: not measured), got {v!r}")
+                cols[k] = [math.nan if x is None else float(x) for x in v]
         else:
             raise ConfigError(f"{where}.data: expected a CSV file name or a mapping of columns")
         if "t" not in cols:
@@ -419,7 +432,10 @@ def synthetic_experiments(flowsheet: Flowsheet, points: Sequence[Mapping], param
         settings = {k: _to_si(v, flowsheet.spec(k)["unit"], f"point {p.get('name')}.{k}") for k, v in p["set"].items()}
         obs = []
         for o in observables:
-            sa, sr = _sigma_entry(sigma[o], DISPLAY_SI.get(o, _core.observable_unit(flowsheet._scene, o)), f"sigma.{o}")
+            if o not in sigma:
+                raise ConfigError(f"sigma: no entry for observable {o} (given: {', '.join(sigma)})")
+            si_unit = DISPLAY_SI.get(o) or _core.observable_unit(flowsheet._scene, o)
+            sa, sr = _sigma_entry(sigma[o], si_unit, f"sigma.{o}")
             obs.append(Observation(o, times.copy(), np.zeros(len(times)), sa, sr))
         exps.append(Experiment(str(p.get("name")), settings, obs, float(times[-1]), str(p.get("kind", "")),
                                str(p.get("use", "calibration"))))
@@ -473,11 +489,16 @@ class StagePlan:
 
     def simultaneous(self) -> list[Stage]:
         """All free parameters at once against all observables (the comparison with the staged route)."""
-        free: dict[str, FreeParameter] = {}
-        for s in self.stages:
-            for f in s.free:
-                free.setdefault(f.name, f)
-        return [Stage("simultaneous", list(free.values()), [])]
+        return [Stage("simultaneous", _all_free(self.stages), [])]
+
+
+def _all_free(stages: Sequence[Stage]) -> list[FreeParameter]:
+    """The free parameters of all stages, each once (as first declared)."""
+    free: dict[str, FreeParameter] = {}
+    for s in stages:
+        for f in s.free:
+            free.setdefault(f.name, f)
+    return list(free.values())
 
 
 def load_stages(path: str | os.PathLike, flowsheet: Flowsheet) -> StagePlan:
@@ -488,13 +509,11 @@ def load_stages(path: str | os.PathLike, flowsheet: Flowsheet) -> StagePlan:
     options = dict(doc.get("options") or {})
     stages: list[Stage] = []
     seen: dict[str, FreeParameter] = {}
+    if not isinstance(doc.get("stages") or [], list):
+        raise ConfigError(f"{path}: stages: expected a list of stages, got {doc['stages']!r}")
     for i, st in enumerate(doc.get("stages") or []):
         where = f"{path}: stages[{i}]"
-        if not isinstance(st, dict):
-            raise ConfigError(f"{where}: expected a mapping")
-        for k in st:
-            if k not in _STAGE_KEYS:
-                raise ConfigError(f"{where}: unknown key '{k}' (allowed: {', '.join(_STAGE_KEYS)})")
+        _check_mapping(st, _STAGE_KEYS, where)
         name = str(st.get("name", f"stage{i + 1}"))
         free_spec = st.get("free")
         free: list[FreeParameter] = []
@@ -502,10 +521,7 @@ def load_stages(path: str | os.PathLike, flowsheet: Flowsheet) -> StagePlan:
             free = list(seen.values())
         elif isinstance(free_spec, dict):
             for p, spec in free_spec.items():
-                spec = spec or {}
-                for k in spec:
-                    if k not in _FREE_KEYS:
-                        raise ConfigError(f"{where}.free.{p}: unknown key '{k}' (allowed: {', '.join(_FREE_KEYS)})")
+                spec = _check_mapping(spec or {}, _FREE_KEYS, f"{where}.free.{p}")
                 u = flowsheet.spec(p)["unit"]
                 fp = FreeParameter(p, str(spec.get("transform", "none")),
                                    None if spec.get("lower") is None else _to_si(spec["lower"], u, f"{where}.free.{p}.lower"),
@@ -516,6 +532,8 @@ def load_stages(path: str | os.PathLike, flowsheet: Flowsheet) -> StagePlan:
         else:
             raise ConfigError(f"{where}.free: expected a mapping of parameters or 'inherit'")
         obs = st.get("observables", "all")
+        if obs not in ("all", None) and not isinstance(obs, list):
+            raise ConfigError(f"{where}.observables: expected a list of observables or 'all', got {obs!r}")
         obs = [] if obs in ("all", None) else [str(o) for o in obs]
         for o in obs:
             _core.observable_unit(flowsheet._scene, o)
@@ -653,6 +671,10 @@ def _core_list(exps: Iterable[Experiment]) -> list[dict]:
     return [e.to_core() for e in exps]
 
 
+def _options(options: Mapping[str, Any] | None) -> dict:
+    return {"num_threads": min(2, os.cpu_count() or 1), **dict(options or {})}
+
+
 def calibrate(flowsheet: Flowsheet, experiments: Sequence[Experiment], stages: Sequence[Stage] | StagePlan, *,
               start: Mapping[str, float] | None = None, options: Mapping[str, Any] | None = None,
               label: str = "") -> CalibrationResult:
@@ -665,8 +687,7 @@ def calibrate(flowsheet: Flowsheet, experiments: Sequence[Experiment], stages: S
         start = {**stages.start, **dict(start or {})}
         options = {**stages.options, **dict(options or {})}
         stages = stages.stages
-    opts = {"num_threads": min(2, os.cpu_count() or 1), **dict(options or {})}
-    raw = _core.calibrate(flowsheet._scene, _core_list(experiments), [s.to_core() for s in stages], opts,
+    raw = _core.calibrate(flowsheet._scene, _core_list(experiments), [s.to_core() for s in stages], _options(options),
                           {k: float(v) for k, v in dict(start or {}).items()})
     return CalibrationResult(raw, label=label)
 
@@ -674,8 +695,7 @@ def calibrate(flowsheet: Flowsheet, experiments: Sequence[Experiment], stages: S
 def predict(flowsheet: Flowsheet, experiments: Sequence[Experiment], params: Mapping[str, float] | None = None, *,
             options: Mapping[str, Any] | None = None) -> list[dict]:
     """Model at the sampled times: list of {experiment, observable, t, data, model, sigma} (SI)."""
-    opts = {"num_threads": min(2, os.cpu_count() or 1), **dict(options or {})}
-    return _core.predict(flowsheet._scene, _core_list(experiments), dict(params or {}), opts)
+    return _core.predict(flowsheet._scene, _core_list(experiments), dict(params or {}), _options(options))
 
 
 def _group_of(name: str) -> str:
@@ -741,11 +761,7 @@ class CalibrationReport:
 
     def parity_plots(self, out_dir: str) -> list[str]:
         """One PNG per output group (size, moisture, outlet gas temperature): model against data."""
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
+        plt = _plt()
         os.makedirs(out_dir, exist_ok=True)
         written = []
         for group, members in GROUPS.items():
@@ -846,14 +862,11 @@ def random_starts(stages: Sequence[Stage] | StagePlan, n: int, *, center: Mappin
     if isinstance(stages, StagePlan):
         stages = stages.stages
     rng = np.random.default_rng(seed)
-    free: dict[str, FreeParameter] = {}
-    for s in stages:
-        for f in s.free:
-            free.setdefault(f.name, f)
     starts = []
     for _ in range(n):
         p = {}
-        for name, f in free.items():
+        for f in _all_free(stages):
+            name = f.name
             c = float(center[name])
             u = rng.uniform(-spread, spread)
             if f.transform == "log":
@@ -881,16 +894,7 @@ def multi_start(flowsheet: Flowsheet, experiments: Sequence[Experiment], stages:
         plan_opts, plan_start, stages = stages.options, stages.start, stages.stages
     workers = workers or min(len(starts), os.cpu_count() or 1)
     opts = {**plan_opts, **dict(options or {}), "num_threads": 1}
-    bar = None
-    if progress is None:
-        progress = sys.stderr.isatty()
-    if progress:
-        try:
-            from tqdm import tqdm
-
-            bar = tqdm(total=len(starts), desc="calibration starts", unit="start", file=sys.stderr, leave=False)
-        except ImportError:
-            bar = None
+    bar = _progress_bar(progress, len(starts), "calibration starts", unit="start")
     results: list[CalibrationResult | Exception | None] = [None] * len(starts)
 
     def one(i: int):

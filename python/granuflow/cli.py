@@ -23,30 +23,54 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _parse_seconds(text: str) -> float:
-    from . import _core
+    from .sweep import _parse_time
 
-    parts = text.strip().split(None, 1)
-    try:
-        v = float(parts[0])
-    except ValueError:
-        raise _core.ConfigError(f"--t-end = '{text}': expected seconds, or a number with a time unit (e.g. '60 min')")
-    return _core.to_si(v, parts[1] if len(parts) > 1 else "", "s", "--t-end")
+    return _parse_time(text, "--t-end")
 
 
 def parse_sets(items) -> dict:
     """``--set unit.param=value`` options as {name: value text}; a malformed one is bad input."""
+    from ._core import ConfigError
+
     overrides = {}
     for item in items or []:
         if "=" not in item:
-            raise ValueError_(f"--set '{item}': expected unit.param=value")
+            raise ConfigError(f"--set '{item}': expected unit.param=value")
         name, value = item.split("=", 1)
         overrides[name.strip()] = value.strip()
     return overrides
 
 
 def check_workers(workers) -> None:
-    if workers is not None and workers < 1:
-        raise ValueError_(f"--workers = {workers}: expected an integer >= 1")
+    _check_at_least("--workers", workers, 1)
+
+
+def _check_at_least(option: str, value, lower) -> None:
+    from ._core import ConfigError
+
+    if value is not None and not value >= lower:
+        raise ConfigError(f"{option} = {value}: expected a number >= {lower}")
+
+
+def _plot_specs(fs) -> list[dict]:
+    """The scene's ``plots:`` list, checked before the run: each ``kind: psd`` or with ``y``, a list of names."""
+    from ._core import ConfigError
+
+    specs = fs.extra.get("plots") or []
+    where = f"{fs.path or fs.name}: plots"
+    if not isinstance(specs, list):
+        raise ConfigError(f"{where}: expected a list of plot mappings, got {specs!r}")
+    known = set(fs.state_names) | set(fs.output_names)
+    for k, spec in enumerate(specs):
+        if isinstance(spec, dict) and spec.get("kind") == "psd":
+            continue
+        if not isinstance(spec, dict) or not isinstance(spec.get("y"), list):
+            raise ConfigError(f"{where}[{k}] = {spec!r}: expected a mapping with y: [state or output names] "
+                              "(or kind: psd)")
+        for n in spec["y"]:
+            if n not in known:
+                raise ConfigError(f"{where}[{k}].y: '{n}' is neither a state nor an output of scene '{fs.name}'")
+    return specs
 
 
 def cmd_run(args) -> int:
@@ -54,9 +78,9 @@ def cmd_run(args) -> int:
 
     fs = load(args.scene)
     fs.update(parse_sets(args.set))
-    t_end = _parse_seconds(args.t_end) if args.t_end else None
-    if t_end is not None:
-        fs.set_t_end(t_end)
+    if args.t_end:
+        fs.set_t_end(_parse_seconds(args.t_end))
+    specs = _plot_specs(fs)
     res = fs.simulate()
     os.makedirs(args.out, exist_ok=True)
     summary = res.summary
@@ -64,9 +88,10 @@ def cmd_run(args) -> int:
         json.dump(summary, f, indent=2, allow_nan=False)
     res.timeseries.to_csv(os.path.join(args.out, "timeseries.csv"))
     written = ["summary.json", "timeseries.csv"]
-    for k, spec in enumerate(fs.extra.get("plots", []) or []):
+    has_psd = bool(res.psd_units())
+    for k, spec in enumerate(specs):
         if spec.get("kind") == "psd":
-            if res.psd_units():
+            if has_psd:
                 name = spec.get("file", "psd.png")
                 times = [t * 60.0 for t in spec["times_min"]] if "times_min" in spec else None
                 plots.plot_psd(res, os.path.join(args.out, name), times)
@@ -75,7 +100,7 @@ def cmd_run(args) -> int:
         name = spec.get("file", f"plot_{k}.png")
         plots.plot_series(res, spec, os.path.join(args.out, name))
         written.append(name)
-    if res.psd_units() and not any(s.get("kind") == "psd" for s in fs.extra.get("plots", []) or []):
+    if has_psd and not any(s.get("kind") == "psd" for s in specs):
         plots.plot_psd(res, os.path.join(args.out, "psd.png"))
         written.append("psd.png")
     if not args.quiet:
@@ -83,10 +108,6 @@ def cmd_run(args) -> int:
               f"({res.stats['steps']} steps); wrote {', '.join(written)} to {args.out}")
         print(json.dumps({k: summary[k] for k in summary if k not in ("solver",)}, indent=None))
     return 0
-
-
-class ValueError_(ValueError):
-    pass
 
 
 def cmd_sweep(args) -> int:
@@ -171,6 +192,7 @@ def cmd_describe(args) -> int:
 def cmd_bench(args) -> int:
     from . import bench
 
+    _check_at_least("--repeats", args.repeats, 1)
     return bench.main(args)
 
 
@@ -183,12 +205,14 @@ def cmd_calibrate(args) -> int:
     fs = exps.flowsheet()
     plan = cal.load_stages(args.stages, fs)
     if not exps.calibration:
-        raise ValueError_(f"{args.experiments}: no run has `use: calibration`")
+        raise cal.ConfigError(f"{args.experiments}: no run has `use: calibration`")
     options = dict(plan.options)
     check_workers(args.workers)
+    _check_at_least("--starts", args.starts, 1)
+    _check_at_least("--spread", args.spread, 0)
     if args.workers is not None:
         options["num_threads"] = args.workers
-    if args.starts and args.starts > 1:
+    if args.starts > 1:
         center = {**{f.name: fs.get(f.name) for s in plan.stages for f in s.free}, **plan.start}
         starts = [center] + cal.random_starts(plan, args.starts - 1, center=center, spread=args.spread, seed=args.seed)
         results = cal.multi_start(fs, exps.calibration, plan, starts, options=options, workers=args.workers,
@@ -288,7 +312,7 @@ def main(argv=None) -> int:
 
     try:
         return args.func(args)
-    except (_core.ConfigError, ValueError_, FileNotFoundError) as e:
+    except (_core.ConfigError, FileNotFoundError) as e:
         print(f"granuflow: bad input: {_one_line(e)}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except (_core.SolverError, _core.CalibrationError) as e:

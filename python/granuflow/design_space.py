@@ -117,12 +117,10 @@ def _si_unit(fs: Flowsheet, param: str) -> str:
 def _affine(fs: Flowsheet, param: str, unit: str, where: str) -> tuple[float, float]:
     si_unit = _si_unit(fs, param)
     try:
-        a = _core.to_si(0.0, unit, si_unit, param)
-        b = _core.to_si(1.0, unit, si_unit, param) - a
+        return sweep._affine(unit, si_unit, param)
     except ConfigError as e:
         raise ConfigError(f"{where}: unit '{unit}' does not fit {param} (SI unit {si_unit}): "
                           f"{' '.join(str(e).split())}") from None
-    return a, b
 
 
 def _parse_spec(spec, where: str, with_n: bool):
@@ -210,6 +208,19 @@ def _fixed_flowsheet(flowsheet: Flowsheet, fixed: Mapping[str, float | str] | No
     return fs
 
 
+def _map_axes(flowsheet: Flowsheet, x, y, fixed: Mapping[str, float | str] | None,
+              t_end: float | str | None) -> tuple[Flowsheet, Axis, Axis]:
+    """The flowsheet with ``fixed`` applied and the two axes of a map over it."""
+    fs = _fixed_flowsheet(flowsheet, fixed, t_end)
+    ax = make_axis(fs, x, "x")
+    ay = make_axis(fs, y, "y")
+    if ax.param == ay.param:
+        raise ConfigError(f"x and y: both vary {ax.param}")
+    if fixed and (ax.param in fixed or ay.param in fixed):
+        raise ConfigError(f"fixed: {ax.param if ax.param in fixed else ay.param} is a variable of the map")
+    return fs, ax, ay
+
+
 def _sim_kwargs(simulate: Mapping[str, Any] | None) -> dict:
     kw = {"n_out": 2}
     kw.update(simulate or {})
@@ -282,10 +293,6 @@ def parse_constraints(constraints) -> list[Constraint]:
     return out
 
 
-def _check_constraint_outputs(fs: Flowsheet, constraints: Sequence[Constraint]) -> None:
-    sweep._check_outputs(fs, [c.output for c in constraints], where="constraints")
-
-
 # ------------------------------------------------------------------------------------------------
 # contour maps
 # ------------------------------------------------------------------------------------------------
@@ -345,8 +352,8 @@ class ContourGrid:
         return df
 
 
-def _grid_points(x: Axis, y: Axis, extra: Mapping[str, float] | None = None) -> list[dict]:
-    return [{x.param: float(xs), y.param: float(ys), **(extra or {})} for ys in y.si for xs in x.si]
+def _grid_points(x: Axis, y: Axis) -> list[dict]:
+    return [{x.param: float(xs), y.param: float(ys)} for ys in y.si for xs in x.si]
 
 
 def contour_map(flowsheet: Flowsheet, x, y, outputs: Sequence[str] = ("d50_um",), *,
@@ -375,13 +382,7 @@ def contour_map(flowsheet: Flowsheet, x, y, outputs: Sequence[str] = ("d50_um",)
     ContourGrid
         Failed points hold NaN and their status/message.
     """
-    fs = _fixed_flowsheet(flowsheet, fixed, t_end)
-    ax = make_axis(fs, x, "x")
-    ay = make_axis(fs, y, "y")
-    if ax.param == ay.param:
-        raise ConfigError(f"x and y: both vary {ax.param}")
-    if fixed and (ax.param in fixed or ay.param in fixed):
-        raise ConfigError(f"fixed: {ax.param if ax.param in fixed else ay.param} is a variable of the map")
+    fs, ax, ay = _map_axes(flowsheet, x, y, fixed, t_end)
     outputs = sweep._check_outputs(fs, list(outputs))
     t0 = time.perf_counter()
     df = sweep.run_sweep(fs, _grid_points(ax, ay), outputs, workers=workers, progress=progress, executor=executor,
@@ -768,11 +769,7 @@ class _Problem:
                     self.fs.set(p, v)
             if self.outputs:
                 self.n_sim += 1
-                res = self.fs.simulate(**kw)
-                summary = res.summary
-                for o in self.outputs:
-                    v = summary[o] if o in summary else float(res[o][-1])
-                    values[o] = math.nan if v is None else float(v)
+                values = sweep._final_values(self.fs.simulate(**kw), self.outputs)
         except (SolverError, ConfigError) as e:
             status, message = sweep.STATUS_FAILED, " ".join(str(e).split())
             values = {o: math.nan for o in self.outputs}
@@ -992,6 +989,8 @@ def optimize(flowsheet: Flowsheet, objective: str, variables, constraints=None, 
                         if rec is not None else "returning the best feasible point evaluated.")
             rec = best
         elif rec is None:
+            if not prob.cache:  # NLopt stopped before its first evaluation
+                prob.evaluate(u0)
             rec = min(prob.cache.values(), key=lambda r: -min(r["margins"], default=0.0)
                       if all(map(math.isfinite, r["margins"])) else math.inf)
             message += "no feasible point found; returning the least infeasible point evaluated."
@@ -1073,13 +1072,7 @@ class _LinearizedPoint:
         self.sim_kwargs, self.steps, self.use_core, self.rel_step = sim_kwargs, steps, use_core, rel_step
 
     def _values(self, fs) -> dict:
-        res = fs.simulate(**self.sim_kwargs)
-        summary = res.summary
-        out = {}
-        for o in self.outputs:
-            v = summary[o] if o in summary else float(res[o][-1])
-            out[o] = math.nan if v is None else float(v)
-        return out
+        return sweep._final_values(fs.simulate(**self.sim_kwargs), self.outputs)
 
     def __call__(self, fs, item) -> dict:
         i, point = item
@@ -1129,8 +1122,8 @@ def probabilistic_design_space(flowsheet: Flowsheet, x, y, constraints, *, param
     P is the fraction of ``n_samples`` (default 20 000) draws of that normal distribution meeting all constraints
     (the same draws at every point, fixed ``seed``: the map is smooth and reproducible, and exactly 0 or 1 where
     the margin is many standard deviations). J comes from forward sensitivities (``_core.output_sensitivities``:
-    one sensitivity solve per point) when every constrained quantity is a reported output and the core provides
-    them (``sensitivities="auto"``/``"core"``), else from central differences with steps of 0.1 sigma
+    one sensitivity solve per point) when every constrained quantity is a reported output
+    (``sensitivities="auto"``/``"core"``), else from central differences with steps of 0.1 sigma
     (``sensitivities="fd"``: 2 simulations per parameter). ``method="monte_carlo"``: ``n_samples`` (default 64)
     parameter draws (fixed ``seed``, the same draws at every point) are simulated at every grid point; P is the
     fraction meeting all constraints. Failed simulations and draws outside the parameter bounds count as not
@@ -1140,15 +1133,15 @@ def probabilistic_design_space(flowsheet: Flowsheet, x, y, constraints, *, param
         raise ConfigError(f"method = {method!r}: expected 'linear' or 'monte_carlo'")
     if sensitivities not in ("auto", "core", "fd"):
         raise ConfigError(f"sensitivities = {sensitivities!r}: expected 'auto', 'core' or 'fd'")
-    fs = _fixed_flowsheet(flowsheet, fixed, t_end)
-    ax = make_axis(fs, x, "x")
-    ay = make_axis(fs, y, "y")
-    if ax.param == ay.param:
-        raise ConfigError(f"x and y: both vary {ax.param}")
+    n = n_samples if n_samples is not None else (64 if method == "monte_carlo" else 20000)
+    if not isinstance(n, (int, np.integer)) or isinstance(n, bool) or n < 1:
+        raise ConfigError(f"n_samples = {n_samples!r}: expected an integer >= 1")
+    n = int(n)
+    fs, ax, ay = _map_axes(flowsheet, x, y, fixed, t_end)
     cons = parse_constraints(constraints)
     if not cons:
         raise ConfigError("constraints: give at least one (e.g. {'d50_um': ('>=', 400)})")
-    _check_constraint_outputs(fs, cons)
+    sweep._check_outputs(fs, [c.output for c in cons], where="constraints")
     params = list(params)
     if not params:
         raise ConfigError("params: name the uncertain parameters")
@@ -1191,9 +1184,6 @@ def probabilistic_design_space(flowsheet: Flowsheet, x, y, constraints, *, param
     t0 = time.perf_counter()
 
     if method == "monte_carlo":
-        n = int(n_samples or 64)
-        if n < 1:
-            raise ConfigError(f"n_samples = {n_samples!r}: expected an integer >= 1")
         draws = mu + rng.standard_normal((n, k)) @ L.T
         points = [{**gp, **{p: float(d[j]) for j, p in enumerate(params)}} for gp in grid_pts for d in draws]
         df = sweep.run_sweep(fs, points, outputs, workers=workers, progress=progress, executor=executor,
@@ -1218,31 +1208,18 @@ def probabilistic_design_space(flowsheet: Flowsheet, x, y, constraints, *, param
                               len(points), int((~ok).sum()), time.perf_counter() - t0)
 
     # linear
-    n = int(n_samples or 20000)
-    if n < 1:
-        raise ConfigError(f"n_samples = {n_samples!r}: expected an integer >= 1")
     sources = [_summary_source(fs, o) for o in outputs]
-    core_ok = hasattr(_core, "output_sensitivities") and all(src in fs.output_names for src, _ in sources)
+    core_ok = all(src in fs.output_names for src, _ in sources)
     if sensitivities == "core" and not core_ok:
         raise ConfigError("sensitivities = 'core': not available for "
                           + ", ".join(o for o, (src, _) in zip(outputs, sources) if src not in fs.output_names)
-                          + " (not a reported output) or not provided by this build of the core")
+                          + " (not a reported output; use 'fd' or 'auto')")
     use_core = core_ok and sensitivities != "fd"
     steps = [0.1 * math.sqrt(cov[j, j]) if cov[j, j] > 0 else max(1e-6 * abs(mu[j]), 1e-12) for j in range(k)]
     base = {p: fs.get(p) for p in (ax.param, ay.param)}
     task = _LinearizedPoint(base, params, outputs, sources, sim_kwargs, steps, use_core, rel_step)
-    exe = sweep.make_executor(executor, workers)
-    bar = sweep._progress_bar(progress, len(grid_pts), "probabilistic design space")
-    rows = []
-    try:
-        for row in exe.map_unordered(task, fs, list(enumerate(grid_pts))):
-            rows.append(row)
-            if bar is not None:
-                bar.update(1)
-    finally:
-        if bar is not None:
-            bar.close()
-    rows.sort(key=lambda r: r["_i"])
+    rows = sweep._collect(sweep.make_executor(executor, workers), task, fs, list(enumerate(grid_pts)), progress,
+                          "probabilistic design space")
     eps = rng.standard_normal((n, k))
     m = len(outputs)
     prob = np.zeros(len(rows))
@@ -1287,7 +1264,7 @@ def contour_command(args) -> int:
     from .flowsheet import load
 
     fs = load(args.scene)
-    from .cli import check_workers, parse_sets
+    from .cli import _json_value, check_workers, parse_sets
 
     fixed = parse_sets(args.set)
     check_workers(args.workers)
@@ -1323,17 +1300,11 @@ def contour_command(args) -> int:
             plot_contour(grid, o, os.path.join(args.out, f"contour_{o}.png"), window=win)
             written.append(f"contour_{o}.png")
     n_failed = int((~grid.ok).sum())
-
-    def clean(v):
-        if isinstance(v, float) and not math.isfinite(v):
-            return None
-        return v
-
     meta = {"scene": os.path.abspath(args.scene), "x": {"param": grid.x.param, "unit": grid.x.unit,
                                                          "values": grid.x.values.tolist()},
             "y": {"param": grid.y.param, "unit": grid.y.unit, "values": grid.y.values.tolist()},
             "outputs": outputs, "fixed": fixed, "t_end_s": grid.t_end_s, "n_points": grid.n_simulations,
-            "n_failed": n_failed, "wall_time_s": grid.wall_time_s, "simulations_per_s": clean(grid.simulations_per_s),
+            "n_failed": n_failed, "wall_time_s": grid.wall_time_s, "simulations_per_s": _json_value(grid.simulations_per_s),
             "constraints": [str(c) for c in cons]}
     if win is not None:
         meta["feasible_fraction"] = win.fraction

@@ -36,16 +36,8 @@ _local = threading.local()
 
 
 def scene_text(flowsheet: Flowsheet) -> str:
-    """The scene text the flowsheet was built from (the core's copy when exposed, else the scene file)."""
-    text = getattr(flowsheet._scene, "text", None)
-    if text:
-        return text
-    path = flowsheet.path
-    if path and os.path.isfile(path):
-        with open(path) as f:
-            return f.read()
-    raise ConfigError(f"flowsheet '{flowsheet.name}': its scene text is not available (loaded with load_text and "
-                      f"the core does not expose Scene.text); load it from a file to run it on a Dask cluster")
+    """The scene text the flowsheet was built from (the core keeps it for clones)."""
+    return flowsheet._scene.text
 
 
 def remote_spec(flowsheet: Flowsheet) -> dict:

@@ -106,7 +106,6 @@ class Flowsheet:
         ``{"y": {state: value}, "iterations": ..., "residual_norm": ...}``; raises SolverError on failure."""
         return self._scene.steady_state(t=float(t), ftol=float(ftol), max_iterations=int(max_iterations))
 
-
     def simulate(self, t_end: float | None = None, *, t_out: Iterable[float] | None = None,
                  n_out: int | None = None, rtol: float | None = None, atol: float | None = None,
                  sensitivities: Sequence[str] = (), linear_solver: str | None = None,

@@ -51,6 +51,11 @@ class Result:
 
     def sensitivity(self, state: str, param: str) -> np.ndarray:
         """d state / d param over time (requires ``simulate(sensitivities=[param])``)."""
+        if param not in self.sens_params:
+            raise ValueError(f"sensitivity: '{param}' was not a sensitivity parameter of this run "
+                             f"(simulated with sensitivities={self.sens_params}); pass it to simulate(sensitivities=)")
+        if state not in self.state_names:
+            raise ValueError(f"sensitivity: '{state}' is not a state (e.g. {', '.join(self.state_names[:8])}, ...)")
         return self.sens[:, self.sens_params.index(param), self.state_names.index(state)]
 
     @property
@@ -78,15 +83,17 @@ class Result:
         if not units:
             raise ValueError("this result has no particle size distribution (no unit reports psd_d_i / psd_m_i)")
         unit = unit or units[0]
+        if unit not in units:
+            raise ValueError(f"psd: unit '{unit}' reports no size distribution (units with one: {', '.join(units)})")
         k = int(np.argmin(np.abs(self.t - t)))
-        d = [(int(m.group(3)), j) for j, n in enumerate(self.output_names)
-             if (m := _PSD.match(n)) and m.group(1) == unit and m.group(2) == "d"]
-        w = [(int(m.group(3)), j) for j, n in enumerate(self.output_names)
-             if (m := _PSD.match(n)) and m.group(1) == unit and m.group(2) == "m"]
-        d = [self.outputs[k, j] for _, j in sorted(d)]
-        w = np.array([self.outputs[k, j] for _, j in sorted(w)])
+        cols: dict[str, list] = {"d": [], "m": []}
+        for j, n in enumerate(self.output_names):
+            if (m := _PSD.match(n)) and m.group(1) == unit:
+                cols[m.group(2)].append((int(m.group(3)), j))
+        d = np.array([self.outputs[k, j] for _, j in sorted(cols["d"])])
+        w = np.array([self.outputs[k, j] for _, j in sorted(cols["m"])])
         frac = w / w.sum() if w.sum() > 0 else w
-        return pd.DataFrame({"d_um": np.array(d) * 1e6, "mass_kg": w, "mass_fraction": frac,
+        return pd.DataFrame({"d_um": d * 1e6, "mass_kg": w, "mass_fraction": frac,
                              "Q3": np.cumsum(frac)}).rename_axis("class")
 
     # -- summary --------------------------------------------------------------------------------
@@ -127,7 +134,7 @@ class Result:
         s["balance"] = self.balance_closure()
         # Where a model left the paper's literal equations (floors, caps, regularizations): the largest count of
         # classes or instances affected at any output time, per unit (PAPER001_DECISIONS asks for this).
-        s["regularizations"] = {n: float(np.max(self.outputs[:, j])) for j, n in enumerate(self.output_names)
+        s["regularizations"] = {n: _finite(np.max(self.outputs[:, j])) for j, n in enumerate(self.output_names)
                                 if ".reg_" in n}
         s["wall_time_s"] = self.wall_time_s
         st = self.stats

@@ -51,6 +51,7 @@ from typing import Any, Callable, Iterable, Iterator, Mapping, Sequence
 
 from . import _core
 from .flowsheet import Flowsheet, load
+from .result import _STANDARD_KEYS
 
 ConfigError = _core.ConfigError
 SolverError = _core.SolverError
@@ -58,7 +59,6 @@ SolverError = _core.SolverError
 DEFAULT_OUTPUTS = ("d50_um", "bed_moisture", "bed_moisture_wet", "T_gas_out_K", "d10_um", "d90_um")
 STATUS_OK = "ok"
 STATUS_FAILED = "failed"
-_STANDARD_SUMMARY = ("d10_um", "d50_um", "d90_um", "bed_moisture", "T_gas_out_K")
 _TOP_KEYS = ("sweep", "description", "scene", "variables", "points", "outputs", "set", "t_end", "notes")
 _VAR_KEYS = ("param", "unit", "levels", "description")
 _POINT_LABELS = ("name", "kind")
@@ -151,7 +151,7 @@ def flowsheet_spec(flowsheet: Flowsheet) -> dict:
 # the generic runner
 # ------------------------------------------------------------------------------------------------
 def _check_outputs(flowsheet: Flowsheet, outputs: Sequence[str], where: str = "outputs") -> list[str]:
-    summary_keys = list(_STANDARD_SUMMARY) + [k for k in flowsheet._scene.summary_map if k not in _STANDARD_SUMMARY]
+    summary_keys = list(_STANDARD_KEYS) + [k for k in flowsheet._scene.summary_map if k not in _STANDARD_KEYS]
     names = set(flowsheet.state_names) | set(flowsheet.output_names)
     out = []
     for o in outputs:
@@ -162,7 +162,18 @@ def _check_outputs(flowsheet: Flowsheet, outputs: Sequence[str], where: str = "o
     return out
 
 
-def _progress_bar(progress: bool | None, total: int, desc: str):
+def _final_values(res, outputs: Sequence[str]) -> dict[str, float]:
+    """``outputs`` of a result at its final time: summary keys, else states and reported outputs; NaN where the
+    summary has no value (null in summary.json)."""
+    summary = res.summary
+    out = {}
+    for o in outputs:
+        v = summary[o] if o in summary else float(res[o][-1])
+        out[o] = math.nan if v is None else float(v)
+    return out
+
+
+def _progress_bar(progress: bool | None, total: int, desc: str, unit: str = "run"):
     if progress is None:
         progress = sys.stderr.isatty()
     if not progress:
@@ -171,7 +182,30 @@ def _progress_bar(progress: bool | None, total: int, desc: str):
         from tqdm import tqdm
     except ImportError:  # tqdm is optional (Debian python3-tqdm)
         return None
-    return tqdm(total=total, desc=desc, unit="run", file=sys.stderr, leave=False)
+    return tqdm(total=total, desc=desc, unit=unit, file=sys.stderr, leave=False)
+
+
+def _collect(exe, evaluate: Callable[[Flowsheet, Any], dict], flowsheet: Flowsheet, items: Sequence[Any],
+             progress: bool | None, desc: str) -> list[dict]:
+    """The rows of ``exe.map_unordered(evaluate, flowsheet, items)`` in the order of ``items``, with a progress bar
+    counting the failed ones. Items are ``(i, ...)`` and every row carries ``"_i": i`` and ``"status"``."""
+    bar = _progress_bar(progress, len(items), desc)
+    rows = []
+    n_failed = 0
+    try:
+        for row in exe.map_unordered(evaluate, flowsheet, items):
+            rows.append(row)
+            n_failed += row["status"] != STATUS_OK
+            if bar is not None:
+                bar.update(1)
+                if n_failed:
+                    bar.set_postfix(failed=n_failed)
+    finally:
+        if bar is not None:
+            bar.refresh()  # tqdm throttles redraws: show the final count before the bar goes
+            bar.close()
+    rows.sort(key=lambda r: r["_i"])
+    return rows
 
 
 def run_sweep(flowsheet: Flowsheet, points: Sequence[Mapping[str, float | str]],
@@ -201,11 +235,7 @@ def run_sweep(flowsheet: Flowsheet, points: Sequence[Mapping[str, float | str]],
     if len(names) != len(points):
         raise ConfigError(f"names: {len(names)} names for {len(points)} points")
     outputs = _check_outputs(flowsheet, list(outputs))
-    params = []
-    for p in points:
-        for k in p:
-            if k not in params:
-                params.append(k)
+    params = list(dict.fromkeys(k for p in points for k in p))
     known = set(flowsheet.params)
     for k in params:
         if k not in known:
@@ -225,10 +255,7 @@ def run_sweep(flowsheet: Flowsheet, points: Sequence[Mapping[str, float | str]],
             for k in params:
                 row[k] = fs.get(k)
             res = fs.simulate(**sim_kwargs)
-            summary = res.summary
-            for o in outputs:
-                v = summary[o] if o in summary else float(res[o][-1])
-                row[o] = math.nan if v is None else float(v)
+            row.update(_final_values(res, outputs))
             row["solve_time_s"] = res.wall_time_s
             row["status"], row["message"] = STATUS_OK, ""
         except (SolverError, ConfigError) as e:
@@ -238,21 +265,7 @@ def run_sweep(flowsheet: Flowsheet, points: Sequence[Mapping[str, float | str]],
         row["wall_time_s"] = time.perf_counter() - t0
         return row
 
-    exe = make_executor(executor, workers)
-    bar = _progress_bar(progress, len(points), desc)
-    rows = []
-    try:
-        for row in exe.map_unordered(evaluate, flowsheet, list(enumerate(points))):
-            rows.append(row)
-            if bar is not None:
-                bar.update(1)
-                n_failed = sum(r["status"] != STATUS_OK for r in rows)
-                if n_failed:
-                    bar.set_postfix(failed=n_failed)
-    finally:
-        if bar is not None:
-            bar.close()
-    rows.sort(key=lambda r: r["_i"])
+    rows = _collect(make_executor(executor, workers), evaluate, flowsheet, list(enumerate(points)), progress, desc)
     cols = ["point"] + params + outputs + ["wall_time_s", "solve_time_s", "status", "message"]
     data = []
     for r in rows:
@@ -274,6 +287,12 @@ def _si_or_nan(flowsheet: Flowsheet, param: str, value) -> float:
         return _core.to_si(num, unit, flowsheet.spec(param)["unit"], param)
     except (ConfigError, ValueError):
         return math.nan
+
+
+def _affine(unit: str, si_unit: str, where: str) -> tuple[float, float]:
+    """(a, b) with SI value = a + b * value in ``unit``: edge units are affine in SI (degC)."""
+    a = _core.to_si(0.0, unit, si_unit, where)
+    return a, _core.to_si(1.0, unit, si_unit, where) - a
 
 
 def _split_quantity(text: str) -> tuple[float, str]:
@@ -521,8 +540,7 @@ def _edge_value(fs: Flowsheet, v: Variable, value, where: str) -> float:
         si = _core.to_si(q[0], q[1], si_unit, v.param)
     except ConfigError as e:
         raise ConfigError(f"{where} = {value!r}: {' '.join(str(e).split())}") from None
-    a = _core.to_si(0.0, v.unit, si_unit, v.param)  # edge units are affine in SI (degC)
-    b = _core.to_si(1.0, v.unit, si_unit, v.param) - a
+    a, b = _affine(v.unit, si_unit, v.param)
     return (si - a) / b
 
 

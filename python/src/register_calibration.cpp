@@ -4,8 +4,12 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
+#include <type_traits>
+#include <utility>
+#include <vector>
 
 #include "granuflow/calibration.hpp"
 #include "granuflow/errors.hpp"
@@ -30,13 +34,19 @@ void check_keys(const py::dict& d, const std::set<std::string>& allowed, const s
   }
 }
 
+// Reads d[key] into out where present and not None.
+template <class T>
+void read_optional(const py::dict& d, const char* key, T& out) {
+  if (d.contains(key) && !d[key].is_none()) out = d[key].cast<T>();
+}
+
 Experiment to_experiment(const py::dict& d) {
   check_keys(d, {"name", "settings", "t_end", "observations"}, "experiment");
   Experiment e;
   e.name = d["name"].cast<std::string>();
   if (d.contains("settings"))
     for (const auto& [k, v] : d["settings"].cast<py::dict>()) e.settings.emplace_back(k.cast<std::string>(), v.cast<double>());
-  if (d.contains("t_end") && !d["t_end"].is_none()) e.t_end = d["t_end"].cast<double>();
+  read_optional(d, "t_end", e.t_end);
   for (const auto& o : d["observations"].cast<py::list>()) {
     const auto od = o.cast<py::dict>();
     const std::string where = "experiment '" + e.name + "': observation";
@@ -45,8 +55,8 @@ Experiment to_experiment(const py::dict& d) {
     ob.name = od["name"].cast<std::string>();
     ob.t = od["t"].cast<std::vector<double>>();
     ob.value = od["value"].cast<std::vector<double>>();
-    if (od.contains("sigma_abs") && !od["sigma_abs"].is_none()) ob.sigma_abs = od["sigma_abs"].cast<double>();
-    if (od.contains("sigma_rel") && !od["sigma_rel"].is_none()) ob.sigma_rel = od["sigma_rel"].cast<double>();
+    read_optional(od, "sigma_abs", ob.sigma_abs);
+    read_optional(od, "sigma_rel", ob.sigma_rel);
     const std::string w = where + " " + ob.name;
     if (ob.t.size() != ob.value.size())
       throw ConfigError(w + ": " + std::to_string(ob.t.size()) + " times but " + std::to_string(ob.value.size()) + " values");
@@ -73,50 +83,71 @@ Stage to_stage(const py::dict& d) {
     FreeParameter p;
     p.name = fd["name"].cast<std::string>();
     if (fd.contains("transform") && !fd["transform"].is_none()) p.transform = transform_from_string(fd["transform"].cast<std::string>());
-    if (fd.contains("lower") && !fd["lower"].is_none()) p.lower = fd["lower"].cast<double>();
-    if (fd.contains("upper") && !fd["upper"].is_none()) p.upper = fd["upper"].cast<double>();
-    if (fd.contains("logarithmic") && !fd["logarithmic"].is_none()) p.logarithmic = fd["logarithmic"].cast<bool>();
+    read_optional(fd, "lower", p.lower);
+    read_optional(fd, "upper", p.upper);
+    read_optional(fd, "logarithmic", p.logarithmic);
     s.free.push_back(std::move(p));
   }
-  if (d.contains("observables") && !d["observables"].is_none())
-    s.observables = d["observables"].cast<std::vector<std::string>>();
+  read_optional(d, "observables", s.observables);
   return s;
 }
 
+// Sets one CalibrationOptions field from a Python value.
+using OptionSetter = void (*)(CalibrationOptions&, const py::handle&);
+
+template <auto Member>
+void set_field(CalibrationOptions& o, const py::handle& v) {
+  o.*Member = v.cast<std::remove_reference_t<decltype(o.*Member)>>();
+}
+
+// The one list of option names: an unknown key is answered with it, in CalibrationOptions' order.
+const std::vector<std::pair<std::string, OptionSetter>>& option_setters() {
+  using O = CalibrationOptions;
+  static const std::vector<std::pair<std::string, OptionSetter>> setters = {
+      {"max_iterations", set_field<&O::max_iterations>},
+      {"function_tolerance", set_field<&O::function_tolerance>},
+      {"gradient_tolerance", set_field<&O::gradient_tolerance>},
+      {"parameter_tolerance", set_field<&O::parameter_tolerance>},
+      {"cost_change_tolerance", set_field<&O::cost_change_tolerance>},
+      {"initial_trust_region_radius", set_field<&O::initial_trust_region_radius>},
+      {"num_threads", set_field<&O::num_threads>},
+      {"sigma_basis", [](O& o, const py::handle& v) { o.sigma_basis = sigma_basis_from_string(v.cast<std::string>()); }},
+      {"max_reweighting_passes", set_field<&O::max_reweighting_passes>},
+      {"reweighting_tolerance", set_field<&O::reweighting_tolerance>},
+      {"jacobian", [](O& o, const py::handle& v) { o.jacobian = jacobian_method_from_string(v.cast<std::string>()); }},
+      {"fd_step", set_field<&O::fd_step>},
+      {"rtol", set_field<&O::rtol>},
+      {"atol", set_field<&O::atol>},
+      {"sens_error_control", set_field<&O::sens_error_control>},
+      {"output_rel_step", set_field<&O::output_rel_step>},
+      {"scale_covariance", set_field<&O::scale_covariance>},
+      {"rse_threshold", set_field<&O::rse_threshold>},
+      {"correlation_threshold", set_field<&O::correlation_threshold>},
+      {"profile", set_field<&O::profile>},
+      {"profile_delta_chi2", set_field<&O::profile_delta_chi2>},
+      {"profile_max_offset", set_field<&O::profile_max_offset>},
+      {"profile_max_points", set_field<&O::profile_max_points>},
+  };
+  return setters;
+}
+
 CalibrationOptions to_options(const py::dict& d) {
+  const auto& setters = option_setters();
   CalibrationOptions o;
   for (const auto& [kk, v] : d) {
     const auto k = kk.cast<std::string>();
-    if (k == "max_iterations") o.max_iterations = v.cast<int>();
-    else if (k == "function_tolerance") o.function_tolerance = v.cast<double>();
-    else if (k == "gradient_tolerance") o.gradient_tolerance = v.cast<double>();
-    else if (k == "parameter_tolerance") o.parameter_tolerance = v.cast<double>();
-    else if (k == "num_threads") o.num_threads = v.cast<int>();
-    else if (k == "sigma_basis") o.sigma_basis = sigma_basis_from_string(v.cast<std::string>());
-    else if (k == "cost_change_tolerance") o.cost_change_tolerance = v.cast<double>();
-    else if (k == "initial_trust_region_radius") o.initial_trust_region_radius = v.cast<double>();
-    else if (k == "max_reweighting_passes") o.max_reweighting_passes = v.cast<int>();
-    else if (k == "reweighting_tolerance") o.reweighting_tolerance = v.cast<double>();
-    else if (k == "jacobian") o.jacobian = jacobian_method_from_string(v.cast<std::string>());
-    else if (k == "fd_step") o.fd_step = v.cast<double>();
-    else if (k == "rtol") o.rtol = v.cast<double>();
-    else if (k == "atol") o.atol = v.cast<double>();
-    else if (k == "sens_error_control") o.sens_error_control = v.cast<bool>();
-    else if (k == "output_rel_step") o.output_rel_step = v.cast<double>();
-    else if (k == "scale_covariance") o.scale_covariance = v.cast<bool>();
-    else if (k == "rse_threshold") o.rse_threshold = v.cast<double>();
-    else if (k == "correlation_threshold") o.correlation_threshold = v.cast<double>();
-    else if (k == "profile") o.profile = v.cast<bool>();
-    else if (k == "profile_delta_chi2") o.profile_delta_chi2 = v.cast<double>();
-    else if (k == "profile_max_offset") o.profile_max_offset = v.cast<double>();
-    else if (k == "profile_max_points") o.profile_max_points = v.cast<int>();
-    else
-      throw ConfigError("calibration option '" + k +
-                        "' is unknown (allowed: max_iterations, function_tolerance, gradient_tolerance, "
-                        "parameter_tolerance, cost_change_tolerance, initial_trust_region_radius, num_threads, sigma_basis, max_reweighting_passes, "
-                        "reweighting_tolerance, jacobian, fd_step, rtol, atol, "
-                        "sens_error_control, output_rel_step, scale_covariance, rse_threshold, correlation_threshold, "
-                        "profile, profile_delta_chi2, profile_max_offset, profile_max_points)");
+    const auto it = std::find_if(setters.begin(), setters.end(), [&](const auto& s) { return s.first == k; });
+    if (it == setters.end()) {
+      std::string names;
+      for (const auto& s : setters) names += (names.empty() ? "" : ", ") + s.first;
+      throw ConfigError("calibration option '" + k + "' is unknown (allowed: " + names + ")");
+    }
+    try {
+      it->second(o, v);
+    } catch (const py::cast_error&) {
+      throw ConfigError("calibration option " + k + " = " + std::string(py::repr(v)) +
+                        ": wrong type (a number, a bool or a name, as the field of CalibrationOptions)");
+    }
   }
   o.validate();
   return o;
@@ -159,6 +190,12 @@ std::vector<Experiment> to_experiments(const py::list& l) {
   return v;
 }
 
+std::vector<Stage> to_stages(const py::list& l) {
+  std::vector<Stage> v;
+  for (const auto& s : l) v.push_back(to_stage(s.cast<py::dict>()));
+  return v;
+}
+
 // Residuals of one stage as a function of θ (tests, Jacobian checks).
 class PyStageProblem {
  public:
@@ -190,8 +227,7 @@ void register_calibration(py::module_& m) {
   m.def("calibrate", [](const Scene& scene, const py::list& exps, const py::list& stages, const py::dict& options,
                         const std::map<std::string, double>& start) {
     const auto ex = to_experiments(exps);
-    std::vector<Stage> st;
-    for (const auto& s : stages) st.push_back(to_stage(s.cast<py::dict>()));
+    const auto st = to_stages(stages);
     const CalibrationOptions o = to_options(options);
     CalibrationResult r;
     {

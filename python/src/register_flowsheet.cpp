@@ -28,7 +28,12 @@ py::array_t<double> as_array(const std::vector<double>& v, std::vector<py::ssize
 double value_for(const Scene& s, const std::string& name, const py::handle& v) {
   if (py::isinstance<py::str>(v))
     return parse_param_value(*s.flowsheet, name, v.cast<std::string>(), "parameter " + name);
-  return v.cast<double>();
+  try {
+    return v.cast<double>();
+  } catch (const py::cast_error&) {
+    throw ConfigError("parameter " + name + " = " + std::string(py::repr(v)) +
+                      ": expected a number (SI) or a string with a unit, e.g. '60 degC'");
+  }
 }
 
 py::dict spec_dict(const ParamSpec& p, double value, bool input) {
