@@ -145,8 +145,8 @@ Record run(const Case& c, const std::string& method, int q, double rtol, int rep
   rec.err_m2 = pbm_test::moment(g, r.N(1), 2) / m2 - 1.0;
   if (!cells.empty()) rec.err_l1 = an::l1_mass_error(g, r.N(1), cells);
   const double v0 = pbm_test::moment(g, r.N(0), 1);
-  const double v1 = pbm_test::moment(g, r.N(1), 1) + r.state(1, "volume_above") + r.state(1, "volume_below") -
-                    r.state(1, "volume_grown");
+  const double v1 = pbm_test::moment(g, r.N(1), 1) + r.state_or_zero(1, "volume_above") +
+                    r.state_or_zero(1, "volume_below") - r.state_or_zero(1, "volume_grown");
   rec.drift = v1 / v0 - 1.0;
   auto fs = pbm_test::flowsheet(settings(c, method, q), params(c));
   profile(*fs, std::vector<double>(r.N(1), r.N(1) + r.result.state_names.size()), rec);

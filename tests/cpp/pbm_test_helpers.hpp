@@ -2,7 +2,9 @@
 #pragma once
 #include <map>
 #include <memory>
+#include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "granuflow/flowsheet.hpp"
 #include "granuflow/simulator.hpp"
@@ -28,14 +30,30 @@ inline Strings grid_settings(int q, int doublings = 27) {
 }
 inline kernels::Grid grid(int q, int doublings = 27) { return kernels::Grid::geometric(std::exp2(-12.0), q, doublings * q); }
 
+// Position of `name` in `names`; a quantity that is not there (renamed, or not declared for these mechanisms) throws,
+// so a test fails instead of reading a silent 0.
+inline size_t index_of(const std::vector<std::string>& names, const std::string& name) {
+  for (size_t i = 0; i < names.size(); ++i)
+    if (names[i] == name) return i;
+  throw std::out_of_range("no quantity '" + name + "' in this run");
+}
+
 struct Run {
   SimResult result;
   int n = 0;
   const double* N(size_t k) const { return &result.y[k * result.state_names.size()]; }
   double state(size_t k, const std::string& name) const {
-    for (size_t i = 0; i < result.state_names.size(); ++i)
-      if (result.state_names[i] == "pbm." + name) return result.y[k * result.state_names.size() + i];
+    return result.y[k * result.state_names.size() + index_of(result.state_names, "pbm." + name)];
+  }
+  // Book-keeping states exist only for the mechanisms that fill them (volume_below: breakage or growth; ...): an
+  // absent one holds nothing.
+  double state_or_zero(size_t k, const std::string& name) const {
+    for (const auto& s : result.state_names)
+      if (s == "pbm." + name) return state(k, name);
     return 0.0;
+  }
+  double output(size_t k, const std::string& name) const {
+    return result.outputs[k * result.output_names.size() + index_of(result.output_names, "pbm." + name)];
   }
 };
 

@@ -13,19 +13,13 @@
 namespace granuflow {
 namespace {
 
+using testing::output_index;
 using testing::scene_from_file;
 
 Scene short_headline() {
   Scene s = scene_from_file("flowsheets/stoeckl_gf25_batch.yaml");
   s.options.t_end = 1200.0;
   return s;
-}
-
-int output_index(const SimResult& r, const std::string& name) {
-  for (size_t i = 0; i < r.output_names.size(); ++i)
-    if (r.output_names[i] == name) return static_cast<int>(i);
-  ADD_FAILURE() << "no output " << name;
-  return 0;
 }
 
 // Two operating points (Table 1 corners), observed every 5 min for 20 min; values filled by predict().

@@ -10,6 +10,7 @@
 #include "granuflow/errors.hpp"
 #include "granuflow/flowsheet.hpp"
 #include "granuflow/simulator.hpp"
+#include "scene_helpers.hpp"
 #include "units/registry.hpp"
 
 namespace granuflow {
@@ -154,7 +155,7 @@ TEST(DemoFlowsheet, JacobianEqualsFiniteDifferencesOnRandomStates) {
   std::mt19937 rng(42);
   std::uniform_real_distribution<double> u(0.5, 1.5);
   for (int trial = 0; trial < 3; ++trial) {
-    std::vector<double> y(n), yp(n), dense(size_t(n) * n), r0(n), r1(n);
+    std::vector<double> y(n), yp(n), dense(size_t(n) * n), fd, r0, r1;
     for (int i = 0; i < n; ++i) {
       y[i] = sys.scales()[i] * u(rng);
       yp[i] = 0.01 * u(rng);
@@ -164,16 +165,10 @@ TEST(DemoFlowsheet, JacobianEqualsFiniteDifferencesOnRandomStates) {
     std::vector<double> sparse(sys.pattern().nnz());
     sys.jacobian(10, y.data(), yp.data(), cj, nullptr, sparse.data());
     for (int c = 0; c < n; ++c) {
-      const double h = 1e-6 * std::max(1.0, std::abs(y[c]));
-      auto yy = y, yyp = yp;
-      yy[c] += h, yyp[c] += cj * h;
-      sys.residual(10, yy.data(), yyp.data(), r1.data());
-      yy[c] -= 2 * h, yyp[c] -= 2 * cj * h;
-      sys.residual(10, yy.data(), yyp.data(), r0.data());
+      testing::central_difference_column(sys, 10, y, yp, cj, c, 1e-6 * std::max(1.0, std::abs(y[c])), fd, r0, r1);
       for (int row = 0; row < n; ++row) {
-        const double fd = (r1[row] - r0[row]) / (2 * h);
         const double ad = dense[size_t(c) * n + row];
-        EXPECT_NEAR(ad, fd, 1e-6 * std::max(1.0, std::abs(fd))) << "row " << row << " col " << c;
+        EXPECT_NEAR(ad, fd[row], 1e-6 * std::max(1.0, std::abs(fd[row]))) << "row " << row << " col " << c;
       }
       // The sparse values agree with the dense matrix on the pattern.
       for (int k = sys.pattern().col_ptr[c]; k < sys.pattern().col_ptr[c + 1]; ++k)

@@ -13,18 +13,10 @@
 namespace granuflow {
 namespace {
 
+using testing::output;
 using testing::scene_from_file;
 using testing::scene_from_text;
 
-int output_index(const SimResult& r, const std::string& name) {
-  for (size_t i = 0; i < r.output_names.size(); ++i)
-    if (r.output_names[i] == name) return static_cast<int>(i);
-  ADD_FAILURE() << "no output " << name;
-  return 0;
-}
-double output(const SimResult& r, size_t k, const std::string& name) {
-  return r.outputs[k * r.output_names.size() + output_index(r, name)];
-}
 double state(const Scene& s, const SimResult& r, size_t k, const std::string& name) {
   return r.state(k, s.flowsheet->state_id(name));
 }

@@ -75,13 +75,7 @@ TEST(PbmBreakage, PaperOneLawsConserveMassWithFinesFolded) {
                       {"fragments", "tanh_power_law"}, {"outside", "fold"}, {"initial", "lognormal_mass"}};
   auto fs = pbm_test::flowsheet(s, {{"rho", 1081.5}, {"mass0", 15.0}, {"d50_3", 400e-6}, {"sel_k_break", 1e-2}});
   const auto r = pbm_test::run(*fs, {0, 60, 600}, 1e-8, 1e-6);
-  const auto& names = r.result.output_names;
-  const size_t no = names.size();
-  auto out = [&](size_t k, const std::string& name) {
-    for (size_t i = 0; i < no; ++i)
-      if (names[i] == "pbm." + name) return r.result.outputs[k * no + i];
-    return std::nan("");
-  };
+  auto out = [&](size_t k, const std::string& name) { return r.output(k, name); };
   EXPECT_NEAR(out(0, "mass"), 15.0, 0.5);  // the grid (50-1000 um pivots) holds nearly all of d50 = 400 um
   for (size_t k = 1; k < 3; ++k) {
     EXPECT_NEAR(out(k, "mass") / out(0, "mass"), 1.0, 1e-12);

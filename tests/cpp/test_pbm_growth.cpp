@@ -66,12 +66,7 @@ TEST(PbmGrowth, MassGrowthRateIsExactForTheNormalizedLaws) {
     if (std::string(law) == "moment_based") p["growth_lambda_2"] = 0.0, p["growth_lambda_3"] = 1.0;
     auto fs = pbm_test::flowsheet(s, p);
     const auto r = pbm_test::run(*fs, {0, 100, 600}, 1e-8, 1e-3);
-    const size_t no = r.result.output_names.size();
-    auto out = [&](size_t k, const std::string& name) {
-      for (size_t i = 0; i < no; ++i)
-        if (r.result.output_names[i] == "pbm." + name) return r.result.outputs[k * no + i];
-      return std::nan("");
-    };
+    auto out = [&](size_t k, const std::string& name) { return r.output(k, name); };
     for (size_t k = 1; k < 3; ++k) {
       const double t = r.result.t[k];
       EXPECT_NEAR(out(k, "mass_grown") / (m_dot * t), 1.0, 1e-10) << law;

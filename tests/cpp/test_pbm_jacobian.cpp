@@ -6,6 +6,7 @@
 
 #include "granuflow/dae_system.hpp"
 #include "pbm_test_helpers.hpp"
+#include "scene_helpers.hpp"
 
 namespace granuflow {
 namespace {
@@ -36,7 +37,7 @@ void check_jacobian(const Strings& settings, const pbm_test::Values& params = {}
   const int n = sys.size();
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(0.2, 1.0);
-  std::vector<double> y(n), yp(n), dense(size_t(n) * n), r0(n), r1(n);
+  std::vector<double> y(n), yp(n), dense(size_t(n) * n), fd, r0, r1;
   sys.initial_values(y);
   for (int i = 0; i < n; ++i) y[i] = std::abs(y[i]) * u(rng) + 1e-3 * u(rng), yp[i] = 0.1 * u(rng);
   const double cj = 2.5;
@@ -45,16 +46,11 @@ void check_jacobian(const Strings& settings, const pbm_test::Values& params = {}
   double scale = 0;
   for (double v : ad) scale = std::max(scale, std::abs(v));
   for (int c = 0; c < n; ++c) {
-    const double h = 1e-6 * std::max(1e-3, std::abs(y[c]));
-    auto yy = y, yyp = yp;
-    yy[c] += h, yyp[c] += cj * h;
-    sys.residual(0, yy.data(), yyp.data(), r1.data());
-    yy[c] -= 2 * h, yyp[c] -= 2 * cj * h;
-    sys.residual(0, yy.data(), yyp.data(), r0.data());
+    testing::central_difference_column(sys, 0, y, yp, cj, c, 1e-6 * std::max(1e-3, std::abs(y[c])), fd, r0, r1);
     for (int row = 0; row < n; ++row) {
-      const double an = dense[size_t(c) * n + row], a = ad[size_t(row) * n + c], fd = (r1[row] - r0[row]) / (2 * h);
+      const double an = dense[size_t(c) * n + row], a = ad[size_t(row) * n + c];
       ASSERT_NEAR(an, a, 1e-11 * scale) << "analytic vs AD, row " << row << " col " << c;
-      ASSERT_NEAR(an, fd, 1e-6 * scale) << "analytic vs FD, row " << row << " col " << c;
+      ASSERT_NEAR(an, fd[row], 1e-6 * scale) << "analytic vs FD, row " << row << " col " << c;
     }
   }
 }

@@ -4,6 +4,7 @@
 // reproduces the compiled one; parameter sensitivities flow through the kernels.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "granuflow/errors.hpp"
@@ -135,10 +136,26 @@ TEST(PbmKernels, AggregationKernelsAreSymmetricFiniteAndNonNegative) {
     std::vector<double> p, beta(25);
     for (const auto& s : k->params()) p.push_back(s.value);
     k->evaluate(cs, p.data(), beta.data());
+    double beta_max = 0;
     for (int i = 0; i < 5; ++i)
       for (int j = 0; j < 5; ++j) {
         EXPECT_TRUE(std::isfinite(beta[i * 5 + j]) && beta[i * 5 + j] >= 0) << name;
         EXPECT_EQ(beta[i * 5 + j], beta[j * 5 + i]) << name;
+        beta_max = std::max(beta_max, beta[i * 5 + j]);
+      }
+    EXPECT_GT(beta_max, 0.0) << name << ": a kernel that never aggregates passes the checks above";
+    // The textbook kernels by their definitions, at the defaults beta0 = 1 1/s, v_ref = 1 m^3.
+    const double* v = g.pivots().data();
+    for (int i = 0; i < 5; ++i)
+      for (int j = 0; j < 5; ++j) {
+        const double b = beta[i * 5 + j];
+        if (name == "constant") {
+          EXPECT_EQ(b, 1.0);
+        } else if (name == "sum") {
+          EXPECT_NEAR(b, v[i] + v[j], 1e-14 * (v[i] + v[j])) << i << " " << j;
+        } else if (name == "product") {
+          EXPECT_NEAR(b, v[i] * v[j], 1e-14 * v[i] * v[j]) << i << " " << j;
+        }
       }
     if (name == "eke") {  // Eq. (37), paper 001, by hand
       const double di = 60e-6, dj = 1000e-6;
@@ -199,6 +216,21 @@ TEST(PbmKernels, SensitivityToAKernelParameterEqualsFiniteDifferences) {
   // M0 = exp(-beta0 t) for the sum kernel: dM0/dbeta0 = -t M0 (the discrete M0 obeys it exactly).
   const double m0 = pbm_test::moment(g, &r.y[n], 0);
   EXPECT_NEAR(sens_m0 / (-1.0 * m0), 1.0, 1e-5);
+  // Class by class against central differences of two more runs (the sensitivity of each N_i, not only their sum).
+  const double h = 1e-4;
+  auto final_state = [&](double b) {
+    auto f = make(b);
+    SimOptions q = o;
+    q.sensitivities.clear();
+    q.rtol = 1e-11;
+    q.atol = 1e-15;
+    return simulate(*f, q).y;
+  };
+  const auto up = final_state(1.0 + h), dn = final_state(1.0 - h);
+  double smax = 0;
+  for (int i = 0; i < g.size(); ++i) smax = std::max(smax, std::abs(r.sens[size_t(n) + i]));
+  for (int i = 0; i < g.size(); ++i)
+    EXPECT_NEAR(r.sens[size_t(n) + i], (up[size_t(n) + i] - dn[size_t(n) + i]) / (2 * h), 1e-5 * smax) << "N_" << i;
 }
 
 }  // namespace

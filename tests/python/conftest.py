@@ -1,4 +1,7 @@
+import hashlib
+import json
 import os
+import subprocess
 import sys
 
 # The package lives in a build tree (CMake copies it next to the compiled _core). PYTHONPATH wins when it names
@@ -7,3 +10,52 @@ ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 BUILD_PY = os.path.join(ROOT, "build", "python")
 if BUILD_PY not in sys.path:
     sys.path.append(BUILD_PY)
+
+import granuflow as gf  # noqa: E402  (after the path set-up above)
+
+SCENE = os.path.join(ROOT, "flowsheets", "stoeckl_gf25_batch.yaml")
+DEMO = os.path.join(ROOT, "flowsheets", "demo_tanks.yaml")
+# the python/ folder holding the granuflow package under test; the command line and subprocesses use the same one
+PKG_PATH = os.path.dirname(os.path.dirname(os.path.abspath(gf.__file__)))
+
+
+def package_env(**extra):
+    """The environment of a subprocess that must import the package under test (not another build's)."""
+    return dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [PKG_PATH, os.environ.get("PYTHONPATH")])),
+                **extra)
+
+
+def cli(*args, timeout=120):
+    """``granuflow ARGS`` through the launcher of the build that holds the package under test (its build dir's
+    ``granuflow`` script; ``python -m granuflow`` where there is none)."""
+    launcher = os.path.join(os.path.dirname(PKG_PATH), "granuflow")
+    cmd = [launcher] if os.access(launcher, os.X_OK) else [sys.executable, "-m", "granuflow"]
+    return subprocess.run(cmd + [str(a) for a in args], capture_output=True, text=True, timeout=timeout,
+                          env=package_env())
+
+
+def sha256(path):
+    with open(path, "rb") as f:
+        return hashlib.sha256(f.read()).hexdigest()
+
+
+def strict_json(path):
+    """JSON as the standard has it: NaN or Infinity in the file fail the test."""
+    def no_nan(token):
+        raise AssertionError(f"{path}: {token} in JSON")
+
+    with open(path) as f:
+        return json.loads(f.read(), parse_constant=no_nan)
+
+
+def assert_bad_input(p, *needles, path=None):
+    """Exit 2 with one stderr line 'granuflow: bad input: ...' that names `path` (when given) and every needle."""
+    assert p.returncode == 2, (p.returncode, p.stderr)
+    assert "Traceback" not in p.stderr, p.stderr
+    lines = p.stderr.strip().splitlines()
+    assert len(lines) == 1, p.stderr
+    assert lines[0].startswith("granuflow: bad input: "), lines[0]
+    if path is not None:
+        assert str(path) in lines[0], (path, lines[0])
+    for needle in needles:
+        assert needle in lines[0], (needle, lines[0])

@@ -7,29 +7,19 @@ import subprocess
 import sys
 
 import pytest
+from conftest import ROOT, SCENE, cli, package_env
 
 import granuflow as gf
 from granuflow import bench
 
-ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
-# the python/ folder holding the granuflow package under test; the CLI runs from the same one
-PKG_PATH = os.path.dirname(os.path.dirname(os.path.abspath(gf.__file__)))
 CASES = {"constant", "sum", "product", "growth", "breakage"}
-
-
-def granuflow_cli(*args, timeout=300):
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [PKG_PATH, os.environ.get("PYTHONPATH")])))
-    return subprocess.run([sys.executable, "-m", "granuflow", *args], capture_output=True, text=True, env=env,
-                          timeout=timeout)
 
 
 @pytest.fixture(scope="module")
 def records():
-    try:
-        bench.pbm_executable()
-    except FileNotFoundError as e:
-        pytest.skip(str(e))
-    p = granuflow_cli("bench", "pbm", "--json", "--quick", "--repeats", "1")
+    # tests/bench is built with the tests: a missing executable is a broken build, not a reason to skip
+    bench.pbm_executable()
+    p = cli("bench", "pbm", "--json", "--quick", "--repeats", "1", timeout=300)
     assert p.returncode == 0, p.stderr
     lines = p.stdout.splitlines()
     assert lines and all(line.startswith("{") for line in lines), p.stdout[:500]
@@ -64,18 +54,21 @@ def test_granuflow_conserves_mass_to_round_off(records):
 def test_granuflow_fixed_pivot_matches_the_scipy_baseline(records):
     """The same discretization in both codes: the errors agree to the integration tolerance."""
     mine = {(r["case"], r["q"], r["rtol"]): r for r in records if r["method"] in ("fixed_pivot", "fv_upwind")}
+    compared = 0
     for s in records:
         if s["method"].endswith("LSODA") and s["rtol"] == 1e-6:
             g = mine[(s["case"], s["q"], s["rtol"])]
             assert g["err_M2"] == pytest.approx(s["err_M2"], abs=1e-3 * (1 + abs(s["err_M2"]))), (g, s)
+            compared += 1
+    # every case on every grid of --quick (q = 1, 2, 4) has a SciPy LSODA twin at rtol 1e-6
+    assert compared == len(CASES) * 3, compared
 
 
 def test_summary_and_speed_ratio_script(records, tmp_path):
     path = tmp_path / "pbm.jsonl"
     path.write_text("".join(json.dumps(r) + "\n" for r in records))
-    env = dict(os.environ, PYTHONPATH=PKG_PATH)
     p = subprocess.run([sys.executable, os.path.join(ROOT, "tests", "bench", "pbm_speed_ratio.py"), str(path)],
-                       capture_output=True, text=True, env=env, timeout=60)
+                       capture_output=True, text=True, env=package_env(), timeout=60)
     assert p.returncode == 0, p.stderr
     assert len(p.stdout.splitlines()) == len(CASES) * len(bench.PBM_LEVELS)
     assert "constant  |err_M2| <= 0.05:  granuflow: cell_average" in p.stdout
@@ -113,7 +106,7 @@ def test_missing_executable_is_a_clear_error(monkeypatch, tmp_path):
 def test_bench_scene_reports_each_variant_with_the_scene_physics():
     """`granuflow bench scene`: one record per class count and breakage switch, from the headline scene itself,
     and an independent SciPy implementation of the same equations agrees with each."""
-    p = granuflow_cli("bench", "scene", "--json", "--repeats", "1")
+    p = cli("bench", "scene", "--json", "--repeats", "1", timeout=300)
     assert p.returncode == 0, p.stderr
     recs = [json.loads(line) for line in p.stdout.splitlines()]
     assert [(r["classes"], r["breakage"]) for r in recs] == [(n, b) for n in (10, 20, 40) for b in (True, False)]
@@ -132,5 +125,5 @@ def test_bench_scene_reports_each_variant_with_the_scene_physics():
     for n in (10, 20, 40):  # breakage is what holds d50 near 450-500 um; without it the bed grows to the top class
         assert by[(n, True)]["d50_um"] < 0.6 * by[(n, False)]["d50_um"]
     # the 10-class variant is the scene file unchanged
-    scene = gf.load(os.path.join(ROOT, "flowsheets", "stoeckl_gf25_batch.yaml")).simulate()
+    scene = gf.load(SCENE).simulate()
     assert by[(10, True)]["d50_um"] == pytest.approx(scene.summary["d50_um"], rel=1e-12)

@@ -1,19 +1,12 @@
 """The Python API and the command line on the demo flowsheet, which has an exact answer."""
-import hashlib
-import json
 import math
-import os
-import subprocess
 
 import numpy as np
 import pytest
+from conftest import DEMO, assert_bad_input, cli, sha256, strict_json
 from scipy.linalg import expm
 
 import granuflow as gf
-
-ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
-DEMO = os.path.join(ROOT, "flowsheets", "demo_tanks.yaml")
-CLI = os.path.join(ROOT, "build", "granuflow")
 
 
 def exact_tank_temperatures(t, F=0.5, split=0.6, M1=100.0, M2=200.0, Q1=2e4, cp=4180.0, Ta=300.0, Tb=350.0, ts=100.0):
@@ -96,41 +89,57 @@ def _scene_with(tmp_path, old, new, name="bad.yaml"):
 ])
 def test_cli_bad_input_exits_2_with_one_line(tmp_path, old, new, needle):
     path = _scene_with(tmp_path, old, new)
-    before = hashlib.sha256(open(path, "rb").read()).hexdigest()
-    p = subprocess.run([CLI, "run", path, "--out", str(tmp_path / "out")], capture_output=True, text=True, timeout=60)
-    assert p.returncode == 2, p.stderr
-    assert needle in p.stderr
-    assert len(p.stderr.strip().splitlines()) == 1
-    assert path in p.stderr or "bad input" in p.stderr
-    assert hashlib.sha256(open(path, "rb").read()).hexdigest() == before  # the input is never modified
+    before = sha256(path)
+    p = cli("run", path, "--out", tmp_path / "out", timeout=60)
+    assert_bad_input(p, needle, path=path)
+    assert sha256(path) == before  # the input is never modified
+    assert not (tmp_path / "out" / "summary.json").exists()
 
 
 def test_cli_solver_failure_exits_3_naming_time_and_unit(tmp_path):
     path = _scene_with(tmp_path, "solver: {rtol: 1e-8, atol: 1e-10}", "solver: {rtol: 1e-8, atol: 1e-10, max_steps: 5}")
-    p = subprocess.run([CLI, "run", path, "--out", str(tmp_path / "out")], capture_output=True, text=True, timeout=60)
+    p = cli("run", path, "--out", tmp_path / "out", timeout=60)
     assert p.returncode == 3, p.stderr
+    assert len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr, p.stderr
     assert "failed at t = " in p.stderr and "unit '" in p.stderr
     assert not (tmp_path / "out" / "summary.json").exists()
     with pytest.raises(gf.SolverError) as e:
         gf.load(path).simulate()
     assert e.value.t > 0 and e.value.unit
+    # the exit message names the same time and unit as the exception
+    assert f"unit '{e.value.unit}'" in p.stderr
 
 
 def test_cli_run_writes_summary_csv_and_plots(tmp_path):
     out = tmp_path / "out"
-    p = subprocess.run([CLI, "run", DEMO, "--out", str(out), "--set", "tank1.Q=25 kW", "--t-end", "10 min"],
-                       capture_output=True, text=True, timeout=120)
+    p = cli("run", DEMO, "--out", out, "--set", "tank1.Q=25 kW", "--t-end", "10 min")
     assert p.returncode == 0, p.stderr
-    s = json.loads((out / "summary.json").read_text())
+    s = strict_json(out / "summary.json")
     for key in ("scene", "t_end_s", "d10_um", "d50_um", "d90_um", "bed_moisture", "T_gas_out_K", "balance",
                 "wall_time_s", "solver"):
         assert key in s
-    assert s["t_end_s"] == 600.0
+    assert s["scene"] == "demo_tanks" and s["t_end_s"] == 600.0
+    # quantities the demo scene does not have are null, not made up
+    for key in ("d10_um", "d50_um", "d90_um", "bed_moisture", "T_gas_out_K"):
+        assert s[key] is None, key
     assert set(s["balance"]) == {"water_rel", "solids_rel", "energy_rel"}
     assert all(v is not None and v < 1e-9 for v in s["balance"].values())
     assert set(s["solver"]) >= {"states", "steps", "residuals", "jacobians"}
+    # the override and the end time reached the solver: T_out = tank 2 at 600 s with Q1 = 25 kW, exactly
+    # (scene tolerances rtol 1e-8)
     assert math.isfinite(s["T_out_K"])
+    assert s["T_out_K"] == pytest.approx(exact_tank_temperatures(600.0, Q1=2.5e4)[1], rel=1e-6)
     assert (out / "timeseries.csv").stat().st_size > 1000
+    import pandas as pd
+
+    ts = pd.read_csv(out / "timeseries.csv", index_col=0)
+    assert ts.index[0] == 0.0 and ts.index[-1] == 600.0
+    assert ts["tank2.T"].iloc[-1] == pytest.approx(s["T_out_K"], rel=1e-9)
+    for t in (50.0, 150.0, 400.0):
+        k = int(np.argmin(np.abs(ts.index.to_numpy() - t)))
+        T1, T2 = exact_tank_temperatures(ts.index[k], Q1=2.5e4)
+        assert ts["tank1.T"].iloc[k] == pytest.approx(T1, rel=1e-6)
+        assert ts["tank2.T"].iloc[k] == pytest.approx(T2, rel=1e-6)
     assert (out / "plot_0.png").read_bytes()[:4] == b"\x89PNG"
 
 

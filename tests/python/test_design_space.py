@@ -5,13 +5,12 @@ import os
 
 import numpy as np
 import pytest
+from conftest import SCENE
 
 import granuflow as gf
 from granuflow import design_space as ds
 from granuflow import sweep
 
-ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
-SCENE = os.path.join(ROOT, "flowsheets", "stoeckl_gf25_batch.yaml")
 X = ("inlet.T", "degC", 40, 80, 5)
 Y = ("nozzle.mdot", "g/min", 60, 120, 4)
 CONSTRAINTS = {"d50_um": (">=", 400), "bed_moisture_wet": ("<", 0.04)}

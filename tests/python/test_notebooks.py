@@ -6,13 +6,9 @@ import sys
 import time
 
 import pytest
+from conftest import PKG_PATH, ROOT
 
-import granuflow as gf
-
-ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 NOTEBOOKS = sorted(glob.glob(os.path.join(ROOT, "flowsheets", "notebooks", "*.ipynb")))
-# the python/ folder holding the granuflow package this test imported (build/python, or PYTHONPATH's)
-PKG_PATH = os.path.dirname(os.path.dirname(os.path.abspath(gf.__file__)))
 
 nbformat = pytest.importorskip("nbformat", reason="Debian python3-nbformat")
 nbclient = pytest.importorskip("nbclient", reason="Debian python3-nbclient")

@@ -1,4 +1,5 @@
 """granuflow.sweep: the sweep-file loader, the generic runner and its executors, main effects."""
+import importlib.util
 import math
 import os
 import threading
@@ -7,12 +8,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from conftest import DEMO, ROOT, SCENE
+
 import granuflow as gf
 from granuflow import sweep
 
-ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
-SCENE = os.path.join(ROOT, "flowsheets", "stoeckl_gf25_batch.yaml")
-DEMO = os.path.join(ROOT, "flowsheets", "demo_tanks.yaml")
 TABLE1 = os.path.join(ROOT, "flowsheets", "stoeckl_gf25_table1.yaml")
 
 
@@ -74,10 +74,21 @@ def test_failed_points_are_rows_unless_asked_to_raise(tmp_path):
 
 
 def test_progress_bar_is_optional(capsys):
+    capsys.readouterr()
     df = sweep.run_sweep(gf.load(DEMO), [{}, {}], ["T_out_K"], progress=True, workers=1)
     assert (df["status"] == "ok").all()
-    df = sweep.run_sweep(gf.load(DEMO), [{}], ["T_out_K"], progress=False)
-    assert (df["status"] == "ok").all()
+    err = capsys.readouterr().err
+    if importlib.util.find_spec("tqdm"):  # optional: Debian python3-tqdm
+        assert "/2 [" in err, err  # a bar over the 2 runs, on stderr (tqdm may not redraw fast runs: 0/2 is fine)
+    else:
+        assert err == ""
+    quiet = sweep.run_sweep(gf.load(DEMO), [{}], ["T_out_K"], progress=False)
+    assert (quiet["status"] == "ok").all()
+    assert capsys.readouterr().err == ""  # no bar, nothing on stderr
+    # the bar does not change the result: both equal a direct run of the scene
+    direct = gf.load(DEMO).simulate().summary["T_out_K"]
+    assert df["T_out_K"].tolist() == pytest.approx([direct, direct], rel=1e-12)
+    assert quiet["T_out_K"][0] == pytest.approx(direct, rel=1e-12)
 
 
 def test_unknown_parameter_or_output_is_a_config_error():
