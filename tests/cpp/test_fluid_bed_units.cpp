@@ -216,7 +216,9 @@ TEST(Gf25Scene, InlinedJacobianIsTheSchurComplementOfTheFullOne) {
   }
 }
 TEST(Gf25Scene, SensitivitiesEqualFiniteDifferences) {
-  const std::vector<std::string> params{"bed.ln_beta0", "bed.k_break", "wall.k_wall", "bed.X_cr", "droplets.k_evap"};
+  // the bed's parameter tables (particle mass, breakage matrix) and its initial PSD carry parameter derivatives too
+  const std::vector<std::string> params{"bed.ln_beta0", "bed.k_break", "wall.k_wall", "bed.X_cr", "droplets.k_evap",
+                                        "bed.rho_s", "bed.q_frag", "bed.d_frag_min", "bed.d50_0", "bed.sigma_0"};
   Scene s = headline();
   SimOptions o = s.options;
   o.t_out = {0, 1200};
