@@ -141,7 +141,6 @@ class FluidBed : public UnitBase<FluidBed> {
 
   void configure(const UnitSpec&, const double* p) override {
     const auto& x = grid_->pivots();
-    const auto& de = grid_->diameter_edges();
     const auto& dp = grid_->diameter_pivots();
     // Aggregation targets of every pair (mass-based fixed pivot): the aggregate of volume x_j + x_k is split
     // between the pivots around it keeping number and mass; beyond the top pivot it stays in the top class

@@ -153,7 +153,7 @@ void PbmBatch::declare_grid(Settings& st) {
     const double d_max = st.get_real("d_max", 1000e-6, 1e-9, 1.0, "largest pivot diameter, m");
     const long classes = st.get_int("classes", 10, 2, 2000, "number of classes");
     if (!(d_max > d_min))
-      throw ConfigError(violation(st.where() + ".d_max", d_max, "m", "d_max > d_min (" + std::to_string(d_min) + ")"));
+      throw ConfigError(violation(st.where() + ".d_max", d_max, "m", "d_max > d_min (" + fmt_num(d_min) + " m)"));
     grid_ = std::make_unique<Grid>(Grid::from_diameter_pivots(log_spaced(d_min, d_max, static_cast<int>(classes))));
   }
   n_ = grid_->size();

@@ -30,9 +30,9 @@ class SprayNozzle : public UnitBase<SprayNozzle> {
     s.add_output("balance_solids_in", "kg");
     s.add_output("balance_energy_in", "J");
   }
-  void configure(const UnitSpec&, const double* p) override {
+  void check(const UnitSpec&, const double* p) const override {
     if (p[kOff] < p[kOn])
-      throw ConfigError(violation("spray_nozzle.t_off", p[kOff], "s", "t_off >= t_on (" + std::to_string(p[kOn]) + " s)"));
+      throw ConfigError(violation("t_off", p[kOff], "s", "t_off >= t_on (" + fmt_num(p[kOn]) + " s)"));
   }
   std::vector<double> breakpoints(const double* p) const override { return {p[kOn], p[kOff]}; }
   template <class T>

@@ -180,12 +180,9 @@ void DaeSystem::extend(double t, const double* y, const double* yp, double* y_fu
 }
 
 void DaeSystem::reconfigure() {
-  fs_.apply_links();
+  fs_.configure_units();
   auto& units = fs_.units();
-  for (size_t u = 0; u < units.size(); ++u) {
-    pvals_[u] = units[u].params;
-    units[u].unit->configure(units[u].spec, units[u].params.data());
-  }
+  for (size_t u = 0; u < units.size(); ++u) pvals_[u] = units[u].params;
   fill_params(0.0);
 }
 

@@ -45,8 +45,7 @@ double Settings::get_real(const std::string& name, double def, double lower, dou
   if (end == s->c_str() || *end != '\0' || !std::isfinite(v))
     throw ConfigError(where_ + "." + name + " = '" + *s + "': expected a finite number");
   if (v < lower || v > upper)
-    throw ConfigError(violation(where_ + "." + name, v, "",
-                                std::to_string(lower) + " <= " + name + " <= " + std::to_string(upper)));
+    throw ConfigError(violation(where_ + "." + name, v, "", fmt_num(lower) + " <= " + name + " <= " + fmt_num(upper)));
   declared_.back().value = v;
   return v;
 }
@@ -144,7 +143,7 @@ void Flowsheet::connect(const std::string& from, const std::string& to) {
     for (size_t i = 0; i < pa.grid.size(); ++i)
       if (std::abs(pa.grid[i] - pb.grid[i]) > 1e-9 * pa.grid[i])
         throw ConfigError("connection " + from + " -> " + to + ": size grids differ (pivot " + std::to_string(i) +
-                          ": " + std::to_string(pa.grid[i] * 1e6) + " um vs " + std::to_string(pb.grid[i] * 1e6) +
+                          ": " + fmt_num(pa.grid[i] * 1e6) + " um vs " + fmt_num(pb.grid[i] * 1e6) +
                           " um); give both units the same classes, d_min and d_max");
   }
   if (units_[b.first].peers[b.second].first >= 0) throw ConfigError("port " + to + " is connected twice");
@@ -255,17 +254,52 @@ const ParamSpec& Flowsheet::param_spec(int id) const {
   return units_[u].spec.params()[k];
 }
 
+std::string Flowsheet::qualified_name(int id) const {
+  auto [u, k] = param_location(id);
+  return units_[u].name + "." + units_[u].spec.params()[k].name;
+}
+
+int Flowsheet::link_source(int target) const {
+  for (const auto& [t, s] : links_)
+    if (t == target) return s;
+  return -1;
+}
+
+double Flowsheet::linked_value(int source) const {
+  auto [su, sk] = param_location(source);
+  const auto& in = units_[su].inputs[sk];
+  return in ? (*in)(0.0) : units_[su].params[sk];
+}
+
+// A link target reports the value it takes in a run (its source's), not the value stored before the last run.
 double Flowsheet::param_value(int id) const {
+  const int src = link_source(id);
+  if (src >= 0) return linked_value(src);
   auto [u, k] = param_location(id);
   return units_[u].params[k];
 }
 
 void Flowsheet::set_param_value(int id, double v) {
+  const int src = link_source(id);
+  // Setting a linked parameter to the value it follows changes nothing (a copy of every parameter value,
+  // e.g. for a worker process, can be set back); any other value would be overwritten by the link at the
+  // start of the run, so it is refused instead of being dropped silently.
+  if (src >= 0 && !(v == linked_value(src))) {
+    const ParamSpec& s = param_spec(id);
+    const std::string target = qualified_name(id), source = qualified_name(src);
+    throw ConfigError(target + " = " + fmt_num(v) + (s.unit.empty() || s.unit == "-" ? "" : " " + s.unit) +
+                      ": cannot be set, it follows " + source + " by a link (links: " + target + ": " + source +
+                      "); set " + source + " instead, or remove the link");
+  }
+  store_param(id, v);
+}
+
+void Flowsheet::store_param(int id, double v) {
   auto [u, k] = param_location(id);
   const ParamSpec& s = units_[u].spec.params()[k];
   const std::string where = units_[u].name + "." + s.name;
   if (!std::isfinite(v)) throw ConfigError(violation(where, v, s.unit, "a finite value"));
-  if (v < s.lower || v > s.upper) {
+  if (!(v >= s.lower && v <= s.upper)) {
     std::ostringstream rule;
     rule.precision(10);
     rule << s.lower << " <= " << s.name << " <= " << s.upper << (s.source.empty() ? "" : " (" + s.source + ")");
@@ -281,9 +315,13 @@ void Flowsheet::set_input(const std::string& qualified, PiecewiseLinear input) {
   const int id = param_id(qualified);
   auto [u, k] = param_location(id);
   const ParamSpec& s = units_[u].spec.params()[k];
+  if (const int src = link_source(id); src >= 0)
+    throw ConfigError("input " + qualified + ": cannot be set, " + qualified + " follows " + qualified_name(src) +
+                      " by a link (links: " + qualified + ": " + qualified_name(src) + "); give " +
+                      qualified_name(src) + " the input instead, or remove the link");
   for (size_t i = 0; i < input.values().size(); ++i) {
     const double v = input.values()[i];
-    if (v < s.lower || v > s.upper) {
+    if (!(v >= s.lower && v <= s.upper)) {
       std::ostringstream rule;
       rule.precision(10);
       rule << s.lower << " <= " << s.name << " <= " << s.upper;
@@ -301,15 +339,60 @@ void Flowsheet::link(const std::string& target, const std::string& source) {
                       param_spec(s).unit + ")");
   for (const auto& [tt, ss] : links_)
     if (tt == t) throw ConfigError("link " + target + ": linked twice");
+  if (link_source(s) >= 0)
+    throw ConfigError("link " + target + " -> " + source + ": " + source + " itself follows " +
+                      qualified_name(link_source(s)) + "; link " + target + " to " + qualified_name(link_source(s)));
+  if (!linked_targets(t).empty())
+    throw ConfigError("link " + target + " -> " + source + ": " + qualified_name(linked_targets(t)[0]) +
+                      " follows " + target + "; a linked parameter cannot be followed in turn");
+  if (has_input(t))
+    throw ConfigError("link " + target + " -> " + source + ": " + target +
+                      " has a time-dependent input, which the link would override; remove one of them");
   links_.push_back({t, s});
 }
 
 void Flowsheet::apply_links() {
   for (const auto& [t, s] : links_) {
-    auto [su, sk] = param_location(s);
-    const auto& in = units_[su].inputs[sk];
-    set_param_value(t, in ? (*in)(0.0) : units_[su].params[sk]);
+    try {
+      store_param(t, linked_value(s));
+    } catch (const ConfigError& e) {
+      throw ConfigError(std::string(e.what()) + " (" + qualified_name(t) + " follows " + qualified_name(s) +
+                        " by a link)");
+    }
   }
+}
+
+void Flowsheet::configure_units() {
+  apply_links();
+  for (auto& inst : units_) {
+    try {
+      inst.unit->check(inst.spec, inst.params.data());
+      inst.unit->configure(inst.spec, inst.params.data());
+    } catch (const ConfigError& e) {
+      throw ConfigError(qualify_unit_message(inst, e.what()));
+    }
+  }
+}
+
+void Flowsheet::check_units() {
+  apply_links();
+  for (auto& inst : units_) {
+    try {
+      inst.unit->check(inst.spec, inst.params.data());
+    } catch (const ConfigError& e) {
+      throw ConfigError(qualify_unit_message(inst, e.what()));
+    }
+  }
+}
+
+// configure() throws messages relative to its unit ("t_off = 600 s: violates t_off >= t_on (1800 s)"):
+// name the unit instance, as the parameter bounds do ("nozzle.t_off = ...").
+std::string Flowsheet::qualify_unit_message(const UnitInstance& inst, const std::string& m) {
+  for (const auto& p : inst.spec.params())
+    if (m.rfind(p.name + " = ", 0) == 0 || m.rfind(p.name + ": ", 0) == 0) return inst.name + "." + m;
+  const std::string type_prefix = "unit " + inst.unit->type();
+  if (m.rfind(type_prefix, 0) == 0) return "unit " + inst.name + " (" + inst.unit->type() + ")" + m.substr(type_prefix.size());
+  return "unit " + inst.name + " (" + inst.unit->type() + "): " + m;
 }
 
 std::vector<int> Flowsheet::linked_targets(int source) const {

@@ -43,6 +43,7 @@ class Loader {
     if (!units.IsMap() || units.size() == 0) fail("units", "expected a non-empty mapping of unit name -> {type, ...}");
     check_unique(units, "units");
     std::vector<std::pair<std::string, YAML::Node>> params;
+    std::map<std::string, std::string> given;  // unit.param -> scene key that set it (params or inputs)
     for (const auto& kv : units) {
       const std::string name = kv.first.as<std::string>();
       const std::string at = "units." + name;
@@ -103,28 +104,50 @@ class Loader {
         } catch (const ConfigError& e) {
           fail(at + "." + key, e.what());
         }
+        given[q] = at + "." + key;
       }
     }
 
-    if (root["inputs"]) load_inputs(root["inputs"], fs);
+    if (root["inputs"]) load_inputs(root["inputs"], fs, given);
     if (root["links"]) {
       const YAML::Node l = root["links"];
       if (!l.IsMap()) fail("links", "expected a mapping of unit.param -> unit.param it follows");
       check_unique(l, "links");
       for (const auto& kv : l) {
         const std::string target = kv.first.as<std::string>();
+        const std::string source = scalar(kv.second, "links." + target);
+        // A value given for a parameter that follows another would be overwritten at the start of every run.
+        if (auto g = given.find(target); g != given.end())
+          fail("links." + target, target + " follows " + source + " by this link but is also given as " + g->second +
+                                     "; remove one of them (set " + source + " instead)");
         try {
-          fs.link(target, scalar(kv.second, "links." + target));
+          fs.link(target, source);
         } catch (const ConfigError& e) {
           fail("links." + target, e.what());
         }
       }
     }
+    // Checks across parameters of a unit (t_off >= t_on ...), as a run would find them.
+    try {
+      fs.check_units();
+    } catch (const ConfigError& e) {
+      std::string m = e.what();
+      for (const auto& q : fs.param_names())
+        if (m.rfind(q + " = ", 0) == 0 || m.rfind(q + ": ", 0) == 0) {
+          auto g = given.find(q);
+          const auto dot = q.find('.');
+          m = (g != given.end() ? g->second
+                                : "units." + q.substr(0, dot) + ".params." + q.substr(dot + 1) + " (default)") +
+              m.substr(q.size());
+          break;
+        }
+      fail("", m);
+    }
     s.options.t_end = quantity(required(root, "t_end", ""), "t_end", "s");
     if (root["output"]) load_output(root["output"], s.options);
     if (root["solver"]) load_solver(root["solver"], s.options);
     try {
-      s.options.validate();
+      s.options.validate(true);
     } catch (const ConfigError& e) {
       rethrow(e);
     }
@@ -204,7 +227,10 @@ class Loader {
     check_keys(o, "output", {"n", "times"});
     if (o["n"]) opt.n_out = whole_number(o["n"], "output.n");
     if (o["times"]) {
-      if (!o["times"].IsSequence()) fail("output.times", "expected a list of times");
+      if (!o["times"].IsSequence() || o["times"].size() == 0)
+        fail("output.times", (o["times"].IsSequence() ? std::string("[]") : kind_name(o["times"])) +
+                                 ": expected a non-empty list of times in [0, t_end] (or output: {n: count})");
+      if (o["n"]) fail("output", "give either n or times, not both");
       for (size_t i = 0; i < o["times"].size(); ++i)
         opt.t_out.push_back(quantity(o["times"][i], "output.times[" + std::to_string(i) + "]", "s"));
     }
@@ -236,7 +262,7 @@ class Loader {
     if (s["linear_solver"]) opt.linear_solver = scalar(s["linear_solver"], "solver.linear_solver");
     if (s["dense_limit"]) opt.dense_limit = whole_number(s["dense_limit"], "solver.dense_limit");
   }
-  void load_inputs(const YAML::Node& in, Flowsheet& fs) const {
+  void load_inputs(const YAML::Node& in, Flowsheet& fs, std::map<std::string, std::string>& given) const {
     if (!in.IsMap()) fail("inputs", "expected a mapping of unit.param -> {times, values, interp}");
     check_unique(in, "inputs");
     for (const auto& kv : in) {
@@ -267,6 +293,7 @@ class Loader {
       } catch (const ConfigError& e) {
         rethrow(e);
       }
+      given[q] = at;
     }
   }
 

@@ -20,23 +20,30 @@
 
 namespace granuflow {
 
-void SimOptions::validate() const {
-  auto fail = [](const std::string& field, double v, const std::string& rule) {
-    throw ConfigError(violation("SimOptions." + field, v, "", rule));
+void SimOptions::validate(bool scene_keys) const {
+  // Named as the scene file's keys (t_end, output.times[i], solver.rtol ...) or as the fields of SimOptions.
+  auto name = [scene_keys](const std::string& field, const std::string& key) {
+    return scene_keys ? key : "SimOptions." + field;
   };
-  if (!(t_end > 0) || !std::isfinite(t_end)) fail("t_end", t_end, "t_end > 0");
-  if (!(rtol > 0 && rtol < 1)) fail("rtol", rtol, "0 < rtol < 1");
-  if (!(atol > 0)) fail("atol", atol, "atol > 0");
-  if (max_steps < 1) fail("max_steps", double(max_steps), "max_steps >= 1");
-  if (max_step < 0) fail("max_step", max_step, "max_step >= 0");
-  if (t_out.empty() && n_out < 2) fail("n_out", n_out, "n_out >= 2");
+  auto fail = [&](const std::string& field, const std::string& key, double v, const std::string& unit,
+                  const std::string& rule) { throw ConfigError(violation(name(field, key), v, unit, rule)); };
+  if (!(t_end > 0) || !std::isfinite(t_end)) fail("t_end", "t_end", t_end, scene_keys ? "s" : "", "t_end > 0");
+  if (!(rtol > 0 && rtol < 1)) fail("rtol", "solver.rtol", rtol, "", "0 < rtol < 1");
+  if (!(atol > 0)) fail("atol", "solver.atol", atol, "", "atol > 0");
+  if (max_steps < 1) fail("max_steps", "solver.max_steps", double(max_steps), "", "max_steps >= 1");
+  if (!(max_step >= 0)) fail("max_step", "solver.max_step", max_step, scene_keys ? "s" : "", "max_step >= 0");
+  if (t_out.empty() && n_out < 2) fail("n_out", "output.n", n_out, "", "n_out >= 2");
   for (size_t i = 0; i < t_out.size(); ++i) {
-    if (t_out[i] < 0 || t_out[i] > t_end * (1 + 1e-12))
-      fail("t_out[" + std::to_string(i) + "]", t_out[i], "0 <= t_out <= t_end");
-    if (i > 0 && !(t_out[i] > t_out[i - 1])) fail("t_out[" + std::to_string(i) + "]", t_out[i], "t_out increasing");
+    const std::string field = "t_out[" + std::to_string(i) + "]", key = "output.times[" + std::to_string(i) + "]";
+    if (!(t_out[i] >= 0 && t_out[i] <= t_end * (1 + 1e-12)))
+      fail(field, key, t_out[i], scene_keys ? "s" : "", "0 <= t_out <= t_end (" + fmt_num(t_end) + " s)");
+    if (i > 0 && !(t_out[i] > t_out[i - 1]))
+      fail(field, key, t_out[i], scene_keys ? "s" : "",
+           "t_out increasing (previous " + fmt_num(t_out[i - 1]) + " s)");
   }
   if (linear_solver != "auto" && linear_solver != "dense" && linear_solver != "sparse")
-    throw ConfigError("SimOptions.linear_solver = '" + linear_solver + "': not one of auto, dense, sparse");
+    throw ConfigError(name("linear_solver", "solver.linear_solver") + " = '" + linear_solver +
+                      "': not one of auto, dense, sparse");
 }
 
 void SteadyOptions::validate() const {

@@ -33,6 +33,15 @@ class CalibrationError : public std::runtime_error {
   explicit CalibrationError(const std::string& msg) : std::runtime_error(msg) {}
 };
 
+// A number for a message: %g-style, shortest form up to 12 significant digits ("1800", "0.01", "5e-05"),
+// never std::to_string's fixed "%f" (which shows 1e-9 as "0.000000").
+inline std::string fmt_num(double v) {
+  std::ostringstream os;
+  os.precision(12);
+  os << v;
+  return os.str();
+}
+
 // Message template "where = value unit: violates rule" (Ceres OPTION_GE style).
 inline std::string violation(const std::string& where, double value, const std::string& unit,
                              const std::string& rule) {

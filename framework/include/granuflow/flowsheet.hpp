@@ -83,8 +83,15 @@ class Flowsheet {
   // the start of every run, e.g. the initial bed temperature follows the inlet temperature (a value set on a
   // linked target is overwritten then); a sensitivity with respect to `source` includes the path through
   // `target`.
+  // Setting a link target (set_param, set_input) to anything but the value it follows is a ConfigError that
+  // names the link; param() of a link target is its source's value.
   void link(const std::string& target, const std::string& source);
   void apply_links();
+  int link_source(int target) const;  // -1 unless `target` follows a parameter
+  std::string qualified_name(int id) const;  // "unit.param"
+  // apply_links(), then every unit's configure(); a ConfigError from a unit names the unit instance.
+  void configure_units();
+  void check_units();  // apply_links(), then every unit's check() (no configure()), named as above
   std::vector<int> linked_targets(int source) const;
   // Breakpoints of all inputs inside (0, t_end).
   std::vector<double> breakpoints(double t_end) const;
@@ -105,6 +112,9 @@ class Flowsheet {
 
  private:
   std::pair<int, int> split_port(const std::string& qualified) const;
+  double linked_value(int source) const;
+  void store_param(int id, double value_si);  // bounds-checked, ignores links
+  static std::string qualify_unit_message(const UnitInstance& inst, const std::string& message);
   std::string name_;
   std::vector<UnitInstance> units_;
   std::vector<std::pair<std::pair<int, int>, std::pair<int, int>>> connections_;

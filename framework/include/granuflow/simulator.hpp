@@ -25,8 +25,8 @@ struct SimOptions {
   bool sens_error_control = true;
   std::string linear_solver = "auto";     // auto | dense | sparse (auto: dense up to dense_limit states)
   int dense_limit = 400;
-  // Throws ConfigError naming the field, the value and the rule.
-  void validate() const;
+  // Throws ConfigError naming the value and the rule, and the field as SimOptions.<field> or, with scene_keys, as the scene file's key.
+  void validate(bool scene_keys = false) const;
 };
 
 struct SolverStats {

@@ -168,6 +168,9 @@ class Unit {
   // Called before each run with current parameter values (at t = 0): precompute what does not change
   // with the state. Throws ConfigError for combinations the bounds alone cannot catch.
   virtual void configure(const UnitSpec& /*spec*/, const double* /*params*/) {}
+  // Cheap checks across parameters (t_off >= t_on) that the bounds alone cannot catch; called before every
+  // configure() and when a scene is loaded. Throws ConfigError relative to the unit ("t_off = 600 s: ...").
+  virtual void check(const UnitSpec& /*spec*/, const double* /*params*/) const {}
 
   virtual Status residual(const Ctx<double>& c) const = 0;
   virtual Status residual(const Ctx<Jet>& c) const = 0;
