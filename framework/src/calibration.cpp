@@ -117,7 +117,7 @@ void parallel_for(int n, int threads, F&& f) {
 void validate_experiments(const std::vector<Experiment>& exps) {
   for (const auto& e : exps) {
     if (!(e.t_end >= 0) || !std::isfinite(e.t_end))
-      throw ConfigError(violation("experiment '" + e.name + "'.t_end", e.t_end, "s", "0 <= t_end < inf"));
+      throw ConfigError(violation("experiment '" + e.name + "'.t_end", e.t_end, "s", "0 <= t_end < inf (0: the last sample time)"));
     for (const auto& o : e.observations) {
       const std::string w = "experiment '" + e.name + "': observation " + o.name;
       if (o.t.size() != o.value.size())
@@ -128,9 +128,16 @@ void validate_experiments(const std::vector<Experiment>& exps) {
                           ", " + std::to_string(o.sigma_rel) + ")");
       if (!(o.sigma_abs >= 0 && o.sigma_rel >= 0) || !std::isfinite(o.sigma_abs) || !std::isfinite(o.sigma_rel))
         throw ConfigError(w + ": sigma must be finite and >= 0");
-      for (size_t i = 0; i < o.t.size(); ++i)
+      for (size_t i = 0; i < o.t.size(); ++i) {
         if (!(o.t[i] >= 0) || !std::isfinite(o.t[i]) || (i > 0 && !(o.t[i] > o.t[i - 1])))
-          throw ConfigError(violation(w + ".t[" + std::to_string(i) + "]", o.t[i], "s", "t >= 0, increasing"));
+          throw ConfigError(violation(w + ".t[" + std::to_string(i) + "]", o.t[i], "s", "t >= 0, finite, increasing"));
+        if (e.t_end > 0 && o.t[i] > e.t_end)
+          throw ConfigError(violation(w + ".t[" + std::to_string(i) + "]", o.t[i], "s",
+                                      "t <= t_end = " + std::to_string(e.t_end) + " s"));
+        if (std::isinf(o.value[i]))
+          throw ConfigError(violation(w + ".value[" + std::to_string(i) + "] at t = " + std::to_string(o.t[i]) + " s",
+                                      o.value[i], "", "a finite number (NaN: not measured)"));
+      }
     }
   }
 }
@@ -160,6 +167,8 @@ Space make_space(const Flowsheet& fs, const Stage& stage) {
     if (fs.has_input(id)) throw ConfigError(where + " is a time-dependent input; only constants can be calibrated");
     const ParamSpec& spec = fs.param_spec(id);
     const double lo = f.lower.value_or(spec.lower), hi = f.upper.value_or(spec.upper);
+    if (std::isnan(lo)) throw ConfigError(violation(where + ".lower", lo, spec.unit, "lower is a number"));
+    if (std::isnan(hi)) throw ConfigError(violation(where + ".upper", hi, spec.unit, "upper is a number"));
     if (lo < spec.lower) throw ConfigError(violation(where + ".lower", lo, spec.unit, "lower >= declared lower bound"));
     if (hi > spec.upper) throw ConfigError(violation(where + ".upper", hi, spec.unit, "upper <= declared upper bound"));
     if (!(hi > lo)) throw ConfigError(violation(where + ".upper", hi, spec.unit, "upper > lower"));
@@ -441,8 +450,12 @@ struct StageRun {
     });
     for (auto& m : all)
       if (m->rows() > 0) models.push_back(std::move(m));
-    if (models.empty())
-      throw CalibrationError("stage '" + stage.name + "': no experiment has data for its observables");
+    if (models.empty()) {
+      std::string names;
+      for (const auto& o : stage.observables) names += (names.empty() ? "" : ", ") + o;
+      throw ConfigError("stage '" + stage.name + "': no experiment has data for its observables (" +
+                        (names.empty() ? std::string("all") : names) + "); give data for at least one of them");
+    }
     for (auto& m : models) costs.push_back(std::make_unique<ExperimentCost>(m.get(), space.size(), opt.sigma_basis));
   }
 
@@ -800,6 +813,18 @@ CalibrationResult calibrate(const Scene& scene, const Registry<Unit>& reg, const
   for (const auto& [k, v] : start) {
     fs.param_id(k);
     out.parameters[k] = v;
+  }
+  // A start value outside the bounds of a stage that frees it is bad input (not clipped silently).
+  for (const auto& st : stages) {
+    const Space sp = make_space(fs, st);
+    for (int k = 0; k < sp.size(); ++k) {
+      const auto it = start.find(sp.names[k]);
+      if (it == start.end()) continue;
+      if (!(it->second >= sp.lower[k] && it->second <= sp.upper[k]))
+        throw ConfigError(violation("start." + sp.names[k], it->second, fs.param_spec(fs.param_id(sp.names[k])).unit,
+                                    fmt(sp.lower[k], 12) + " <= " + sp.names[k] + " <= " + fmt(sp.upper[k], 12) +
+                                        " (bounds of stage '" + st.name + "')"));
+    }
   }
   for (const auto& st : stages)
     for (const auto& f : st.free)

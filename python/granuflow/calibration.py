@@ -109,28 +109,73 @@ _FREE_KEYS = ("transform", "lower", "upper", "logarithmic")
 # ------------------------------------------------------------------------------------------------
 # quantities
 # ------------------------------------------------------------------------------------------------
-def _split(text: str) -> tuple[float, str]:
+def _split(text: str, where: str = "") -> tuple[float, str]:
     try:
         return _split_quantity(str(text))
     except (ValueError, IndexError):
-        raise ConfigError(f"'{text}': expected a number, optionally followed by a unit") from None
+        raise ConfigError(f"{where + ' = ' if where else ''}'{text}': expected a number, optionally followed by a "
+                          "unit") from None
+
+
+def _number(value: Any, where: str) -> float:
+    if isinstance(value, str):
+        try:
+            return float(value)
+        except ValueError:
+            pass
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise ConfigError(f"{where} = {value!r}: expected a number, optionally followed by a unit")
+    return float(value)
 
 
 def _to_si(value: Any, si_unit: str, where: str, unit: str = "") -> float:
     """A number in `unit` (or a string "value unit") converted to `si_unit`."""
     if isinstance(value, str):
-        v, u = _split(value)
+        v, u = _split(value, where)
         return _core.to_si(v, u or unit, si_unit, where)
-    return _core.to_si(float(value), unit, si_unit, where)
+    return _core.to_si(_number(value, where), unit, si_unit, where)
+
+
+def _show(x: Any) -> str:
+    """A value as the user wrote it: numbers short (10, 0.5, inf), text quoted."""
+    if isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, bool):
+        return f"{float(x):g}"
+    return repr(x)
+
+
+def _in_context(where: str, fn, *args):
+    """fn(*args), a ConfigError from it prefixed with `where` (the file and key) unless it already names it."""
+    try:
+        return fn(*args)
+    except ConfigError as e:
+        msg = " ".join(str(e).split())
+        raise ConfigError(msg if msg.startswith(where) else f"{where}: {msg}") from None
+
+
+def _param_spec(fs: Flowsheet, name: str, where: str) -> dict:
+    """The declared spec of parameter `name`; ConfigError naming `where` and the parameters otherwise."""
+    if name not in fs.params:
+        raise ConfigError(f"{where}: unknown parameter '{name}' of scene '{fs.name}' (allowed: {', '.join(fs.params)})")
+    return fs.spec(name)
+
+
+def _param_to_si(fs: Flowsheet, name: str, value: Any, where: str) -> float:
+    """A parameter value (units allowed) in SI, within the declared bounds; ConfigError naming `where`."""
+    spec = _param_spec(fs, name, where)
+    v = _to_si(value, spec["unit"], where)
+    if not (math.isfinite(v) and spec["lower"] <= v <= spec["upper"]):
+        raise ConfigError(f"{where} = {_show(value)}: {v:g} {spec['unit']} is outside the declared bounds "
+                          f"{spec['lower']:g} <= {name} <= {spec['upper']:g} {spec['unit']}".rstrip())
+    return v
 
 
 def _difference_to_si(value: Any, si_unit: str, where: str, unit: str = "") -> float:
     """A difference (a standard deviation): offsets such as degC -> K cancel."""
     if isinstance(value, str):
-        v, u = _split(value)
+        v, u = _split(value, where)
         u = u or unit
     else:
-        v, u = float(value), unit
+        v, u = _number(value, where), unit
     return _core.to_si(v, u, si_unit, where) - _core.to_si(0.0, u, si_unit, where)
 
 
@@ -206,11 +251,11 @@ def _sigma_entry(spec: Any, si_unit: str, where: str) -> tuple[float, float]:
         raise ConfigError(f"{where}: expected {{abs: value [unit]}} or {{rel: fraction}}, got {spec!r}")
     if "abs" in spec:
         v = _difference_to_si(spec["abs"], si_unit, where)
-        if not v > 0:
-            raise ConfigError(f"{where}.abs = {v}: violates abs > 0")
+        if not (v > 0 and math.isfinite(v)):
+            raise ConfigError(f"{where}.abs = {spec['abs']!r}: violates 0 < abs < inf")
         return v, 0.0
-    v = float(spec["rel"])
-    if not v > 0:
+    v = _number(spec["rel"], f"{where}.rel")
+    if not (v > 0 and math.isfinite(v)):
         raise ConfigError(f"{where}.rel = {v}: violates rel > 0")
     return 0.0, v
 
@@ -223,24 +268,33 @@ def _parse_header(h: str) -> tuple[str, str]:
     return h, ""
 
 
-def _read_csv(path: str) -> tuple[dict[str, list[float]], dict[str, str]]:
+def _read_csv(path: str) -> tuple[dict[str, list[float | None]], dict[str, str], list[int]]:
+    """Columns (None: an empty field, not measured; inf and nan kept, the caller rejects them), units and the
+    line number of every row."""
     with open(path, newline="") as f:
-        rows = list(csv.reader(f))
-    rows = [r for r in rows if r and not r[0].lstrip().startswith("#")]
+        rows = list(enumerate(csv.reader(f), start=1))
+    rows = [(i, r) for i, r in rows if r and not r[0].lstrip().startswith("#")]
     if not rows:
         raise ConfigError(f"{path}: empty data file")
-    header = [_parse_header(h) for h in rows[0]]
-    cols: dict[str, list[float]] = {n: [] for n, _ in header}
-    for i, r in enumerate(rows[1:], start=2):
+    header = [_parse_header(h) for h in rows[0][1]]
+    names = [n for n, _ in header]
+    if len(set(names)) != len(names):
+        dup = next(n for n in names if names.count(n) > 1)
+        raise ConfigError(f"{path}:{rows[0][0]}: column '{dup}' appears twice in the header")
+    cols: dict[str, list[float | None]] = {n: [] for n in names}
+    lines = []
+    for i, r in rows[1:]:
         if len(r) != len(header):
             raise ConfigError(f"{path}:{i}: {len(r)} fields, the header has {len(header)}")
-        for (n, _), v in zip(header, r):
+        for n, v in zip(names, r):
             v = v.strip()
             try:
-                cols[n].append(float(v) if v not in ("", "nan", "NaN", "NA") else math.nan)
+                cols[n].append(None if v == "" else float(v))
             except ValueError:
-                raise ConfigError(f"{path}:{i}: column {n}: '{v}' is not a number") from None
-    return cols, {n: u for n, u in header}
+                raise ConfigError(f"{path}:{i}: column {n}: '{v}' is not a number "
+                                  "(leave the field empty: not measured)") from None
+        lines.append(i)
+    return cols, {n: u for n, u in header}, lines
 
 
 def _check_mapping(doc: Any, allowed: Sequence[str], where: str) -> dict:
@@ -301,40 +355,89 @@ def load_experiments(path: str | os.PathLike, flowsheet: Flowsheet | None = None
                 raise ConfigError(f"{where}.{k}: expected a mapping, got {run[k]!r}")
         settings = {}
         for k, v in (run.get("set") or {}).items():
-            settings[k] = _to_si(v, fs.spec(k)["unit"], f"{where}.set.{k}")
+            settings[k] = _param_to_si(fs, k, v, f"{where}.set.{k}")
+        t_end = run.get("t_end")
+        if t_end is not None:
+            t_end_si = _to_si(t_end, "s", f"{where}.t_end")
+            if not (t_end_si > 0 and math.isfinite(t_end_si)):
+                raise ConfigError(f"{where}.t_end = {_show(t_end)}: violates 0 < t_end < inf (leave it out for the last "
+                                  "sample time)")
+            t_end = t_end_si
         data = run.get("data")
         if isinstance(data, str):
-            cols, units = _read_csv(data if os.path.isabs(data) else os.path.join(base, data))
+            csv_path = data if os.path.isabs(data) else os.path.join(base, data)
+            cols, units, lines = _in_context(f"{where}.data", _read_csv, csv_path)
+
+            def at(name: str, i: int) -> str:
+                return f"{where}.data: {csv_path}:{lines[i]}: {name}"
+            empty = "leave the field empty"
         elif isinstance(data, dict):
-            units = dict(data.get("units", {}) or {})
+            units = data.get("units", {}) or {}
+            if not isinstance(units, dict) or not all(isinstance(u, str) for u in units.values()):
+                raise ConfigError(f"{where}.data.units: expected a mapping column -> unit name, got {units!r}")
+            units = dict(units)
             cols = {}
             for k, v in data.items():
                 if k == "units":
                     continue
-                if not isinstance(v, list) or not all(x is None or isinstance(x, (int, float)) for x in v):
+                if not isinstance(v, list) or not all(x is None or (isinstance(x, (int, float)) and
+                                                                    not isinstance(x, bool)) for x in v):
                     raise ConfigError(f"{where}.data.{k}: expected a list of numbers (null: not measured), got {v!r}")
-                cols[k] = [math.nan if x is None else float(x) for x in v]
+                cols[k] = [None if x is None else float(x) for x in v]
+
+            def at(name: str, i: int) -> str:
+                return f"{where}.data.{name}[{i}]"
+            empty = "null"
         else:
-            raise ConfigError(f"{where}.data: expected a CSV file name or a mapping of columns")
+            raise ConfigError(f"{where}.data: expected a CSV file name or a mapping of columns, got {data!r}")
         if "t" not in cols:
             raise ConfigError(f"{where}.data: no time column 't' (e.g. 't [min]')")
-        t = np.array([_to_si(x, "s", f"{where}.t", units.get("t", "")) for x in cols.pop("t")])
+        t_raw = cols.pop("t")
+        t_unit = units.get("t", "")
+        for k in units:
+            if k != "t" and k not in cols:
+                raise ConfigError(f"{where}.data.units: '{k}' is not a data column (columns: {', '.join(['t', *cols])})")
+        t = []
+        for i, x in enumerate(t_raw):
+            ts = math.nan if x is None else _to_si(x, "s", f"{at('t', i)}", t_unit)
+            if not (ts >= 0 and math.isfinite(ts)) or (t and not ts > t[-1]):
+                raise ConfigError(f"{at('t', i)} = {_show(x)} {t_unit}: times must be finite, >= 0 and increasing".rstrip())
+            if t_end is not None and ts > t_end * (1 + 1e-12):
+                raise ConfigError(f"{at('t', i)} = {_show(x)} {t_unit}: after the run's end, t_end = {_show(run['t_end'])} "
+                                  "(data must lie within 0 <= t <= t_end)")
+            t.append(ts)
+        t = np.array(t, dtype=float)
+
+        def t_text(i: int) -> str:
+            return f"t = {_show(t_raw[i])} {t_unit}".rstrip()
         sig = {**defaults, **(run.get("sigma") or {})}
         obs = []
         for oname, values in cols.items():
-            si_unit = _core.observable_unit(sc, oname)
+            si_unit = _in_context(f"{where}.data.{oname}", _core.observable_unit, sc, oname)
             if len(values) != len(t):
                 raise ConfigError(f"{where}.data.{oname}: {len(values)} values for {len(t)} times")
-            v = np.array([math.nan if not np.isfinite(x) else _to_si(x, si_unit, f"{where}.{oname}", units.get(oname, ""))
-                          for x in values])
+            v = []
+            for i, x in enumerate(values):
+                if x is None:
+                    v.append(math.nan)
+                    continue
+                if not math.isfinite(x):
+                    raise ConfigError(f"{at(oname, i)} = {_show(x)} at {t_text(i)}: not a finite number ({empty}: not "
+                                      "measured)")
+                xs = _to_si(x, si_unit, f"{where}.data.{oname}", units.get(oname, ""))
+                if not math.isfinite(xs):
+                    raise ConfigError(f"{at(oname, i)} = {x} at {t_text(i)}: {xs} {si_unit} is not finite")
+                v.append(xs)
+            v = np.array(v, dtype=float)
             if oname not in sig:
                 raise ConfigError(f"{where}: no sigma for observable {oname} (give it under `sigma:`)")
             sa, sr = _sigma_entry(sig[oname], si_unit, f"{where}: sigma.{oname}")
             keep = np.isfinite(v)
             obs.append(Observation(oname, t[keep], v[keep], sa, sr))
-        t_end = run.get("t_end")
-        exps.append(Experiment(name, settings, obs, None if t_end is None else _to_si(t_end, "s", f"{where}.t_end"),
-                               str(run.get("kind", "")), use))
+        if not any(len(o.t) for o in obs):
+            raise ConfigError(f"{where}.data: no measured value (every value is {empty} or there are no rows); "
+                              "give at least one number")
+        exps.append(Experiment(name, settings, obs, t_end, str(run.get("kind", "")), use))
     return ExperimentSet(str(doc.get("experiments", os.path.splitext(os.path.basename(path))[0])), exps,
                          scene, str(doc.get("description", "")))
 
@@ -505,8 +608,15 @@ def load_stages(path: str | os.PathLike, flowsheet: Flowsheet) -> StagePlan:
     """Read a stage file (see the module docstring)."""
     path = os.fspath(path)
     doc = _read_mapping(path, _STAGEFILE_KEYS)
-    start = {k: _to_si(v, flowsheet.spec(k)["unit"], f"{path}: start.{k}") for k, v in (doc.get("start") or {}).items()}
-    options = dict(doc.get("options") or {})
+    start_doc = doc.get("start") or {}
+    if not isinstance(start_doc, dict):
+        raise ConfigError(f"{path}: start: expected a mapping parameter -> value [unit], got {start_doc!r}")
+    start = {k: _param_to_si(flowsheet, k, v, f"{path}: start.{k}") for k, v in start_doc.items()}
+    options = doc.get("options") or {}
+    if not isinstance(options, dict):
+        raise ConfigError(f"{path}: options: expected a mapping of CalibrationOptions fields, got {options!r}")
+    options = dict(options)
+    _in_context(f"{path}: options", _core.check_calibration_options, options)
     stages: list[Stage] = []
     seen: dict[str, FreeParameter] = {}
     if not isinstance(doc.get("stages") or [], list):
@@ -519,29 +629,90 @@ def load_stages(path: str | os.PathLike, flowsheet: Flowsheet) -> StagePlan:
         free: list[FreeParameter] = []
         if free_spec == "inherit":
             free = list(seen.values())
+            if not free:
+                raise ConfigError(f"{where}.free = inherit: no stage before it has free parameters")
         elif isinstance(free_spec, dict):
             for p, spec in free_spec.items():
-                spec = _check_mapping(spec or {}, _FREE_KEYS, f"{where}.free.{p}")
-                u = flowsheet.spec(p)["unit"]
-                fp = FreeParameter(p, str(spec.get("transform", "none")),
-                                   None if spec.get("lower") is None else _to_si(spec["lower"], u, f"{where}.free.{p}.lower"),
-                                   None if spec.get("upper") is None else _to_si(spec["upper"], u, f"{where}.free.{p}.upper"),
-                                   spec.get("logarithmic"))
+                fp = _free_parameter(flowsheet, p, spec, f"{where}.free.{p}")
                 free.append(fp)
                 seen[p] = fp
+            if not free:
+                raise ConfigError(f"{where}.free: empty; give at least one parameter "
+                                  "(e.g. wall.k_wall: {transform: log, lower: 1, upper: 200}) or 'inherit'")
         else:
-            raise ConfigError(f"{where}.free: expected a mapping of parameters or 'inherit'")
+            raise ConfigError(f"{where}.free = {free_spec!r}: expected a mapping of parameters or 'inherit'")
         obs = st.get("observables", "all")
         if obs not in ("all", None) and not isinstance(obs, list):
             raise ConfigError(f"{where}.observables: expected a list of observables or 'all', got {obs!r}")
         obs = [] if obs in ("all", None) else [str(o) for o in obs]
-        for o in obs:
-            _core.observable_unit(flowsheet._scene, o)
+        for j, o in enumerate(obs):
+            _in_context(f"{where}.observables[{j}]", _core.observable_unit, flowsheet._scene, o)
         stages.append(Stage(name, free, obs))
     if not stages:
         raise ConfigError(f"{path}: no stages")
+    for k, v in start.items():
+        for i, stg in enumerate(stages):
+            for f in stg.free:
+                if f.name != k:
+                    continue
+                spec = flowsheet.spec(k)
+                lo = spec["lower"] if f.lower is None else f.lower
+                hi = spec["upper"] if f.upper is None else f.upper
+                if not lo <= v <= hi:
+                    raise ConfigError(f"{path}: start.{k} = {_show(start_doc[k])}: {v:g} {spec['unit']} is outside the "
+                                      f"bounds {lo:g} <= {k} <= {hi:g} {spec['unit']} of stage '{stg.name}' "
+                                      f"(stages[{i}].free.{k})")
     return StagePlan(str(doc.get("name", os.path.splitext(os.path.basename(path))[0])), stages, start, options,
                      str(doc.get("description", "")))
+
+
+def _free_parameter(flowsheet: Flowsheet, p: str, spec: Any, where: str) -> FreeParameter:
+    """One entry of a stage's ``free:`` mapping, checked: parameter, transform, bounds (SI), logarithmic."""
+    spec = _check_mapping({} if spec is None else spec, _FREE_KEYS, where)
+    decl = _param_spec(flowsheet, p, where)
+    u = decl["unit"]
+    transform = spec.get("transform", "none")
+    if transform not in ("none", "log"):
+        raise ConfigError(f"{where}.transform = {transform!r}: not one of none, log")
+    bounds = {}
+    for key in ("lower", "upper"):
+        if spec.get(key) is None:
+            bounds[key] = None
+            continue
+        v = _to_si(spec[key], u, f"{where}.{key}")
+        if math.isnan(v):
+            raise ConfigError(f"{where}.{key} = {_show(spec[key])}: not a number")
+        bounds[key] = v
+    lo = decl["lower"] if bounds["lower"] is None else bounds["lower"]
+    hi = decl["upper"] if bounds["upper"] is None else bounds["upper"]
+    if bounds["lower"] is not None and not lo >= decl["lower"]:
+        raise ConfigError(f"{where}.lower = {_show(spec['lower'])}: below the declared lower bound {decl['lower']:g} {u}")
+    if bounds["upper"] is not None and not hi <= decl["upper"]:
+        raise ConfigError(f"{where}.upper = {_show(spec['upper'])}: above the declared upper bound {decl['upper']:g} {u}")
+    if not hi > lo:
+        key = "upper" if bounds["upper"] is not None else "lower"
+        raise ConfigError(f"{where}.{key} = {_show(spec.get(key, hi))}: violates upper > lower "
+                          f"(lower {lo:g} {u}, upper {hi:g} {u})")
+    if transform == "log" and not lo > 0:
+        raise ConfigError(f"{where}.lower = {_show(spec.get('lower', lo))}: transform log needs lower > 0 "
+                          f"(lower {lo:g} {u})")
+    logarithmic = spec.get("logarithmic")
+    if logarithmic is not None and not isinstance(logarithmic, bool):
+        raise ConfigError(f"{where}.logarithmic = {logarithmic!r}: expected true or false")
+    return FreeParameter(p, transform, bounds["lower"], bounds["upper"], logarithmic)
+
+
+def check_stage_data(plan: "StagePlan", experiments: Sequence[Experiment], stages_path: str = "",
+                     experiments_path: str = "") -> None:
+    """Every stage must see data: some experiment measures at least one of its observables (bad input otherwise)."""
+    measured = {o.name for e in experiments for o in e.observations if len(o.t)}
+    for i, st in enumerate(plan.stages):
+        wanted = st.observables or sorted(measured)
+        if not measured.intersection(wanted):
+            where = f"{stages_path}: stages[{i}] '{st.name}'" if stages_path else f"stage '{st.name}'"
+            src = f"calibration run of {experiments_path}" if experiments_path else "calibration experiment"
+            raise ConfigError(f"{where}.observables = [{', '.join(st.observables) or 'all'}]: no {src} "
+                              f"has data for them (measured: {', '.join(sorted(measured)) or 'nothing'})")
 
 
 def paper001_stages() -> StagePlan:
@@ -855,12 +1026,30 @@ def report(flowsheet: Flowsheet, result: CalibrationResult, calibration: Sequenc
 # ------------------------------------------------------------------------------------------------
 # multi-start
 # ------------------------------------------------------------------------------------------------
-def random_starts(stages: Sequence[Stage] | StagePlan, n: int, *, center: Mapping[str, float], spread: float = 1.0,
-                  seed: int | None = 0) -> list[dict[str, float]]:
-    """`n` start points: each free parameter drawn uniformly within ±`spread` of `center` (in ln units for
-    log-transformed and logarithmic parameters, relative otherwise), clipped to its bounds."""
+def stage_bounds(stages: Sequence[Stage] | StagePlan, flowsheet: Flowsheet | None = None) -> dict[str, tuple]:
+    """Per free parameter (lower, upper) in SI that every stage freeing it accepts (the declared bounds of
+    `flowsheet` where a stage gives none; ±inf without a flowsheet)."""
     if isinstance(stages, StagePlan):
         stages = stages.stages
+    out: dict[str, tuple] = {}
+    for s in stages:
+        for f in s.free:
+            spec = flowsheet.spec(f.name) if flowsheet is not None else {"lower": -math.inf, "upper": math.inf}
+            lo = spec["lower"] if f.lower is None else f.lower
+            hi = spec["upper"] if f.upper is None else f.upper
+            plo, phi = out.get(f.name, (-math.inf, math.inf))
+            out[f.name] = (max(lo, plo), min(hi, phi))
+    return out
+
+
+def random_starts(stages: Sequence[Stage] | StagePlan, n: int, *, center: Mapping[str, float], spread: float = 1.0,
+                  seed: int | None = 0, flowsheet: Flowsheet | None = None) -> list[dict[str, float]]:
+    """`n` start points: each free parameter drawn uniformly within ±`spread` of `center` (in ln units for
+    log-transformed and logarithmic parameters, relative otherwise), clipped to the bounds of every stage that
+    frees it (and to the declared bounds of `flowsheet`, when given)."""
+    if isinstance(stages, StagePlan):
+        stages = stages.stages
+    bounds = stage_bounds(stages, flowsheet)
     rng = np.random.default_rng(seed)
     starts = []
     for _ in range(n):
@@ -875,8 +1064,7 @@ def random_starts(stages: Sequence[Stage] | StagePlan, n: int, *, center: Mappin
                 v = c + u
             else:
                 v = c * (1 + u)
-            lo = -math.inf if f.lower is None else f.lower
-            hi = math.inf if f.upper is None else f.upper
+            lo, hi = bounds[name]
             p[name] = min(max(v, lo), hi)
         starts.append(p)
     return starts

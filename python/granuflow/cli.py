@@ -52,24 +52,95 @@ def _check_at_least(option: str, value, lower) -> None:
         raise ConfigError(f"{option} = {value}: expected a number >= {lower}")
 
 
-def _plot_specs(fs) -> list[dict]:
-    """The scene's ``plots:`` list, checked before the run: each ``kind: psd`` or with ``y``, a list of names."""
+_SERIES_KEYS = ("title", "y", "unit", "ylabel", "file")
+_PSD_KEYS = ("kind", "times_min", "file")
+
+
+def check_out_dir(out: str, option: str = "--out") -> None:
+    """The output folder: an existing folder or a path that can be created (not an existing file)."""
     from ._core import ConfigError
+
+    if os.path.exists(out) and not os.path.isdir(out):
+        raise ConfigError(f"{option} = '{out}': an existing file, not a folder (give a folder to write to)")
+    parent = out
+    while parent and not os.path.exists(parent):
+        parent = os.path.dirname(parent.rstrip(os.sep))
+    if parent and not os.path.isdir(parent):
+        raise ConfigError(f"{option} = '{out}': '{parent}' is a file, not a folder (give a folder to write to)")
+
+
+def _plot_file(name, where: str, formats: list[str]) -> str:
+    """A plot's `file:`: a plain file name (no folder) with an extension matplotlib writes."""
+    from ._core import ConfigError
+
+    if not isinstance(name, str) or not name.strip():
+        raise ConfigError(f"{where} = {name!r}: expected a file name such as plot.png")
+    if name != os.path.basename(name) or "/" in name or "\\" in name or name in (".", "..") or os.path.isabs(name):
+        raise ConfigError(f"{where} = '{name}': expected a plain file name inside the output folder "
+                          "(no folder part, e.g. plot.png)")
+    ext = os.path.splitext(name)[1].lstrip(".").lower()
+    if ext not in formats:
+        raise ConfigError(f"{where} = '{name}': extension '{ext}' is not an image format matplotlib writes "
+                          f"(allowed: {', '.join(formats)})")
+    return name
+
+
+def _plot_specs(fs) -> list[dict]:
+    """The scene's ``plots:`` list, checked before the run: each ``kind: psd`` (``times_min`` within the scene's
+    t_end; a shorter ``--t-end`` leaves the later times out of the plot and says so) or
+    with ``y``, a list of names, and a ``unit`` that fits them; ``file`` a plain image file name."""
+    import math
+
+    from . import plots
+    from ._core import ConfigError, observable_unit
 
     specs = fs.extra.get("plots") or []
     where = f"{fs.path or fs.name}: plots"
     if not isinstance(specs, list):
         raise ConfigError(f"{where}: expected a list of plot mappings, got {specs!r}")
     known = set(fs.state_names) | set(fs.output_names)
+    formats = plots.supported_formats() if specs else []
+    t_end_min = fs.t_end / 60.0
     for k, spec in enumerate(specs):
-        if isinstance(spec, dict) and spec.get("kind") == "psd":
+        w = f"{where}[{k}]"
+        if isinstance(spec, dict) and "kind" in spec:
+            if spec["kind"] != "psd":
+                raise ConfigError(f"{w}.kind = {spec['kind']!r}: not one of psd (or leave kind out and give y)")
+            for key in spec:
+                if key not in _PSD_KEYS:
+                    raise ConfigError(f"{w}: unknown key '{key}' (allowed for kind psd: {', '.join(_PSD_KEYS)})")
+            if "file" in spec:
+                _plot_file(spec["file"], f"{w}.file", formats)
+            if "times_min" in spec:
+                times = spec["times_min"]
+                if not isinstance(times, list) or not times:
+                    raise ConfigError(f"{w}.times_min = {times!r}: expected a non-empty list of times in minutes")
+                for i, t in enumerate(times):
+                    ok = isinstance(t, (int, float)) and not isinstance(t, bool) and math.isfinite(t)
+                    if not ok or not 0 <= t <= t_end_min * (1 + 1e-12):
+                        raise ConfigError(f"{w}.times_min[{i}] = {t!r}: expected a time in minutes within "
+                                          f"[0, {t_end_min:g}] (the scene's t_end)")
             continue
         if not isinstance(spec, dict) or not isinstance(spec.get("y"), list):
-            raise ConfigError(f"{where}[{k}] = {spec!r}: expected a mapping with y: [state or output names] "
+            raise ConfigError(f"{w} = {spec!r}: expected a mapping with y: [state or output names] "
                               "(or kind: psd)")
+        for key in spec:
+            if key not in _SERIES_KEYS:
+                raise ConfigError(f"{w}: unknown key '{key}' (allowed: {', '.join(_SERIES_KEYS)}; or kind: psd)")
+        unit = spec.get("unit", "")
+        if unit is None:
+            unit = ""
+        if not isinstance(unit, str):
+            raise ConfigError(f"{w}.unit = {unit!r}: expected a unit name (allowed: {', '.join(plots.display_units())})")
         for n in spec["y"]:
             if n not in known:
-                raise ConfigError(f"{where}[{k}].y: '{n}' is neither a state nor an output of scene '{fs.name}'")
+                raise ConfigError(f"{w}.y: '{n}' is neither a state nor an output of scene '{fs.name}'")
+            try:
+                plots.conversion(unit, observable_unit(fs._scene, n))
+            except ValueError as e:
+                raise ConfigError(f"{w}.unit = '{unit}' for {n}: {e}") from None
+        if "file" in spec:
+            _plot_file(spec["file"], f"{w}.file", formats)
     return specs
 
 
@@ -78,9 +149,10 @@ def cmd_run(args) -> int:
 
     fs = load(args.scene)
     fs.update(parse_sets(args.set))
+    specs = _plot_specs(fs)  # against the scene file's own t_end
     if args.t_end:
         fs.set_t_end(_parse_seconds(args.t_end))
-    specs = _plot_specs(fs)
+    check_out_dir(args.out)
     res = fs.simulate()
     os.makedirs(args.out, exist_ok=True)
     summary = res.summary
@@ -94,8 +166,12 @@ def cmd_run(args) -> int:
             if has_psd:
                 name = spec.get("file", "psd.png")
                 times = [t * 60.0 for t in spec["times_min"]] if "times_min" in spec else None
+                late = [t / 60.0 for t in times or [] if t > res.t[-1] * (1 + 1e-12)]
+                if times is not None:
+                    times = [t for t in times if t <= res.t[-1] * (1 + 1e-12)] or None
                 plots.plot_psd(res, os.path.join(args.out, name), times)
-                written.append(name)
+                written.append(name + (f" (times after the run's end left out: {', '.join(f'{t:g}' for t in late)} min)"
+                                       if late else ""))
             continue
         name = spec.get("file", f"plot_{k}.png")
         plots.plot_series(res, spec, os.path.join(args.out, name))
@@ -122,6 +198,7 @@ def cmd_sweep(args) -> int:
     fs = spec.flowsheet(overrides)
     if args.t_end:
         fs.set_t_end(_parse_seconds(args.t_end))
+    check_out_dir(args.out)
     t0 = time.perf_counter()
     df = spec.run(flowsheet=fs, workers=args.workers, executor=args.executor,
                   progress=False if args.no_progress else None, raise_errors=args.fail_fast)
@@ -210,11 +287,16 @@ def cmd_calibrate(args) -> int:
     check_workers(args.workers)
     _check_at_least("--starts", args.starts, 1)
     _check_at_least("--spread", args.spread, 0)
+    check_out_dir(args.out)
+    cal.check_stage_data(plan, exps.calibration, args.stages, args.experiments)
     if args.workers is not None:
         options["num_threads"] = args.workers
     if args.starts > 1:
-        center = {**{f.name: fs.get(f.name) for s in plan.stages for f in s.free}, **plan.start}
-        starts = [center] + cal.random_starts(plan, args.starts - 1, center=center, spread=args.spread, seed=args.seed)
+        # the scene's values where the stage file gives no start, within the stages' bounds (as a single start)
+        bounds = cal.stage_bounds(plan, fs)
+        center = {**{n: min(max(fs.get(n), lo), hi) for n, (lo, hi) in bounds.items()}, **plan.start}
+        starts = [center] + cal.random_starts(plan, args.starts - 1, center=center, spread=args.spread, seed=args.seed,
+                                              flowsheet=fs)
         results = cal.multi_start(fs, exps.calibration, plan, starts, options=options, workers=args.workers,
                                   progress=False if args.no_progress else None)
         res = cal.best(results)
@@ -274,8 +356,8 @@ def main(argv=None) -> int:
     w.set_defaults(func=cmd_sweep)
     k = sub.add_parser("contour", help="contour map of outputs over two parameters; feasible window; CSV and PNG")
     k.add_argument("scene")
-    k.add_argument("--x", required=True, metavar="UNIT.PARAM:UNIT:LO:HI:N", help="e.g. inlet.T:degC:40:80:15")
-    k.add_argument("--y", required=True, metavar="UNIT.PARAM:UNIT:LO:HI:N", help="e.g. nozzle.mdot:g/min:60:120:15")
+    k.add_argument("--x", required=True, metavar="UNIT.PARAM:UNIT:LO:HI:N", help="e.g. inlet.T:degC:40:80:15 (N: 1 to 401 points)")
+    k.add_argument("--y", required=True, metavar="UNIT.PARAM:UNIT:LO:HI:N", help="e.g. nozzle.mdot:g/min:60:120:15 (N: 1 to 401 points)")
     k.add_argument("--output", action="append", help="summary key or state/output name (repeatable; default d50_um)")
     k.add_argument("--constraint", action="append", metavar="OUTPUT>=VALUE", help='e.g. "bed_moisture_wet<0.04"')
     k.add_argument("--out", required=True, help="output folder (created)")

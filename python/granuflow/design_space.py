@@ -48,6 +48,8 @@ from . import _core, sweep
 from .flowsheet import Flowsheet
 
 ConfigError = _core.ConfigError
+# Most points on one axis of a map (a 401 x 401 grid is already 160,801 simulations).
+MAX_AXIS_POINTS = 401
 SolverError = _core.SolverError
 
 T_END = "t_end"  # pseudo-parameter of optimize(): the end time of the run (batch time)
@@ -127,6 +129,7 @@ def _parse_spec(spec, where: str, with_n: bool):
     """(param, unit, lo, hi[, n]) or (param, unit, values) from a tuple, a dict entry or a string."""
     if isinstance(spec, Axis):
         return spec.param, spec.unit, list(spec.values)
+    given = spec
     if isinstance(spec, str):
         parts = spec.split(":")
         want = 5 if with_n else 4
@@ -155,10 +158,11 @@ def _parse_spec(spec, where: str, with_n: bool):
         if len(rest) != 3:
             raise ConfigError(f"{where} = {spec!r}: expected (param, unit, lo, hi, n)")
         lo, hi, n = rest
-        if not isinstance(n, (int, np.integer)) or isinstance(n, bool) or n < 1:
-            raise ConfigError(f"{where} = {spec!r}: n = {n!r}: expected an integer >= 1")
+        if not isinstance(n, (int, np.integer)) or isinstance(n, bool) or not 1 <= n <= MAX_AXIS_POINTS:
+            raise ConfigError(f"{where} = {given!r}: n = {n!r}: expected an integer 1 <= n <= {MAX_AXIS_POINTS} "
+                              "(points per axis)")
         if not (math.isfinite(float(lo)) and math.isfinite(float(hi))) or float(hi) < float(lo):
-            raise ConfigError(f"{where} = {spec!r}: expected finite lo <= hi")
+            raise ConfigError(f"{where} = {given!r}: expected finite lo <= hi")
         return param, unit, list(np.linspace(float(lo), float(hi), int(n)))
     if len(rest) != 2:
         raise ConfigError(f"{where} = {spec!r}: expected (param, unit, lo, hi)")
@@ -183,6 +187,8 @@ def make_axis(fs: Flowsheet, spec, where: str = "axis", *, with_n: bool = True, 
         desc, lower, upper = s.get("description", ""), s["lower"], s["upper"]
     a, b = _affine(fs, param, unit, where)
     v = np.asarray(values, dtype=float)
+    if v.size > MAX_AXIS_POINTS:
+        raise ConfigError(f"{where}: {param}: {v.size} values: expected at most {MAX_AXIS_POINTS} points per axis")
     if v.size == 0 or (v.size > 1 and not np.all(np.diff(v) > 0)):
         raise ConfigError(f"{where}: {param}: expected increasing values, got {v.tolist()}")
     si = a + b * v
@@ -280,7 +286,10 @@ def parse_constraints(constraints) -> list[Constraint]:
             if not m:
                 raise ConfigError(f"constraint '{c}': expected OUTPUT OP NUMBER with OP one of {', '.join(_OPS)} "
                                   f"(e.g. d50_um>=400)")
-            out.append(Constraint(m.group(1), m.group(2), float(m.group(3))))
+            bound = float(m.group(3))
+            if not math.isfinite(bound):
+                raise ConfigError(f"constraint '{c}': bound {m.group(3)} is not a finite number")
+            out.append(Constraint(m.group(1), m.group(2), bound))
             continue
         if isinstance(c, tuple) and len(c) == 2 and isinstance(c[0], str):
             name, rule = c
@@ -1264,11 +1273,17 @@ def contour_command(args) -> int:
     from .flowsheet import load
 
     fs = load(args.scene)
-    from .cli import _json_value, check_workers, parse_sets
+    from .cli import _json_value, check_out_dir, check_workers, parse_sets
 
     fixed = parse_sets(args.set)
     check_workers(args.workers)
     cons = parse_constraints(args.constraint or [])
+    sweep._check_outputs(fs, list(args.output or ["d50_um"]), where="--output")
+    for raw, c in zip(args.constraint or [], cons):
+        sweep._check_outputs(fs, [c.output], where=f"--constraint '{raw}'")
+    make_axis(fs, args.x, "--x")
+    make_axis(fs, args.y, "--y")
+    check_out_dir(args.out)
     outputs = list(dict.fromkeys(list(args.output or ["d50_um"]) + [c.output for c in cons]))
     executor: Any = args.executor
     client = None

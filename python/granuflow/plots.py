@@ -3,9 +3,12 @@ from __future__ import annotations
 
 import numpy as np
 
+# Display units of the series plots, each with its SI unit and (factor, offset): display = SI * factor + offset.
 _UNIT_CONVERT = {
-    "degC": (1.0, -273.15), "K": (1.0, 0.0), "um": (1e6, 0.0), "kg/s": (1.0, 0.0), "g/min": (6e4, 0.0),
-    "wt%": (100.0, 0.0), "kg/kg": (1.0, 0.0), "kg": (1.0, 0.0), "W": (1.0, 0.0), "-": (1.0, 0.0),
+    "degC": ("K", 1.0, -273.15), "K": ("K", 1.0, 0.0), "um": ("m", 1e6, 0.0), "mm": ("m", 1e3, 0.0),
+    "m": ("m", 1.0, 0.0), "kg/s": ("kg/s", 1.0, 0.0), "g/min": ("kg/s", 6e4, 0.0), "wt%": ("kg/kg", 100.0, 0.0),
+    "kg/kg": ("kg/kg", 1.0, 0.0), "kg": ("kg", 1.0, 0.0), "g": ("kg", 1e3, 0.0), "W": ("W", 1.0, 0.0),
+    "-": ("-", 1.0, 0.0),
 }
 
 
@@ -18,8 +21,38 @@ def _plt():
     return plt
 
 
-def convert(values, unit: str):
-    f, o = _UNIT_CONVERT.get(unit, (1.0, 0.0))
+def supported_formats() -> list[str]:
+    """File extensions matplotlib can write (png, pdf, svg, ...)."""
+    plt = _plt()
+    fig = plt.figure()
+    try:
+        return sorted(fig.canvas.get_supported_filetypes())
+    finally:
+        plt.close(fig)
+
+
+def display_units(si_unit: str | None = None) -> list[str]:
+    """The display units of series plots (those for `si_unit` when given)."""
+    return [u for u, (si, _, _) in _UNIT_CONVERT.items() if si_unit is None or si == si_unit]
+
+
+def conversion(unit: str, si_unit: str | None = None) -> tuple[float, float]:
+    """(factor, offset) with display = SI * factor + offset; ValueError for an unknown unit or one of another
+    dimension than `si_unit` (when given)."""
+    if unit in ("", None) or (si_unit is not None and unit == si_unit):
+        return 1.0, 0.0
+    if unit not in _UNIT_CONVERT:
+        raise ValueError(f"unknown unit '{unit}' (allowed: {', '.join(display_units())})")
+    si, f, o = _UNIT_CONVERT[unit]
+    if si_unit is not None and si != si_unit:
+        raise ValueError(f"unit '{unit}' is for {si}, but the series is in {si_unit or '-'} "
+                         f"(allowed: {', '.join(display_units(si_unit)) or si_unit or '-'})")
+    return f, o
+
+
+def convert(values, unit: str, si_unit: str | None = None):
+    """SI values in the display `unit` (ValueError for an unknown unit or one of another dimension)."""
+    f, o = conversion(unit, si_unit)
     return np.asarray(values) * f + o
 
 

@@ -57,17 +57,8 @@ Experiment to_experiment(const py::dict& d) {
     ob.value = od["value"].cast<std::vector<double>>();
     read_optional(od, "sigma_abs", ob.sigma_abs);
     read_optional(od, "sigma_rel", ob.sigma_rel);
-    const std::string w = where + " " + ob.name;
-    if (ob.t.size() != ob.value.size())
-      throw ConfigError(w + ": " + std::to_string(ob.t.size()) + " times but " + std::to_string(ob.value.size()) + " values");
-    if ((ob.sigma_abs > 0) == (ob.sigma_rel > 0))
-      throw ConfigError(w + ": give exactly one of sigma_abs > 0, sigma_rel > 0 (got " + std::to_string(ob.sigma_abs) +
-                        ", " + std::to_string(ob.sigma_rel) + ")");
-    if (ob.sigma_abs < 0 || ob.sigma_rel < 0) throw ConfigError(w + ": sigma must be >= 0");
-    for (size_t i = 0; i < ob.t.size(); ++i) {
-      if (!(ob.t[i] >= 0) || (i > 0 && !(ob.t[i] > ob.t[i - 1])))
-        throw ConfigError(violation(w + ".t[" + std::to_string(i) + "]", ob.t[i], "s", "t >= 0, increasing"));
-    }
+    // sizes, sigmas, times and values are checked in one place: the core's validate_experiments (calibrate,
+    // predict, StageProblem), with the experiment and observation named
     e.observations.push_back(std::move(ob));
   }
   return e;
@@ -82,7 +73,13 @@ Stage to_stage(const py::dict& d) {
     check_keys(fd, {"name", "transform", "lower", "upper", "logarithmic"}, "stage '" + s.name + "': free parameter");
     FreeParameter p;
     p.name = fd["name"].cast<std::string>();
-    if (fd.contains("transform") && !fd["transform"].is_none()) p.transform = transform_from_string(fd["transform"].cast<std::string>());
+    if (fd.contains("transform") && !fd["transform"].is_none()) {
+      try {
+        p.transform = transform_from_string(fd["transform"].cast<std::string>());
+      } catch (const ConfigError& e) {
+        throw ConfigError("stage '" + s.name + "': free parameter " + p.name + ": " + e.what());
+      }
+    }
     read_optional(fd, "lower", p.lower);
     read_optional(fd, "upper", p.upper);
     read_optional(fd, "logarithmic", p.logarithmic);
@@ -223,6 +220,9 @@ class PyStageProblem {
 void register_calibration(py::module_& m) {
   m.def("observable_unit", [](const Scene& s, const std::string& name) { return observable_unit(*s.flowsheet, name); },
         "scene"_a, "name"_a, "SI unit of a state or reported output; ConfigError listing valid names otherwise.");
+
+  m.def("check_calibration_options", [](const py::dict& options) { to_options(options); }, "options"_a,
+        "ConfigError naming the field, the value and the rule if `options` are not valid CalibrationOptions.");
 
   m.def("calibrate", [](const Scene& scene, const py::list& exps, const py::list& stages, const py::dict& options,
                         const std::map<std::string, double>& start) {
