@@ -59,3 +59,26 @@ def assert_bad_input(p, *needles, path=None):
         assert str(path) in lines[0], (path, lines[0])
     for needle in needles:
         assert needle in lines[0], (needle, lines[0])
+
+
+def scene_with(tmp_path, old, new, name="scene.yaml"):
+    """A copy of the headline scene with its first `old` (which must occur) replaced by `new`."""
+    with open(SCENE) as f:
+        text = f.read()
+    assert old in text, old
+    path = tmp_path / name
+    path.write_text(text.replace(old, new, 1))
+    return path
+
+
+def run_bad_scene(tmp_path, path, *needles, out=None):
+    """`granuflow run` on bad input: exit 2 with one line naming `path` and the needles, the file untouched and
+    no summary written."""
+    before = sha256(path)
+    out = out or tmp_path / "out"
+    p = cli("run", path, "--out", out)
+    assert_bad_input(p, *needles, path=path)
+    assert sha256(path) == before
+    assert not os.path.exists(os.path.join(out, "summary.json"))
+    return p
+

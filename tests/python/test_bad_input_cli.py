@@ -2,10 +2,9 @@
 and what is allowed; no traceback, no silent fallback, clipping or dropping; the input files are never modified."""
 import json
 import math
-import os
 
 import pytest
-from conftest import ROOT, SCENE, assert_bad_input, cli, sha256
+from conftest import SCENE, assert_bad_input, cli, run_bad_scene, scene_with, sha256
 
 import granuflow as gf
 from granuflow import calibration as cal
@@ -17,21 +16,6 @@ PSD_PLOT = "{kind: psd, times_min: [0, 5, 15, 30, 60], file: psd.png}"
 assert DIAMETER_PLOT in SCENE_TEXT and PSD_PLOT in SCENE_TEXT
 
 
-def scene_with(tmp_path, old, new, name="scene.yaml"):
-    path = tmp_path / name
-    path.write_text(SCENE_TEXT.replace(old, new))
-    return path
-
-
-def run_bad(tmp_path, path, *needles, out=None):
-    before = sha256(path)
-    out = out or tmp_path / "out"
-    p = cli("run", path, "--out", out, timeout=120)
-    assert_bad_input(p, *needles, path=path)
-    assert sha256(path) == before
-    return p
-
-
 # ------------------------------------------------------------------------------------------------ run: plots
 @pytest.mark.parametrize("unit, needles", [
     ("furlong", ["plots[0].unit", "'furlong'", "allowed", "um"]),
@@ -39,7 +23,7 @@ def run_bad(tmp_path, path, *needles, out=None):
 ])
 def test_plot_unit_unknown_or_of_the_wrong_dimension(tmp_path, unit, needles):
     path = scene_with(tmp_path, DIAMETER_PLOT, DIAMETER_PLOT.replace("unit: um", f"unit: {unit}"))
-    run_bad(tmp_path, path, *needles)
+    run_bad_scene(tmp_path, path, *needles)
     assert not (tmp_path / "out").exists()  # rejected before the run
 
 
@@ -56,7 +40,7 @@ def test_plot_convert_refuses_unknown_units():
 @pytest.mark.parametrize("times, bad", [("[-5, 5, 60]", "-5"), ("[0, 30, 90]", "90")])
 def test_psd_times_outside_the_run(tmp_path, times, bad):
     path = scene_with(tmp_path, PSD_PLOT, PSD_PLOT.replace("[0, 5, 15, 30, 60]", times))
-    run_bad(tmp_path, path, "plots[3].times_min", f"= {bad}", "[0, 60]")
+    run_bad_scene(tmp_path, path, "plots[3].times_min", f"= {bad}", "[0, 60]")
 
 
 def test_psd_times_after_a_shorter_command_line_end_are_left_out_and_said(tmp_path):
@@ -78,14 +62,14 @@ def test_psd_times_after_a_shorter_command_line_end_are_left_out_and_said(tmp_pa
 ])
 def test_plot_file_must_be_an_image_inside_the_output_folder(tmp_path, file, needles):
     path = scene_with(tmp_path, DIAMETER_PLOT, DIAMETER_PLOT.replace("file: diameters.png", f"file: '{file}'"))
-    run_bad(tmp_path, path, *needles)
+    run_bad_scene(tmp_path, path, *needles)
     assert not (tmp_path / "out").exists()
     assert not (tmp_path.parent.parent / "escape.png").exists()
 
 
 def test_psd_file_extension_checked_before_the_run(tmp_path):
     path = scene_with(tmp_path, PSD_PLOT, PSD_PLOT.replace("psd.png", "psd.docx"))
-    run_bad(tmp_path, path, "plots[3].file", "psd.docx", "allowed:")
+    run_bad_scene(tmp_path, path, "plots[3].file", "psd.docx", "allowed:")
     assert not (tmp_path / "out" / "summary.json").exists()
 
 

@@ -2,15 +2,7 @@
 never a silent fallback, and the scene file is left alone. Each case is a copy of the headline scene with one
 edit (or a --set on the command line)."""
 import pytest
-from conftest import SCENE, assert_bad_input, cli, sha256
-
-
-def _scene_with(tmp_path, old, new):
-    text = open(SCENE).read()
-    assert old in text, old
-    path = tmp_path / "bad_scene.yaml"
-    path.write_text(text.replace(old, new, 1))
-    return path
+from conftest import SCENE, assert_bad_input, cli, run_bad_scene, scene_with, sha256
 
 
 BAD_SCENES = {
@@ -45,12 +37,7 @@ BAD_SCENES = {
 @pytest.mark.parametrize("case", list(BAD_SCENES))
 def test_bad_scene_exits_2_with_one_line(tmp_path, case):
     old, new, needles = BAD_SCENES[case]
-    path = _scene_with(tmp_path, old, new)
-    before = sha256(path)
-    p = cli("run", path, "--out", tmp_path / "out")
-    assert_bad_input(p, *needles, path=path)
-    assert sha256(path) == before
-    assert not (tmp_path / "out" / "summary.json").exists()
+    run_bad_scene(tmp_path, scene_with(tmp_path, old, new), *needles)
 
 
 @pytest.mark.parametrize("args,needles", [

@@ -7,7 +7,7 @@ import os
 import numpy as np
 import pytest
 import yaml
-from conftest import ROOT, SCENE, assert_bad_input, cli, sha256, strict_json
+from conftest import ROOT, SCENE, assert_bad_input, cli, run_bad_scene, scene_with, sha256, strict_json
 
 import granuflow as gf
 from granuflow import sweep
@@ -105,12 +105,6 @@ def test_cli_run_writes_summary_csv_and_plots(tmp_path, headline):
 # ------------------------------------------------------------------------------------------------
 # bad input: exit 2, one line naming the key, the value and what is allowed; the input is never modified
 # ------------------------------------------------------------------------------------------------
-def _scene_with(tmp_path, old, new):
-    text = open(SCENE).read()
-    assert old in text, old
-    p = tmp_path / "gf25_bad.yaml"
-    p.write_text(text.replace(old, new, 1))
-    return str(p)
 
 
 with open(SCENE) as _f:
@@ -171,12 +165,7 @@ BAD_SCENES = {
 @pytest.mark.parametrize("case", list(BAD_SCENES))
 def test_cli_bad_scene_exits_2_with_one_line(tmp_path, case):
     old, new, needles = BAD_SCENES[case]
-    path = _scene_with(tmp_path, old, new)
-    before = sha256(path)
-    p = cli("run", path, "--out", tmp_path / "out")
-    assert_bad_input(p, *needles, path=path)
-    assert sha256(path) == before
-    assert not (tmp_path / "out" / "summary.json").exists()
+    run_bad_scene(tmp_path, scene_with(tmp_path, old, new), *needles)
 
 
 @pytest.mark.parametrize("args,needles", [
