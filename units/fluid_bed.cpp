@@ -669,7 +669,7 @@ class FluidBed : public UnitBase<FluidBed> {
   }
 
   int n_ = def::kSizeClasses;
-  static constexpr double kMassFloor = 1e-12;  // kg
+  static constexpr double kMassFloor = holdup::kMassFloor;
   int sH_ = 0, sT_ = 0, sU0_ = 0, sVap_ = 0, sQ_ = 0, sTop_ = 0;
   std::vector<int> o_quantiles_;  // output indices
   int o_moisture_ = 0, o_moisture_wet_ = 0, o_particles_ = 0, o_top_ = 0, o_reg_eta_ = 0, o_reg_a_ = 0, o_balance_ = 0,

@@ -251,7 +251,7 @@ class SprayZone : public UnitBase<SprayZone> {
     if constexpr (std::is_same_v<T, double>) return sd_;
     else return sj_;
   }
-  static constexpr double kMassFloor = 1e-12;  // kg: keeps X = W / M finite for an emptied class
+  static constexpr double kMassFloor = holdup::kMassFloor;
   int n_ = def::kSizeClasses;
   std::vector<double> d_;
   p1::LiquidSplit split_ = p1::LiquidSplit::kClassSurface;

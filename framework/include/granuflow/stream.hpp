@@ -47,6 +47,8 @@ inline int mass(int i) { return i; }
 inline int water(int classes, int i) { return classes + i; }
 inline int T(int classes) { return 2 * classes; }
 inline int u0(int classes) { return 2 * classes + 1; }
+// kg: a class's moisture is W / (M + kMassFloor), finite for an emptied class; every reader of a holdup uses it
+inline constexpr double kMassFloor = 1e-12;
 }  // namespace holdup
 namespace wetting {
 inline int mdot(int i) { return i; }
