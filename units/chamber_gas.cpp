@@ -27,7 +27,7 @@ class ChamberGas : public UnitBase<ChamberGas> {
     s.add_port("in", StreamKind::Gas, PortDir::In);
     s.add_port("evap", StreamKind::Liquid, PortDir::In, 0, true);    // spray evaporating in the gas
     s.add_port("drying", StreamKind::Vapour, PortDir::In, 0, true);  // vapour from drying particles
-    for (const char* name : {"wall", "solids"}) {                     // heat leaving the gas
+    for (const char* name : {"wall", "solids"}) {                    // heat leaving the gas
       const int p = s.add_port(name, StreamKind::Heat, PortDir::Out, 0, true);
       s.provide(p, heat::kT, kT);
     }
@@ -56,11 +56,11 @@ class ChamberGas : public UnitBase<ChamberGas> {
     c.res(kH) = c.xd(kH) - (m_in * props::humid_air_enthalpy(c.port(kIn, gas::kT), y_in) -
                             c.x_(kMdot) * props::humid_air_enthalpy(c.x_(kT), c.x_(kY)) +
                             m_ev * props::liquid_water_enthalpy(c.port(kEvap, liquid::kT)) +
-                            m_dr * props::vapour_enthalpy(c.port(kDrying, vapour::kT)) -
-                            c.port(kWall, heat::kQ) - c.port(kSolids, heat::kQ));
+                            m_dr * props::vapour_enthalpy(c.port(kDrying, vapour::kT)) - c.port(kWall, heat::kQ) -
+                            c.port(kSolids, heat::kQ));
     c.res(kY) = c.x_(kW) - c.par(kMassGas) * c.x_(kY);
     c.res(kT) = c.x_(kH) - c.par(kMassGas) * props::humid_air_enthalpy(c.x_(kT), c.x_(kY));  // Eq. (63)
-    c.res(kMdot) = c.x_(kMdot) - m_in;  // constant dry-gas hold-up
+    c.res(kMdot) = c.x_(kMdot) - m_in;                                                       // constant dry-gas hold-up
     c.res(kP) = c.x_(kP) - c.port(kIn, gas::kP);
     return Status::kOk;
   }

@@ -7,4 +7,4 @@ namespace granuflow::units {
 // energy balances close to solver tolerance. Evaporating spray, drying vapour, wall loss and gas-solid heat
 // transfer arrive on optional ports: a scene without a mechanism leaves its port open.
 void register_chamber_gas(Registry<Unit>& r);
-}
+}  // namespace granuflow::units

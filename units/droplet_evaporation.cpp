@@ -19,7 +19,8 @@ class DropletEvaporation : public UnitBase<DropletEvaporation> {
                  "evaporation coefficient per droplet surface and unit humidity difference", "paper 001, Table 8"});
     s.add_param({"d_drop", "m", def::kDropletDiameter, 1e-6, 1e-3, "droplet diameter", "paper 001, Table 9"});
     s.add_param({"rho_l", "kg/m3", def::kLiquidDensity, 500.0, 2000.0, "liquid density", "paper 001, Table 6"});
-    s.add_param({"multiplier", "-", 1.0, 0.0, 100.0, "scales Eq. (66) (option; 1 = as published)", "PAPER001_DECISIONS"});
+    s.add_param(
+        {"multiplier", "-", 1.0, 0.0, 100.0, "scales Eq. (66) (option; 1 = as published)", "PAPER001_DECISIONS"});
     s.add_state("m_evap", StateKind::Algebraic, "kg/s", 1e-4);
     s.add_state("m_dep", StateKind::Algebraic, "kg/s", 1e-3);
     s.add_state("T", StateKind::Algebraic, "K", 300.0);

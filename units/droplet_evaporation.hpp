@@ -6,4 +6,4 @@ namespace granuflow::units {
 // evaporates in the chamber gas ("vapour", still liquid at the spray temperature: the gas supplies the
 // sensible and latent heat) and the part deposited on the particles ("deposit").
 void register_droplet_evaporation(Registry<Unit>& r);
-}
+}  // namespace granuflow::units

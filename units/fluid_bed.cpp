@@ -9,7 +9,6 @@
 #include "granuflow/errors.hpp"
 #include "granuflow/flowsheet.hpp"
 #include "granuflow/properties.hpp"
-#include "size_grid_settings.hpp"
 #include "kernels/breakage/paper001_breakage_laws.hpp"
 #include "kernels/discretization/grid.hpp"
 #include "kernels/discretization/psd.hpp"
@@ -18,6 +17,7 @@
 #include "kernels/particle_geometry.hpp"
 #include "kernels/transfer/fluid_bed_transfer.hpp"
 #include "kernels/wetting/paper001_spray_zone.hpp"
+#include "size_grid_settings.hpp"
 
 namespace granuflow::units {
 namespace {
@@ -27,10 +27,37 @@ namespace def = kernels::paper001::defaults;
 namespace tr = kernels::transfer;
 
 enum P {
-  kBedMass, kX0, kD50, kSigma, kTS0, kRhoS, kEps, kCpS, kCpL, kABed,                   // bed and material
-  kLnBeta0, kTauSpray, kStickyOffset, kStickySlope, kGtK, kTgL, kTgS, kVVessel,       // agglomeration
-  kKBreak, kDMinBreak, kFMat, kEMin, kQFrag, kDFragMin,                              // breakage
-  kXcr, kShCorr, kBetMm, kBetN, kDv, kLambda, kNParams                               // drying, transfer
+  kBedMass,
+  kX0,
+  kD50,
+  kSigma,
+  kTS0,
+  kRhoS,
+  kEps,
+  kCpS,
+  kCpL,
+  kABed,  // bed and material
+  kLnBeta0,
+  kTauSpray,
+  kStickyOffset,
+  kStickySlope,
+  kGtK,
+  kTgL,
+  kTgS,
+  kVVessel,  // agglomeration
+  kKBreak,
+  kDMinBreak,
+  kFMat,
+  kEMin,
+  kQFrag,
+  kDFragMin,  // breakage
+  kXcr,
+  kShCorr,
+  kBetMm,
+  kBetN,
+  kDv,
+  kLambda,
+  kNParams  // drying, transfer
 };
 enum Port { kWet, kGasProbe, kInletProbe, kVapourOut, kHeatIn, kState };
 
@@ -46,7 +73,7 @@ class FluidBed : public UnitBase<FluidBed> {
     const std::string agg = st.get_choice("aggregation", "glass_transition", {"glass_transition", "constant", "none"},
                                           "agglomeration kernel: paper 001 Eqs. (36)-(57), size-independent, or off");
     agg_ = agg == "glass_transition" ? Aggregation::kGlassTransition
-         : agg == "constant"         ? Aggregation::kConstant
+           : agg == "constant"       ? Aggregation::kConstant
                                      : Aggregation::kNone;
     breakage_ = st.get_choice("breakage", "vogel_peukert", {"vogel_peukert", "none"},
                               "breakage: paper 001 Eqs. (90)-(93), or off") == "vogel_peukert";
@@ -71,7 +98,8 @@ class FluidBed : public UnitBase<FluidBed> {
         {"cp_s", "J/(kg K)", def::kSolidCp, 100.0, 1e4, "solid heat capacity", t6},
         {"cp_l", "J/(kg K)", def::kLiquidCp, 100.0, 1e4, "liquid heat capacity", t6},
         {"A_bed", "m2", def::kBedArea, 1e-4, 100.0, "bed cross-section (A_inlet)", t6},
-        {"ln_beta0", "-", def::kLnBeta0, -60.0, 10.0, "ln of the agglomeration rate constant (beta0 in 1/s with d in m)", t9},
+        {"ln_beta0", "-", def::kLnBeta0, -60.0, 10.0,
+         "ln of the agglomeration rate constant (beta0 in 1/s with d in m)", t9},
         {"tau_spray", "-", def::kTauSpray, 0.0, 1.0, "fraction of particles in the spray zone, Eq. (37)", t9},
         {"sticky_offset", "K", def::kStickyOffset, 0.0, 200.0, "sticky point above Tg, Eq. (53)", t9},
         {"sticky_slope", "K", def::kStickySlope, 0.1, 200.0, "width of the sticky transition, Eq. (53)", t9},
@@ -253,7 +281,7 @@ class FluidBed : public UnitBase<FluidBed> {
     for (int i = 0; i < n_; ++i) {
       const T dep = wet ? c.port(kWet, wetting::mdot(i)) : T(0.0);
       m_vap += dry[i];
-      c.res(i) = c.xd(i) - dM[i];                         // Eq. (20), paper 001, per class in mass
+      c.res(i) = c.xd(i) - dM[i];                             // Eq. (20), paper 001, per class in mass
       c.res(n_ + i) = c.xd(n_ + i) - (dep - dry[i] + dW[i]);  // Eq. (58), paper 001, as water mass per class
       h_dep += dep;
     }
@@ -347,7 +375,10 @@ class FluidBed : public UnitBase<FluidBed> {
       const double nn = s * number[j] * number[k];
       const double e = beta * nn;  // events per second
       // dE/d(column) for the pair's variables
-      struct D { int col; double v; };
+      struct D {
+        int col;
+        double v;
+      };
       D de[7];
       int nd = 0;
       de[nd++] = {col_m(j), s * beta * number[k] / mj};
@@ -361,8 +392,13 @@ class FluidBed : public UnitBase<FluidBed> {
       }
       // rates per event: mass and water coefficients of the touched rows (residual = xdot - rate)
       const double up = pr.frac_upper, m_agg = mj + mk, w_agg = mj * X[j] + mk * X[k];
-      struct R { int row; double cm, cw; };
-      const R rows[4] = {{j, -mj, -mj * X[j]}, {k, -mk, -mk * X[k]}, {pr.a, (1 - up) * m_agg, (1 - up) * w_agg},
+      struct R {
+        int row;
+        double cm, cw;
+      };
+      const R rows[4] = {{j, -mj, -mj * X[j]},
+                         {k, -mk, -mk * X[k]},
+                         {pr.a, (1 - up) * m_agg, (1 - up) * w_agg},
                          {pr.a + 1, up * m_agg, up * w_agg}};
       const int nrows = up > 0 ? 4 : 3;
       for (int r = 0; r < nrows; ++r)
@@ -411,17 +447,19 @@ class FluidBed : public UnitBase<FluidBed> {
     // drying (W rows, m_vap row) and heat transfer (Q row)
     std::vector<J8> par(kNParams);
     for (int k = 0; k < kNParams; ++k) par[k] = J8(c.par(k));
-    const int cols[7] = {0, 0, col_ts, c.offset + sU0_, ports[kGasProbe][gas::kY], ports[kGasProbe][gas::kP],
-                         ports[kGasProbe][gas::kT]};
-    const GasSide<J8> g = gas_side(J8(c.x_(sT_), 2), J8(c.port(kGasProbe, gas::kT), 6), J8(c.port(kGasProbe, gas::kY), 4),
-                                   J8(c.port(kGasProbe, gas::kP), 5), J8(c.x_(sU0_), 3), J8(value_of(area_ratio(c, surface_per_mass_.data())), 7),
-                                   par.data());
+    const int cols[7] = {
+        0, 0, col_ts, c.offset + sU0_, ports[kGasProbe][gas::kY], ports[kGasProbe][gas::kP], ports[kGasProbe][gas::kT]};
+    const GasSide<J8> g =
+        gas_side(J8(c.x_(sT_), 2), J8(c.port(kGasProbe, gas::kT), 6), J8(c.port(kGasProbe, gas::kY), 4),
+                 J8(c.port(kGasProbe, gas::kP), 5), J8(c.x_(sU0_), 3),
+                 J8(value_of(area_ratio(c, surface_per_mass_.data())), 7), par.data());
     std::vector<double> ddry_dratio(n_);
     double dvap_dratio = 0, dq_dratio = 0;
     for (int i = 0; i < n_; ++i) {
       J8 dry, q;
       class_transfer(i, J8(c.x_(i), 0), J8(c.x_(n_ + i), 1), J8(particle_mass_[i]), g, par.data(), &dry, &q);
-      for (auto [row, f, sign] : {std::tuple{n_ + i, &dry, 1.0}, std::tuple{sVap_, &dry, -1.0}, std::tuple{sQ_, &q, -1.0}}) {
+      for (auto [row, f, sign] :
+           {std::tuple{n_ + i, &dry, 1.0}, std::tuple{sVap_, &dry, -1.0}, std::tuple{sQ_, &q, -1.0}}) {
         sink.add(row, col_m(i), sign * f->v[0]);
         sink.add(row, col_w(i), sign * f->v[1]);
         for (int d = 2; d < 7; ++d) sink.add(row, cols[d], sign * f->v[d]);
@@ -444,8 +482,8 @@ class FluidBed : public UnitBase<FluidBed> {
       const J4 m(c.port(kInletProbe, gas::kMdot), 0), t(c.port(kInletProbe, gas::kT), 1),
           y(c.port(kInletProbe, gas::kY), 2), p(c.port(kInletProbe, gas::kP), 3);
       const J4 u = tr::superficial_velocity(J4(m / props::dry_air_partial_density(t, p, y)), J4(c.par(kABed)));
-      const int in_cols[4] = {ports[kInletProbe][gas::kMdot], ports[kInletProbe][gas::kT],
-                              ports[kInletProbe][gas::kY], ports[kInletProbe][gas::kP]};
+      const int in_cols[4] = {ports[kInletProbe][gas::kMdot], ports[kInletProbe][gas::kT], ports[kInletProbe][gas::kY],
+                              ports[kInletProbe][gas::kP]};
       for (int k = 0; k < 4; ++k) sink.add(sU0_, in_cols[k], -u.v[k]);
     }
     // deposition into the W rows and the enthalpy row (Eq. (59)); enthalpy row's other terms
@@ -520,8 +558,10 @@ class FluidBed : public UnitBase<FluidBed> {
   };
   template <class T>
   Scratch<T>& scratch() const {
-    if constexpr (std::is_same_v<T, double>) return sd_;
-    else return sj_;
+    if constexpr (std::is_same_v<T, double>)
+      return sd_;
+    else
+      return sj_;
   }
 
   struct Pair {
@@ -560,7 +600,7 @@ class FluidBed : public UnitBase<FluidBed> {
       if (agg_ == Aggregation::kGlassTransition) {
         fwet[i] = c.port(kWet, wetting::fwet(n_, i));
         const T& xwet = c.port(kWet, wetting::Xwet(n_, i));
-        const T tg = p1::gordon_taylor(xwet, c.par(kGtK), c.par(kTgL), c.par(kTgS));                  // Eq. (54)
+        const T tg = p1::gordon_taylor(xwet, c.par(kGtK), c.par(kTgL), c.par(kTgS));                   // Eq. (54)
         sticky[i] = p1::sticky_probability(c.x_(sT_), tg, c.par(kStickySlope), c.par(kStickyOffset));  // Eq. (53)
       }
     }
@@ -576,10 +616,12 @@ class FluidBed : public UnitBase<FluidBed> {
       T beta;
       if (agg_ == Aggregation::kGlassTransition) {
         T cf;  // Eq. (37); Jets recompute it so that sensitivities to ln_beta0 and tau_spray carry through
-        if constexpr (std::is_same_v<T, double>) cf = cf_[q];
-        else cf = p1::collision_frequency(T(d[j]), T(d[k]), c.par(kLnBeta0), c.par(kTauSpray));
+        if constexpr (std::is_same_v<T, double>)
+          cf = cf_[q];
+        else
+          cf = p1::collision_frequency(T(d[j]), T(d[k]), c.par(kLnBeta0), c.par(kTauSpray));
         beta = p1::agglomeration_kernel(cf, p1::geometric_success_factor(fwet[j], fwet[k]),
-                                        p1::physical_success_factor(sticky[j], sticky[k]));          // Eq. (39)
+                                        p1::physical_success_factor(sticky[j], sticky[k]));  // Eq. (39)
       } else {
         beta = beta_constant;
       }
@@ -616,7 +658,7 @@ class FluidBed : public UnitBase<FluidBed> {
     g.rho_da = props::dry_air_partial_density(t_g, p, y);  // Y is per kg dry air in Eq. (72)
     const T mu = props::air_viscosity(t_g);
     g.nu = props::kinematic_viscosity(mu, rho);
-    g.sc = props::schmidt_number(mu, rho, par[kDv]);                                 // Eq. (78)
+    g.sc = props::schmidt_number(mu, rho, par[kDv]);                                // Eq. (78)
     g.pr = props::prandtl_number(props::humid_heat_capacity(y), mu, par[kLambda]);  // Eq. (89)
     // Eqs. (82)-(83): activity of the bulk gas at the solids temperature; BET (81) is singular at a = 1
     const auto a = kernels::cap_at(p1::water_activity(y, t_s, p), T(0.99));
@@ -635,13 +677,14 @@ class FluidBed : public UnitBase<FluidBed> {
                       T* q) const {
     const T di(grid_->diameter_pivots()[i]);
     const T area = kernels::class_surface(T(m / particle_mass), di);  // N_i pi d_i^2 (PAPER001_DECISIONS)
-    const T re0 = tr::particle_reynolds_number(g.u0, di, g.nu);                                  // Eq. (76)
+    const T re0 = tr::particle_reynolds_number(g.u0, di, g.nu);       // Eq. (76)
     const T shb = tr::bulk_sherwood(tr::sherwood_single(re0, g.sc), re0, g.sc, g.ratio, par[kShCorr]);  // (74), (75)
-    const T j = p1::drying_mass_flux(g.rho_da, tr::mass_transfer_coefficient(shb, par[kDv], di), g.y_sat, g.y);  // (72), (73)
+    const T j =
+        p1::drying_mass_flux(g.rho_da, tr::mass_transfer_coefficient(shb, par[kDv], di), g.y_sat, g.y);  // (72), (73)
     const auto eta = p1::normalized_moisture(T(w / (m + kMassFloor)), g.x_eq, par[kXcr]);  // Eq. (80), regularized
     *dry = p1::drying_rate(p1::linear_drying_curve(eta.value), area, j);                   // Eqs. (70), (79)
     const T nub = tr::bulk_nusselt(tr::nusselt_single(re0, g.pr), re0, g.pr, g.ratio);     // Eqs. (87), (88)
-    *q = tr::heat_transfer_coefficient(nub, par[kLambda], di) * area * (g.t_g - g.t_s);   // Eqs. (85), (86)
+    *q = tr::heat_transfer_coefficient(nub, par[kLambda], di) * area * (g.t_g - g.t_s);    // Eqs. (85), (86)
     return eta.active;
   }
 

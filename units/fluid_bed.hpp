@@ -8,4 +8,4 @@ namespace granuflow::units {
 // isotherm (Eqs. (58), (70)-(83)); gas-solid heat transfer (Eqs. (85)-(89)); one lumped solids enthalpy
 // (Eqs. (59)-(60)).
 void register_fluid_bed(Registry<Unit>& r);
-}
+}  // namespace granuflow::units

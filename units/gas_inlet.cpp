@@ -70,7 +70,8 @@ class GasInlet : public UnitBase<GasInlet> {
 }  // namespace
 
 void register_gas_inlet(Registry<Unit>& r) {
-  r.add("gas_inlet", "fluidization air: volume flow, temperature, humidity", [] { return std::make_unique<GasInlet>(); });
+  r.add("gas_inlet", "fluidization air: volume flow, temperature, humidity",
+        [] { return std::make_unique<GasInlet>(); });
 }
 
 }  // namespace granuflow::units

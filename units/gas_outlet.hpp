@@ -4,4 +4,4 @@
 namespace granuflow::units {
 // Exhaust gas sink: accumulates the dry gas, water and enthalpy that leave, for the balances.
 void register_gas_outlet(Registry<Unit>& r);
-}
+}  // namespace granuflow::units

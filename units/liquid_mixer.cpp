@@ -26,9 +26,9 @@ class LiquidMixer : public UnitBase<LiquidMixer> {
       mt += mi * c.port(i, liquid::kT);
       mw += mi * c.port(i, liquid::kW);
     }
-    c.res(0) = c.x_(0) - m;               // mass balance
-    c.res(1) = c.x_(0) * c.x_(1) - mt;    // enthalpy balance, constant cp
-    c.res(2) = c.x_(0) * c.x_(2) - mw;    // solute balance
+    c.res(0) = c.x_(0) - m;             // mass balance
+    c.res(1) = c.x_(0) * c.x_(1) - mt;  // enthalpy balance, constant cp
+    c.res(2) = c.x_(0) * c.x_(2) - mw;  // solute balance
     return Status::kOk;
   }
   template <class T>

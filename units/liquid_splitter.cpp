@@ -7,7 +7,8 @@ class LiquidSplitter : public UnitBase<LiquidSplitter> {
  public:
   std::string type() const override { return "liquid_splitter"; }
   void declare(UnitSpec& s, Settings&) override {
-    s.add_param({"split", "-", 0.5, 0.0, 1.0, "fraction of the inlet mass flow leaving through out1", "operating input"});
+    s.add_param(
+        {"split", "-", 0.5, 0.0, 1.0, "fraction of the inlet mass flow leaving through out1", "operating input"});
     const int m1 = s.add_state("mdot1", StateKind::Algebraic, "kg/s", 0.1);
     const int m2 = s.add_state("mdot2", StateKind::Algebraic, "kg/s", 0.1);
     const int t = s.add_state("T", StateKind::Algebraic, "K", 300.0);

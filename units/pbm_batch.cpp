@@ -103,8 +103,10 @@ class PbmBatch : public UnitBase<PbmBatch> {
   void fold(T* rates) const;
   template <class T>
   Scratch<T>& scratch() const {
-    if constexpr (std::is_same_v<T, double>) return sd_;
-    else return sj_;
+    if constexpr (std::is_same_v<T, double>)
+      return sd_;
+    else
+      return sj_;
   }
 
   std::unique_ptr<Grid> grid_;
@@ -188,8 +190,8 @@ void PbmBatch::declare(UnitSpec& s, Settings& st) {
                  : Outside::kRemove;
   const double number_scale = st.get_real("number_scale", 1.0, 1e-30, 1e30,
                                           "typical particle number; absolute tolerance = atol * number_scale");
-  initial_ = st.get_choice("initial", "exponential", {"exponential", "lognormal_mass"},
-                           "initial distribution") == "exponential"
+  initial_ = st.get_choice("initial", "exponential", {"exponential", "lognormal_mass"}, "initial distribution") ==
+                     "exponential"
                  ? Initial::kExponential
                  : Initial::kLognormalMass;
   binning_ = binning_from_string(st.get_choice("initial_binning", "moments", {"moments", "number", "mass"},
@@ -216,8 +218,9 @@ void PbmBatch::declare(UnitSpec& s, Settings& st) {
   const std::string sel = st.get_choice("breakage", kNone, with_none(reg.selection.names()), "breakage selection rate");
   sel_ = plugin(s, st, reg.selection, sel, "sel_");
   if (sel_) {
-    frag_ = plugin(s, st, reg.fragments,
-                   st.get_choice("fragments", "uniform_binary", reg.fragments.names(), "fragment distribution"), "frag_");
+    frag_ =
+        plugin(s, st, reg.fragments,
+               st.get_choice("fragments", "uniform_binary", reg.fragments.names(), "fragment distribution"), "frag_");
     brk_scheme_ = reg.breakage_schemes.create(
         st.get_choice("breakage_scheme", "cell_average", reg.breakage_schemes.names(), "breakage scheme"), st.where());
   }
@@ -267,9 +270,10 @@ void PbmBatch::configure(const UnitSpec& spec, const double* p) {
   pvals_.assign(p, p + np);
   ClassState<double> cs = class_state<double>(nullptr, p, sd_);
   const std::string where = "unit pbm_batch";
-  const std::pair<const KernelBase*, int> kernels[] = {{agg_.kernel.get(), agg_.first}, {sel_.kernel.get(), sel_.first},
-                                                        {frag_.kernel.get(), frag_.first},
-                                                        {growth_.kernel.get(), growth_.first}};
+  const std::pair<const KernelBase*, int> kernels[] = {{agg_.kernel.get(), agg_.first},
+                                                       {sel_.kernel.get(), sel_.first},
+                                                       {frag_.kernel.get(), frag_.first},
+                                                       {growth_.kernel.get(), growth_.first}};
   for (const auto& [k, first] : kernels)
     if (k) k->check(cs, p + first, where);
   if (agg_) agg_scheme_->setup(*grid_);
@@ -331,8 +335,10 @@ const T* PbmBatch::beta(const ClassState<T>& cs, const T* p, Scratch<T>& w) cons
     agg_.kernel->evaluate(cs, p + agg_.first, w.beta.data());
     return w.beta.data();
   }
-  if constexpr (std::is_same_v<T, double>) return beta_.data();
-  else return beta_jet_.data();
+  if constexpr (std::is_same_v<T, double>)
+    return beta_.data();
+  else
+    return beta_jet_.data();
 }
 
 template <class T>

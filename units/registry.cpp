@@ -5,15 +5,15 @@
 #include "fluid_bed.hpp"
 #include "gas_inlet.hpp"
 #include "gas_outlet.hpp"
-#include "spray_nozzle.hpp"
-#include "spray_zone.hpp"
-#include "wall_heat_loss.hpp"
 #include "liquid_feed.hpp"
 #include "liquid_mixer.hpp"
 #include "liquid_product.hpp"
 #include "liquid_splitter.hpp"
 #include "pbm_batch.hpp"
+#include "spray_nozzle.hpp"
+#include "spray_zone.hpp"
 #include "stirred_tank.hpp"
+#include "wall_heat_loss.hpp"
 
 namespace granuflow::units {
 

@@ -23,7 +23,8 @@ inline std::vector<double> log_spaced_pivots(Settings& st) {
   const int n = static_cast<int>(st.get_int("classes", def::kSizeClasses, 3, 200, "size classes, log-spaced pivots"));
   const double lo = st.get_real("d_min", def::kDiameterMin, 1e-7, 1e-2, "smallest pivot diameter, m (Table 5)");
   const double hi = st.get_real("d_max", def::kDiameterMax, 1e-7, 1e-1, "largest pivot diameter, m (Table 5)");
-  if (!(hi > lo)) throw ConfigError(violation(st.where() + ".d_max", hi, "m", "d_max > d_min (" + std::to_string(lo) + ")"));
+  if (!(hi > lo))
+    throw ConfigError(violation(st.where() + ".d_max", hi, "m", "d_max > d_min (" + std::to_string(lo) + ")"));
   return log_spaced(lo, hi, n);
 }
 

@@ -15,8 +15,10 @@ class SprayNozzle : public UnitBase<SprayNozzle> {
   std::string type() const override { return "spray_nozzle"; }
   void declare(UnitSpec& s, Settings&) override {
     s.add_param({"mdot", "kg/s", 90e-3 / 60.0, 0.0, 1.0, "liquid spray rate while spraying", "paper 001, Table 1"});
-    s.add_param({"T", "K", kernels::paper001::defaults::kSprayTemperature, 273.15, 373.15, "liquid temperature", "paper 001, Table 7"});
-    s.add_param({"w", "kg/kg", 0.0, 0.0, 0.9, "dissolved-solids mass fraction of the liquid", "paper 001: water spray (w = 0)"});
+    s.add_param({"T", "K", kernels::paper001::defaults::kSprayTemperature, 273.15, 373.15, "liquid temperature",
+                 "paper 001, Table 7"});
+    s.add_param({"w", "kg/kg", 0.0, 0.0, 0.9, "dissolved-solids mass fraction of the liquid",
+                 "paper 001: water spray (w = 0)"});
     s.add_param({"t_on", "s", 0.0, 0.0, 1e7, "spray start", "paper 001: spraying from the start"});
     s.add_param({"t_off", "s", 3600.0, 0.0, 1e7, "spray stop", "paper 001: 60 min of spraying"});
     s.add_state("mdot", StateKind::Algebraic, "kg/s", 1e-3);
@@ -66,7 +68,8 @@ class SprayNozzle : public UnitBase<SprayNozzle> {
 }  // namespace
 
 void register_spray_nozzle(Registry<Unit>& r) {
-  r.add("spray_nozzle", "spray liquid source with start and stop times", [] { return std::make_unique<SprayNozzle>(); });
+  r.add("spray_nozzle", "spray liquid source with start and stop times",
+        [] { return std::make_unique<SprayNozzle>(); });
 }
 
 }  // namespace granuflow::units

@@ -5,10 +5,10 @@
 
 #include "granuflow/flowsheet.hpp"
 #include "granuflow/properties.hpp"
-#include "size_grid_settings.hpp"
 #include "kernels/particle_geometry.hpp"
 #include "kernels/transfer/fluid_bed_transfer.hpp"
 #include "kernels/wetting/paper001_spray_zone.hpp"
+#include "size_grid_settings.hpp"
 
 namespace granuflow::units {
 namespace {
@@ -16,7 +16,23 @@ namespace {
 namespace p1 = kernels::paper001;
 namespace def = kernels::paper001::defaults;
 
-enum P { kTauC1, kTauC2, kWsC1, kWsC2, kWsC3, kWsFloor, kVC1, kVC2, kDZone, kDDrop, kRhoDrop, kRhoP, kRhoEnv, kHPen, kNParams };
+enum P {
+  kTauC1,
+  kTauC2,
+  kWsC1,
+  kWsC2,
+  kWsC3,
+  kWsFloor,
+  kVC1,
+  kVC2,
+  kDZone,
+  kDDrop,
+  kRhoDrop,
+  kRhoP,
+  kRhoEnv,
+  kHPen,
+  kNParams
+};
 enum Port { kLiquid, kBed, kOut };
 
 class SprayZone : public UnitBase<SprayZone> {
@@ -38,14 +54,17 @@ class SprayZone : public UnitBase<SprayZone> {
     s.add_param({"ws_floor", "-", def::kWsFloor, 1e-6, 1.0, "floor of Eq. (47)", "PAPER001_DECISIONS"});
     s.add_param({"v_c1", "m/s", def::kVelocityC1, -1.0, 1.0, "Eq. (49) Re coefficient", "paper 001, Table 9"});
     s.add_param({"v_c2", "m/s", def::kVelocityC2, 1e-4, 10.0, "Eq. (49) intercept", "paper 001, Table 9"});
-    s.add_param({"d_zone", "m", def::kSprayZoneDiameter, 1e-3, 10.0, "spray-zone diameter, Eq. (48)", "paper 001, Table 9"});
+    s.add_param(
+        {"d_zone", "m", def::kSprayZoneDiameter, 1e-3, 10.0, "spray-zone diameter, Eq. (48)", "paper 001, Table 9"});
     s.add_param({"d_drop", "m", def::kDropletDiameter, 1e-6, 1e-3, "droplet diameter, Eq. (42)", "paper 001, Table 9"});
-    s.add_param({"rho_drop", "kg/m3", def::kDropletDensity, 100.0, 3000.0, "droplet density, Eq. (42)", "paper 001, Table 9"});
+    s.add_param(
+        {"rho_drop", "kg/m3", def::kDropletDensity, 100.0, 3000.0, "droplet density, Eq. (42)", "paper 001, Table 9"});
     s.add_param({"rho_p", "kg/m3", def::kParticleDensity, 100.0, 5000.0, "particle density in Eqs. (33), (42)",
                  "paper 001, Table 9; PAPER001_DECISIONS"});
     s.add_param({"rho_env", "kg/m3", def::kEnvelopeDensity, 100.0, 5000.0, "envelope density for size <-> mass",
                  "paper 001, Table 6-7: 1545 (1 - 0.3)"});
-    s.add_param({"h_pen", "m", def::kPenetrationDepth, 1e-7, 1e-2, "liquid penetration depth, Eq. (57)", "paper 001, Table 9"});
+    s.add_param(
+        {"h_pen", "m", def::kPenetrationDepth, 1e-7, 1e-2, "liquid penetration depth, Eq. (57)", "paper 001, Table 9"});
     for (int i = 0; i < n_; ++i) s.add_state("m_dep_" + std::to_string(i), StateKind::Algebraic, "kg/s", 1e-4);
     for (int i = 0; i < n_; ++i) s.add_state("fwet_" + std::to_string(i), StateKind::Algebraic, "-", 0.1);
     for (int i = 0; i < n_; ++i) s.add_state("Xwet_" + std::to_string(i), StateKind::Algebraic, "kg/kg", 0.1);
@@ -82,12 +101,13 @@ class SprayZone : public UnitBase<SprayZone> {
   template <class T>
   ClassFlow<T> class_flow(int i, const T& u0, const GasProps<T>& g, const T* par) const {
     const T d(d_[i]);
-    const T umf = kernels::transfer::wen_yu_umf(d, par[kRhoP], g.rho, g.mu);  // Eqs. (31)-(33)
+    const T umf = kernels::transfer::wen_yu_umf(d, par[kRhoP], g.rho, g.mu);   // Eqs. (31)-(33)
     const T re = kernels::transfer::excess_reynolds_number(u0, umf, d, g.nu);  // Eq. (30)
     const auto w = p1::spray_zone_solids_fraction(re, par[kWsFloor], par[kWsC1], par[kWsC2], par[kWsC3]);  // (47)
-    return {p1::dimensionless_residence_time(re, par[kTauC1], par[kTauC2]),  // Eq. (29)
+    return {p1::dimensionless_residence_time(re, par[kTauC1], par[kTauC2]),                                // Eq. (29)
             w.value,
-            p1::spray_zone_crossing_time(p1::spray_zone_particle_velocity(re, par[kVC1], par[kVC2]), par[kDZone]),  // (48), (49)
+            p1::spray_zone_crossing_time(p1::spray_zone_particle_velocity(re, par[kVC1], par[kVC2]),
+                                         par[kDZone]),  // (48), (49)
             w.active};
   }
 
@@ -120,8 +140,8 @@ class SprayZone : public UnitBase<SprayZone> {
     // Eq. (42) is linear in X_LS: phi = kappa X_LS
     const T kappa = p1::coating_number(T(1.0), d, par[kDDrop], par[kRhoP], par[kRhoDrop]);
     const T phi = kappa * x_ls;
-    *fwet = p1::surface_coverage(phi);                                       // Eq. (41)
-    const auto frac = p1::wetted_volume_fraction(*fwet, d, par[kHPen]);      // Eq. (57)
+    *fwet = p1::surface_coverage(phi);                                   // Eq. (41)
+    const auto frac = p1::wetted_volume_fraction(*fwet, d, par[kHPen]);  // Eq. (57)
     // Eqs. (55)-(56): X_wet - X0 = m_dep / (m_s frac) = X_LS / frac. Uncapped, frac = (h A / V) f_wet, so
     // X_LS / frac = (phi / f_wet) / (kappa h A / V), and phi / f_wet -> 1 + phi / 2 as the spray goes to zero:
     // a droplet's wet spot keeps its moisture however few droplets there are.
@@ -150,8 +170,8 @@ class SprayZone : public UnitBase<SprayZone> {
     }
     const T& m_liquid = c.port(kLiquid, liquid::kMdot);
     for (int i = 0; i < n_; ++i)
-      *vol_capped += class_outputs(i, c.port(kBed, holdup::mass(i)), c.port(kBed, holdup::water(n_, i)), m_liquid,
-                                   sum, f[i], c.p, &m_dep[i], &fwet[i], &xwet[i]);
+      *vol_capped += class_outputs(i, c.port(kBed, holdup::mass(i)), c.port(kBed, holdup::water(n_, i)), m_liquid, sum,
+                                   f[i], c.p, &m_dep[i], &fwet[i], &xwet[i]);
   }
 
   // The exact Jacobian class by class: each class's outputs depend on its mass and water, the bed temperature,
@@ -172,7 +192,9 @@ class SprayZone : public UnitBase<SprayZone> {
       const J6 w = split_weight(j, J6(c.port(kBed, holdup::mass(j))), f.back(), par.data());
       sum += w;
       // the weight is linear in M_j (default split) or independent of it (literal)
-      dsum_dm[j] = split_ == p1::LiquidSplit::kClassSurface ? value_of(f.back().tau) * d_[j] * d_[j] / particle_mass(j, c.p) : 0.0;
+      dsum_dm[j] = split_ == p1::LiquidSplit::kClassSurface
+                       ? value_of(f.back().tau) * d_[j] * d_[j] / particle_mass(j, c.p)
+                       : 0.0;
     }
     sum.v[5] = 1.0;  // keeps its dependence on T_bed and u0 and also stands for itself
     const int cols[5] = {0, 0, ports[kBed][holdup::T(n_)], ports[kBed][holdup::u0(n_)], ports[kLiquid][liquid::kMdot]};
@@ -248,8 +270,10 @@ class SprayZone : public UnitBase<SprayZone> {
   };
   template <class T>
   Scratch<T>& scratch() const {
-    if constexpr (std::is_same_v<T, double>) return sd_;
-    else return sj_;
+    if constexpr (std::is_same_v<T, double>)
+      return sd_;
+    else
+      return sj_;
   }
   static constexpr double kMassFloor = holdup::kMassFloor;
   int n_ = def::kSizeClasses;

@@ -7,4 +7,4 @@ namespace granuflow::units {
 // surface fraction and the wet-spot moisture that the glass-transition agglomeration kernel needs.
 // Zero hold-up: every state is algebraic.
 void register_spray_zone(Registry<Unit>& r);
-}
+}  // namespace granuflow::units

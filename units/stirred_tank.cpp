@@ -60,7 +60,8 @@ class StirredTank : public UnitBase<StirredTank> {
 }  // namespace
 
 void register_stirred_tank(Registry<Unit>& r) {
-  r.add("stirred_tank", "heated ideally mixed tank with constant hold-up", [] { return std::make_unique<StirredTank>(); });
+  r.add("stirred_tank", "heated ideally mixed tank with constant hold-up",
+        [] { return std::make_unique<StirredTank>(); });
 }
 
 }  // namespace granuflow::units

@@ -13,7 +13,8 @@ class WallHeatLoss : public UnitBase<WallHeatLoss> {
   std::string type() const override { return "wall_heat_loss"; }
   void declare(UnitSpec& s, Settings&) override {
     namespace def = kernels::paper001::defaults;
-    s.add_param({"k_wall", "W/(m2 K)", def::kWallHeatTransfer, 0.0, 1e3, "wall heat-transfer coefficient", "paper 001, Table 8"});
+    s.add_param({"k_wall", "W/(m2 K)", def::kWallHeatTransfer, 0.0, 1e3, "wall heat-transfer coefficient",
+                 "paper 001, Table 8"});
     s.add_param({"A_wall", "m2", def::kWallArea, 0.0, 1e3, "wall surface", "paper 001, Table 6"});
     s.add_param({"T_env", "K", 293.15, 200.0, 400.0, "environment temperature", "PAPER001_DECISIONS"});
     s.add_state("Q", StateKind::Algebraic, "W", 1e3);

@@ -57,7 +57,8 @@ void CalibrationOptions::validate() const {
   if (!(fd_step > 0 && fd_step < 1)) fail("fd_step", fd_step, "0 < fd_step < 1");
   if (!(rtol > 0 && rtol < 1)) fail("rtol", rtol, "0 < rtol < 1");
   if (!(atol > 0)) fail("atol", atol, "atol > 0");
-  if (!(output_rel_step > 0 && output_rel_step < 0.1)) fail("output_rel_step", output_rel_step, "0 < output_rel_step < 0.1");
+  if (!(output_rel_step > 0 && output_rel_step < 0.1))
+    fail("output_rel_step", output_rel_step, "0 < output_rel_step < 0.1");
   if (!(rse_threshold > 0)) fail("rse_threshold", rse_threshold, "rse_threshold > 0");
   if (!(correlation_threshold > 0 && correlation_threshold <= 1))
     fail("correlation_threshold", correlation_threshold, "0 < correlation_threshold <= 1");
@@ -117,7 +118,8 @@ void parallel_for(int n, int threads, F&& f) {
 void validate_experiments(const std::vector<Experiment>& exps) {
   for (const auto& e : exps) {
     if (!(e.t_end >= 0) || !std::isfinite(e.t_end))
-      throw ConfigError(violation("experiment '" + e.name + "'.t_end", e.t_end, "s", "0 <= t_end < inf (0: the last sample time)"));
+      throw ConfigError(
+          violation("experiment '" + e.name + "'.t_end", e.t_end, "s", "0 <= t_end < inf (0: the last sample time)"));
     for (const auto& o : e.observations) {
       const std::string w = "experiment '" + e.name + "': observation " + o.name;
       if (o.t.size() != o.value.size())
@@ -195,8 +197,7 @@ class ExperimentModel {
     for (const auto& [k, v] : fixed) fs.set_param(k, v);
     for (const auto& [k, v] : e.settings) {
       for (const auto& n : space.names)
-        if (n == k)
-          throw ConfigError("experiment '" + e.name + "' sets " + k + ", a free parameter of the stage");
+        if (n == k) throw ConfigError("experiment '" + e.name + "' sets " + k + ", a free parameter of the stage");
       fs.set_param(k, v);
     }
     const auto outs = fs.output_names();
@@ -231,7 +232,8 @@ class ExperimentModel {
     t_out_.assign(times.begin(), times.end());
     for (auto& ob : obs_)
       for (int i : ob.samples)
-        ob.time_index.push_back(static_cast<int>(std::lower_bound(t_out_.begin(), t_out_.end(), ob.src->t[i]) - t_out_.begin()));
+        ob.time_index.push_back(
+            static_cast<int>(std::lower_bound(t_out_.begin(), t_out_.end(), ob.src->t[i]) - t_out_.begin()));
     sim_ = scene_.options;
     sim_.t_end = std::max(e.t_end, t_last);
     if (!(sim_.t_end > 0)) sim_.t_end = 1.0;  // only t = 0 samples: a nominal horizon
@@ -264,8 +266,10 @@ class ExperimentModel {
       dm->assign(size_t(rows()) * n, 0.0);
       std::vector<double> th(theta, theta + n), mp, mm;
       for (int k = 0; k < n; ++k) {
-        const double h = opt_.fd_step * (space_.transform[k] == Transform::kLog ? 1.0 : std::max(std::abs(theta[k]), 1.0));
-        const double hi = std::min(theta[k] + h, space_.theta_upper(k)), lo = std::max(theta[k] - h, space_.theta_lower(k));
+        const double h =
+            opt_.fd_step * (space_.transform[k] == Transform::kLog ? 1.0 : std::max(std::abs(theta[k]), 1.0));
+        const double hi = std::min(theta[k] + h, space_.theta_upper(k)),
+                     lo = std::max(theta[k] - h, space_.theta_lower(k));
         for (int side = 0; side < 2; ++side) {
           th[k] = side == 0 ? hi : lo;
           fs.set_param(space_.names[k], clamp_p(k, space_.to_p(k, th[k])));
@@ -316,9 +320,9 @@ class ExperimentModel {
         const size_t it = ob.time_index[j];
         m[row] = ob.state ? r.y[it * ns + ob.index] : r.outputs[it * no + ob.index];
         if (!std::isfinite(m[row]))
-          throw SolverError("experiment '" + name_ + "': " + ob.src->name + " is not finite at t = " +
-                                std::to_string(r.t[it]) + " s",
-                            r.t[it], ob.src->name, 0.0);
+          throw SolverError(
+              "experiment '" + name_ + "': " + ob.src->name + " is not finite at t = " + std::to_string(r.t[it]) + " s",
+              r.t[it], ob.src->name, 0.0);
         if (!dm) continue;
         for (int k = 0; k < n; ++k)
           (*dm)[size_t(row) * n + k] =
@@ -527,7 +531,7 @@ struct StageRun {
       explicit SmallChange(double t) : tol(t) {}
       ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
         return s.iteration > 0 && s.step_is_successful && s.cost_change < tol ? ceres::SOLVER_TERMINATE_SUCCESSFULLY
-                                                                               : ceres::SOLVER_CONTINUE;
+                                                                              : ceres::SOLVER_CONTINUE;
       }
     } small_change(opt.cost_change_tolerance);
     if (opt.cost_change_tolerance > 0) so.callbacks.push_back(&small_change);
@@ -615,8 +619,7 @@ std::string fmt(double v, int prec = 4) {
 // Runs one stage from `params` (updated with the estimates); statistics at the optimum if `statistics`.
 StageResult run_stage(const Scene& scene, const Registry<Unit>& reg, const std::vector<Experiment>& exps,
                       const Stage& stage, const CalibrationOptions& opt, std::map<std::string, double>& params,
-                      bool statistics, int max_iterations,
-                      const std::vector<std::vector<double>>* sigmas = nullptr,
+                      bool statistics, int max_iterations, const std::vector<std::vector<double>>* sigmas = nullptr,
                       std::vector<std::vector<double>>* sigmas_out = nullptr) {
   const auto t0 = Clock::now();
   StageRun run(scene, reg, exps, stage, opt, params);
@@ -643,7 +646,8 @@ StageResult run_stage(const Scene& scene, const Registry<Unit>& reg, const std::
     ++res.passes;
     if (!res.usable) {
       const std::string err = run.first_error();
-      throw CalibrationError("stage '" + stage.name + "' failed: " + summary.message + (err.empty() ? "" : " (" + err + ")"));
+      throw CalibrationError("stage '" + stage.name + "' failed: " + summary.message +
+                             (err.empty() ? "" : " (" + err + ")"));
     }
     clamp_theta(sp, theta);
     run.evaluate(theta, r, &J, opt.num_threads);  // Ceres' last Jacobian, unless a bound moved θ
@@ -679,19 +683,20 @@ StageResult run_stage(const Scene& scene, const Registry<Unit>& reg, const std::
     for (int i = 0; i < n; ++i)
       for (int k = 0; k < n; ++k) {
         const double ci = res.covariance[size_t(i) * n + i], ck = res.covariance[size_t(k) * n + k];
-        res.correlation[size_t(i) * n + k] =
-            i == k ? 1.0 : (std::isfinite(ci) && std::isfinite(ck) && ci > 0 && ck > 0)
-                               ? res.covariance[size_t(i) * n + k] / std::sqrt(ci * ck)
-                               : std::numeric_limits<double>::quiet_NaN();
+        res.correlation[size_t(i) * n + k] = i == k ? 1.0
+                                             : (std::isfinite(ci) && std::isfinite(ck) && ci > 0 && ck > 0)
+                                                 ? res.covariance[size_t(i) * n + k] / std::sqrt(ci * ck)
+                                                 : std::numeric_limits<double>::quiet_NaN();
       }
     for (int k = 0; k < n; ++k) {
       Estimate& e = res.estimates[k];
       e.se_theta = std::sqrt(res.covariance[size_t(k) * n + k]);
       e.se = e.se_theta * sp.dp_dtheta(k, e.theta);
-      e.rel_se = (e.transform == Transform::kLog || e.logarithmic) ? e.se_theta
-                                                                   : e.se / std::max(std::abs(e.value), 1e-300);
+      e.rel_se =
+          (e.transform == Transform::kLog || e.logarithmic) ? e.se_theta : e.se / std::max(std::abs(e.value), 1e-300);
       std::vector<std::string> why;
-      if (!std::isfinite(e.se)) why.push_back("the data do not constrain it (singular covariance)");
+      if (!std::isfinite(e.se))
+        why.push_back("the data do not constrain it (singular covariance)");
       else if (e.rel_se > opt.rse_threshold)
         why.push_back("relative standard error " + fmt(e.rel_se, 3) + " > " + fmt(opt.rse_threshold, 3));
       for (int i = 0; i < n; ++i) {
@@ -713,8 +718,9 @@ StageResult run_stage(const Scene& scene, const Registry<Unit>& reg, const std::
 
 // Δχ² profile of the loss over one free parameter of `stage`, the others re-optimized (warm-started outward).
 Profile profile_parameter(const Scene& scene, const Registry<Unit>& reg, const std::vector<Experiment>& exps,
-                          const Stage& stage, const CalibrationOptions& opt, const std::map<std::string, double>& optimum,
-                          const StageResult& at, int which, const std::vector<std::vector<double>>& sigmas) {
+                          const Stage& stage, const CalibrationOptions& opt,
+                          const std::map<std::string, double>& optimum, const StageResult& at, int which,
+                          const std::vector<std::vector<double>>& sigmas) {
   const Estimate& e = at.estimates[which];
   Profile pr;
   pr.name = e.name;
@@ -791,8 +797,8 @@ Profile profile_parameter(const Scene& scene, const Registry<Unit>& reg, const s
   for (double d : dchi_2se)
     if (!(d > 2.0 && d < 8.0)) pr.linear_trustworthy = false;
   pr.verdict = !(pr.bounded_below && pr.bounded_above) ? "unidentifiable"
-               : pr.linear_trustworthy                ? "identifiable"
-                                                      : "nonlinear";
+               : pr.linear_trustworthy                 ? "identifiable"
+                                                       : "nonlinear";
   return pr;
 }
 
@@ -832,7 +838,8 @@ CalibrationResult calibrate(const Scene& scene, const Registry<Unit>& reg, const
   for (size_t s = 0; s < stages.size(); ++s) {
     const bool last = s + 1 == stages.size();
     std::vector<std::vector<double>> sigmas;
-    StageResult r = run_stage(scene, reg, exps, stages[s], opt, out.parameters, true, opt.max_iterations, nullptr, &sigmas);
+    StageResult r =
+        run_stage(scene, reg, exps, stages[s], opt, out.parameters, true, opt.max_iterations, nullptr, &sigmas);
     if (last && opt.profile) {
       for (size_t k = 0; k < r.estimates.size(); ++k) {
         if (r.estimates[k].flag.empty()) continue;
@@ -840,8 +847,8 @@ CalibrationResult calibrate(const Scene& scene, const Registry<Unit>& reg, const
         Estimate& e = r.estimates[k];
         e.identifiable = p.verdict != "unidentifiable" && std::isfinite(e.se);
         e.flag += "; profile: " + p.verdict + " (Δχ² < " + fmt(opt.profile_delta_chi2, 3) + " over [" +
-                  fmt(p.lower_95) + ", " + fmt(p.upper_95) + "]" +
-                  (p.bounded_below ? "" : ", open below") + (p.bounded_above ? "" : ", open above") + ")";
+                  fmt(p.lower_95) + ", " + fmt(p.upper_95) + "]" + (p.bounded_below ? "" : ", open below") +
+                  (p.bounded_above ? "" : ", open above") + ")";
         r.profiles.push_back(std::move(p));
       }
     }
@@ -863,7 +870,8 @@ std::string CalibrationResult::brief() const {
   std::ostringstream os;
   os << "calibration " << status << ": " << stages.size() << " stage" << (stages.size() == 1 ? "" : "s");
   if (!stages.empty())
-    os << ", final cost " << fmt(stages.back().cost, 6) << " (reduced chi2 " << fmt(stages.back().chi2_reduced, 3) << ")";
+    os << ", final cost " << fmt(stages.back().cost, 6) << " (reduced chi2 " << fmt(stages.back().chi2_reduced, 3)
+       << ")";
   os << ", " << simulations << " simulations (" << sensitivity_solves << " with sensitivities), " << fmt(wall_time_s, 3)
      << " s";
   std::string flagged;
@@ -892,14 +900,15 @@ std::string CalibrationResult::full_report() const {
     for (const auto& e : s.estimates)
       os << std::left << std::setw(22) << e.name << std::right << std::setw(14) << fmt(e.start, 6) << std::setw(14)
          << fmt(e.value, 6) << std::setw(14) << fmt(e.se, 4) << std::setw(11) << fmt(e.rel_se, 3) << std::setw(11)
-         << to_string(e.transform) << "  " << (e.identifiable ? "yes" : "NO") << (e.flag.empty() ? "" : "  [" + e.flag + "]")
-         << "\n";
+         << to_string(e.transform) << "  " << (e.identifiable ? "yes" : "NO")
+         << (e.flag.empty() ? "" : "  [" + e.flag + "]") << "\n";
     const size_t n = s.estimates.size();
     if (!s.correlation.empty()) {
       os << "correlation:\n";
       for (size_t i = 0; i < n; ++i) {
         os << "  " << std::left << std::setw(22) << s.estimates[i].name << std::right;
-        for (size_t k = 0; k < n; ++k) os << std::setw(8) << std::fixed << std::setprecision(3) << s.correlation[i * n + k];
+        for (size_t k = 0; k < n; ++k)
+          os << std::setw(8) << std::fixed << std::setprecision(3) << s.correlation[i * n + k];
         os.unsetf(std::ios::fixed);
         os << "\n";
       }
@@ -948,12 +957,14 @@ std::vector<Prediction> predict(const Scene& scene, const Registry<Unit>& reg, c
       if (io == outs.end() && is == states.end()) observable_unit(fs, o.name);
       for (size_t j = 0; j < o.t.size(); ++j) {
         const size_t it = std::lower_bound(so.t_out.begin(), so.t_out.end(), o.t[j]) - so.t_out.begin();
-        const double m = io != outs.end() ? r.outputs[it * no + (io - outs.begin())] : r.y[it * ns + (is - states.begin())];
+        const double m =
+            io != outs.end() ? r.outputs[it * no + (io - outs.begin())] : r.y[it * ns + (is - states.begin())];
         p.t.push_back(o.t[j]);
         p.data.push_back(o.value[j]);
         p.model.push_back(m);
-        p.sigma.push_back(o.sigma_abs > 0 ? o.sigma_abs
-                                          : o.sigma_rel * std::abs(opt.sigma_basis == SigmaBasis::kModel ? m : o.value[j]));
+        p.sigma.push_back(o.sigma_abs > 0
+                              ? o.sigma_abs
+                              : o.sigma_rel * std::abs(opt.sigma_basis == SigmaBasis::kModel ? m : o.value[j]));
       }
       per[i].push_back(std::move(p));
     }
@@ -1010,7 +1021,8 @@ struct StageProblem::Impl {
 };
 
 StageProblem::StageProblem(const Scene& scene, const Registry<Unit>& reg, const std::vector<Experiment>& exps,
-                           const Stage& stage, const CalibrationOptions& opt, const std::map<std::string, double>& start)
+                           const Stage& stage, const CalibrationOptions& opt,
+                           const std::map<std::string, double>& start)
     : impl_(new Impl) {
   try {
     opt.validate();

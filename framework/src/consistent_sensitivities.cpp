@@ -25,9 +25,9 @@ void consistent_sensitivities(DaeSystem& sys, bool dense, double t, const double
     ps[k] = s0[k].data(), pps[k] = sp0[k].data(), prs[k] = rs[k].data();
   }
   if (sys.sens_residual(t, y, yp, params, ps.data(), pps.data(), prs.data()) != Status::kOk)
-    throw SolverError("consistent initial sensitivities: the sensitivity residual failed at t = " + std::to_string(t) +
-                          " s",
-                      t, "", 0.0);
+    throw SolverError(
+        "consistent initial sensitivities: the sensitivity residual failed at t = " + std::to_string(t) + " s", t, "",
+        0.0);
   Eigen::MatrixXd rhs(n, np);
   for (size_t k = 0; k < np; ++k)
     for (int i = 0; i < n; ++i) rhs(i, k) = -rs[k][i];
@@ -42,7 +42,8 @@ void consistent_sensitivities(DaeSystem& sys, bool dense, double t, const double
     sys.jacobian(t, y, yp, 0.0, j0.data(), nullptr);  // column-major, ld = n
     sys.jacobian(t, y, yp, 1.0, j1.data(), nullptr);
     Eigen::MatrixXd m(n, n);
-    for (int c = 0; c < n; ++c) m.col(c) = id[c] > 0 ? Eigen::VectorXd(j1.col(c) - j0.col(c)) : Eigen::VectorXd(j0.col(c));
+    for (int c = 0; c < n; ++c)
+      m.col(c) = id[c] > 0 ? Eigen::VectorXd(j1.col(c) - j0.col(c)) : Eigen::VectorXd(j0.col(c));
     Eigen::PartialPivLU<Eigen::MatrixXd> lu(m);
     u = lu.solve(rhs);
   } else {

@@ -1,11 +1,10 @@
 #include "granuflow/dae_system.hpp"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <set>
 #include <unordered_map>
-
-#include <Eigen/Dense>
 
 #include "granuflow/errors.hpp"
 
@@ -75,8 +74,10 @@ DaeSystem::DaeSystem(Flowsheet& fs, bool inline_explicit) : fs_(fs) {
     for (int c = 0; c < n_; ++c)
       if (col_read[c]) schur_cols_.push_back(c);
     for (int i = 0; i < static_cast<int>(schur_rows_.size()); ++i)  // runs of consecutive rows, copied as blocks
-      if (i > 0 && schur_rows_[i] == schur_rows_[i - 1] + 1) ++std::get<2>(schur_row_runs_.back());
-      else schur_row_runs_.push_back({i, schur_rows_[i], 1});
+      if (i > 0 && schur_rows_[i] == schur_rows_[i - 1] + 1)
+        ++std::get<2>(schur_row_runs_.back());
+      else
+        schur_row_runs_.push_back({i, schur_rows_[i], 1});
     schur_col_pos_.assign(n_, -1);
     for (size_t j = 0; j < schur_cols_.size(); ++j) schur_col_pos_[schur_cols_[j]] = static_cast<int>(j);
   }
@@ -108,8 +109,8 @@ DaeSystem::DaeSystem(Flowsheet& fs, bool inline_explicit) : fs_(fs) {
       for (double shift : {0.0, 1.0}) {
         auto y = y_ext_;
         for (int k = 0; k < ns; ++k) y[off + k] = shift;
-        Ctx<double> c{0.0, y.data(), yp0.data(), pvals_[u].data(), (shift > 0 ? r1 : r0).data(), off,
-                      &units[u].port_index, 0.0};
+        Ctx<double> c{
+            0.0, y.data(), yp0.data(), pvals_[u].data(), (shift > 0 ? r1 : r0).data(), off, &units[u].port_index, 0.0};
         units[u].unit->residual(c);
       }
       for (int k = 0; k < ns; ++k)
@@ -128,7 +129,8 @@ void DaeSystem::build_sparse_maps() const {
   std::vector<std::vector<int>> col_rows(n_all);
   for (size_t u = 0; u < units.size(); ++u)
     for (int c : local_cols_[u])
-      for (int k = 0; k < static_cast<int>(units[u].spec.states().size()); ++k) col_rows[c].push_back(units[u].offset + k);
+      for (int k = 0; k < static_cast<int>(units[u].spec.states().size()); ++k)
+        col_rows[c].push_back(units[u].offset + k);
   pattern_.n = n_all;
   pattern_.col_ptr.assign(n_all + 1, 0);
   for (int c = 0; c < n_all; ++c) {
@@ -147,7 +149,8 @@ void DaeSystem::build_sparse_maps() const {
         const int row = units[u].offset + k;
         auto begin = pattern_.row_idx.begin() + pattern_.col_ptr[c];
         auto end = pattern_.row_idx.begin() + pattern_.col_ptr[c + 1];
-        block_pos_[u][size_t(k) * cols.size() + j] = static_cast<int>(std::lower_bound(begin, end, row) - pattern_.row_idx.begin());
+        block_pos_[u][size_t(k) * cols.size() + j] =
+            static_cast<int>(std::lower_bound(begin, end, row) - pattern_.row_idx.begin());
       }
     }
   }
@@ -216,7 +219,8 @@ Status DaeSystem::residual(double t, const double* y, const double* yp, double* 
   }
   for (size_t u = 0; u < units.size(); ++u) {
     if (inline_ && units[u].spec.is_explicit()) continue;
-    Ctx<double> c{t, y, yp, pvals_[u].data(), r + units[u].offset, units[u].offset, &units[u].port_index, segment_start_};
+    Ctx<double> c{
+        t, y, yp, pvals_[u].data(), r + units[u].offset, units[u].offset, &units[u].port_index, segment_start_};
     const Status s = units[u].unit->residual(c);
     if (s != Status::kOk) return s;
   }
@@ -332,7 +336,8 @@ void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj,
       for (size_t c = 0; c < term.cols.size(); ++c) {
         const int j = schur_col_pos_[term.cols[c]];
         if (j < 0)
-          throw std::logic_error("unit '" + units[term.unit].name + "' added an outer product on a column it does not read");
+          throw std::logic_error("unit '" + units[term.unit].name +
+                                 "' added an outer product on a column it does not read");
         schur_p_.col(j).noalias() += term.w[c] * schur_au_.col(k);
       }
     }
@@ -342,8 +347,8 @@ void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj,
       out.col(schur_cols_[j]).segment(row, len) -= schur_p_.col(j).segment(pos, len);
 }
 
-void DaeSystem::assemble(double t, const double* y, const double* yp, double cj, int dim, double* dense,
-                         double* sparse, bool factor_outer) {
+void DaeSystem::assemble(double t, const double* y, const double* yp, double cj, int dim, double* dense, double* sparse,
+                         bool factor_outer) {
   const auto& units = fs_.units();
   if (dense) std::fill(dense, dense + size_t(dim) * dim, 0.0);
   if (sparse) {
@@ -378,8 +383,10 @@ void DaeSystem::assemble(double t, const double* y, const double* yp, double cj,
     if (units[u].spec.is_explicit())
       for (int k = 0; k < ns; ++k) {
         const int col = units[u].offset + k;
-        if (dense) dense[size_t(col) * dim + col] += 1.0;
-        else sparse[block_pos_[u][size_t(k) * cols.size() + col_map_[u].at(col)]] += 1.0;
+        if (dense)
+          dense[size_t(col) * dim + col] += 1.0;
+        else
+          sparse[block_pos_[u][size_t(k) * cols.size() + col_map_[u].at(col)]] += 1.0;
       }
     for (size_t a0 = 0; a0 < ad.size(); a0 += kAdChunk) {
       const size_t a1 = std::min(ad.size(), a0 + kAdChunk);
@@ -388,7 +395,8 @@ void DaeSystem::assemble(double t, const double* y, const double* yp, double cj,
         xj_[cols[ad[a]]].v[a - a0] = 1.0;
         xdj_[cols[ad[a]]].v[a - a0] = cj;
       }
-      Ctx<Jet> c{t, xj_.data(), xdj_.data(), pj.data(), rj_.data(), units[u].offset, &units[u].port_index, segment_start_};
+      Ctx<Jet> c{t,          xj_.data(),      xdj_.data(),          pj.data(),
+                 rj_.data(), units[u].offset, &units[u].port_index, segment_start_};
       units[u].unit->residual(c);
       for (size_t a = a0; a < a1; ++a) {
         const size_t j = ad[a];
@@ -418,8 +426,8 @@ void DaeSystem::seed(int id, int u, size_t slot, std::vector<Jet>& pj) const {
 
 // Loads directions [d0, d1) into the Jets: the unknowns' values and sensitivities (y' ones zero without `ypS`),
 // and every unit's parameters seeded with the directions of the parameters they are or follow.
-void DaeSystem::load_directions(const double* y, const double* yp, const std::vector<int>& params, size_t d0,
-                                size_t d1, const double* const* yS, const double* const* ypS) {
+void DaeSystem::load_directions(const double* y, const double* yp, const std::vector<int>& params, size_t d0, size_t d1,
+                                const double* const* yS, const double* const* ypS) {
   for (int i = 0; i < n_; ++i) {
     xj_[i] = Jet(y[i]);
     xdj_[i] = Jet(yp[i]);
@@ -445,8 +453,14 @@ Status DaeSystem::sens_residual(double t, const double* y, const double* yp, con
     if (inline_) evaluate_explicit(t, xj_.data(), xdj_.data(), pj_, jet_scratch_);
     for (size_t u = 0; u < units.size(); ++u) {
       if (inline_ && units[u].spec.is_explicit()) continue;
-      Ctx<Jet> c{t, xj_.data(), xdj_.data(), pj_[u].data(), rj_.data() + units[u].offset, units[u].offset,
-                 &units[u].port_index, segment_start_};
+      Ctx<Jet> c{t,
+                 xj_.data(),
+                 xdj_.data(),
+                 pj_[u].data(),
+                 rj_.data() + units[u].offset,
+                 units[u].offset,
+                 &units[u].port_index,
+                 segment_start_};
       const Status s = units[u].unit->residual(c);
       if (s != Status::kOk) return s;
     }

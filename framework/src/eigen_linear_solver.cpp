@@ -1,8 +1,9 @@
 #include "eigen_linear_solver.hpp"
 
-#include <Eigen/Dense>
 #include <nvector/nvector_serial.h>
 #include <sunmatrix/sunmatrix_dense.h>
+
+#include <Eigen/Dense>
 
 namespace granuflow::detail {
 namespace {

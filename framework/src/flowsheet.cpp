@@ -26,8 +26,8 @@ long Settings::get_int(const std::string& name, long def, long lower, long upper
   char* end = nullptr;
   const long v = std::strtol(s->c_str(), &end, 10);
   if (end == s->c_str() || *end != '\0')
-    throw ConfigError(where_ + "." + name + " = '" + *s + "': expected an integer in [" + std::to_string(lower) +
-                      ", " + std::to_string(upper) + "]");
+    throw ConfigError(where_ + "." + name + " = '" + *s + "': expected an integer in [" + std::to_string(lower) + ", " +
+                      std::to_string(upper) + "]");
   if (v < lower || v > upper)
     throw ConfigError(violation(where_ + "." + name, double(v), "",
                                 std::to_string(lower) + " <= " + name + " <= " + std::to_string(upper)));
@@ -111,8 +111,7 @@ int Flowsheet::unit_index(const std::string& name) const {
 
 std::pair<int, int> Flowsheet::split_port(const std::string& qualified) const {
   const auto dot = qualified.find('.');
-  if (dot == std::string::npos)
-    throw ConfigError("port '" + qualified + "': expected 'unit.port'");
+  if (dot == std::string::npos) throw ConfigError("port '" + qualified + "': expected 'unit.port'");
   const int u = unit_index(qualified.substr(0, dot));
   const std::string port = qualified.substr(dot + 1);
   const auto& ports = units_[u].spec.ports();
@@ -120,8 +119,8 @@ std::pair<int, int> Flowsheet::split_port(const std::string& qualified) const {
     if (ports[p].name == port) return {u, static_cast<int>(p)};
   std::string allowed;
   for (const auto& p : ports) allowed += (allowed.empty() ? "" : ", ") + p.name;
-  throw ConfigError("unit '" + units_[u].name + "' has no port '" + port + "' (ports: " +
-                    (allowed.empty() ? "none" : allowed) + ")");
+  throw ConfigError("unit '" + units_[u].name + "' has no port '" + port +
+                    "' (ports: " + (allowed.empty() ? "none" : allowed) + ")");
 }
 
 void Flowsheet::connect(const std::string& from, const std::string& to) {
@@ -137,8 +136,8 @@ void Flowsheet::connect(const std::string& from, const std::string& to) {
     throw ConfigError("connection " + from + " -> " + to + ": stream kinds differ (" + to_string(pa.kind) + " vs " +
                       to_string(pb.kind) + ")");
   if (pa.classes != pb.classes)
-    throw ConfigError("connection " + from + " -> " + to + ": size-class counts differ (" +
-                      std::to_string(pa.classes) + " vs " + std::to_string(pb.classes) + ")");
+    throw ConfigError("connection " + from + " -> " + to + ": size-class counts differ (" + std::to_string(pa.classes) +
+                      " vs " + std::to_string(pb.classes) + ")");
   if (!pa.grid.empty() && !pb.grid.empty()) {
     for (size_t i = 0; i < pa.grid.size(); ++i)
       if (std::abs(pa.grid[i] - pb.grid[i]) > 1e-9 * pa.grid[i])
@@ -201,8 +200,8 @@ void Flowsheet::finalize() {
           throw ConfigError(where + ": field '" + fields[f].name + "' is provided by both " + inst.name + " and " +
                             peer.name);
         if (mine < 0 && theirs < 0)
-          throw ConfigError(where + ": field '" + fields[f].name + "' is provided by neither " + inst.name +
-                            " nor " + peer.name);
+          throw ConfigError(where + ": field '" + fields[f].name + "' is provided by neither " + inst.name + " nor " +
+                            peer.name);
         inst.port_index[p].push_back(mine >= 0 ? inst.offset + mine : peer.offset + theirs);
       }
     }
@@ -343,8 +342,8 @@ void Flowsheet::link(const std::string& target, const std::string& source) {
     throw ConfigError("link " + target + " -> " + source + ": " + source + " itself follows " +
                       qualified_name(link_source(s)) + "; link " + target + " to " + qualified_name(link_source(s)));
   if (!linked_targets(t).empty())
-    throw ConfigError("link " + target + " -> " + source + ": " + qualified_name(linked_targets(t)[0]) +
-                      " follows " + target + "; a linked parameter cannot be followed in turn");
+    throw ConfigError("link " + target + " -> " + source + ": " + qualified_name(linked_targets(t)[0]) + " follows " +
+                      target + "; a linked parameter cannot be followed in turn");
   if (has_input(t))
     throw ConfigError("link " + target + " -> " + source + ": " + target +
                       " has a time-dependent input, which the link would override; remove one of them");
@@ -391,7 +390,8 @@ std::string Flowsheet::qualify_unit_message(const UnitInstance& inst, const std:
   for (const auto& p : inst.spec.params())
     if (m.rfind(p.name + " = ", 0) == 0 || m.rfind(p.name + ": ", 0) == 0) return inst.name + "." + m;
   const std::string type_prefix = "unit " + inst.unit->type();
-  if (m.rfind(type_prefix, 0) == 0) return "unit " + inst.name + " (" + inst.unit->type() + ")" + m.substr(type_prefix.size());
+  if (m.rfind(type_prefix, 0) == 0)
+    return "unit " + inst.name + " (" + inst.unit->type() + ")" + m.substr(type_prefix.size());
   return "unit " + inst.name + " (" + inst.unit->type() + "): " + m;
 }
 

@@ -17,8 +17,9 @@ std::vector<double> output_sensitivities(Flowsheet& fs, const SimResult& r, cons
   opt.validate();
   const size_t nt = r.t.size(), np = r.sens_params.size(), ns = r.state_names.size(), no = r.output_names.size();
   if (np == 0 || r.sens.size() != nt * np * ns)
-    throw ConfigError("output_sensitivities: the simulation result carries no state sensitivities "
-                      "(run simulate() with SimOptions.sensitivities)");
+    throw ConfigError(
+        "output_sensitivities: the simulation result carries no state sensitivities "
+        "(run simulate() with SimOptions.sensitivities)");
   if (static_cast<int>(ns) != fs.n_states() || static_cast<int>(no) != fs.n_outputs())
     throw ConfigError("output_sensitivities: the simulation result does not belong to flowsheet '" + fs.name() + "'");
   std::vector<double> dz(nt * np * no, 0.0);

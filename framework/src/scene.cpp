@@ -16,11 +16,16 @@ namespace {
 
 std::string kind_name(const YAML::Node& n) {
   switch (n.Type()) {
-    case YAML::NodeType::Map: return "a mapping";
-    case YAML::NodeType::Sequence: return "a list";
-    case YAML::NodeType::Scalar: return "'" + n.Scalar() + "'";
-    case YAML::NodeType::Null: return "empty";
-    default: return "undefined";
+    case YAML::NodeType::Map:
+      return "a mapping";
+    case YAML::NodeType::Sequence:
+      return "a list";
+    case YAML::NodeType::Scalar:
+      return "'" + n.Scalar() + "'";
+    case YAML::NodeType::Null:
+      return "empty";
+    default:
+      return "undefined";
   }
 }
 
@@ -30,8 +35,9 @@ class Loader {
 
   Scene load(const YAML::Node& root) {
     if (!root.IsMap()) fail("", "the file must be a mapping of scene keys, got " + kind_name(root));
-    check_keys(root, "", {"scene", "description", "t_end", "output", "solver", "units", "connections", "inputs",
-                          "summary", "plots", "sweep", "notes", "links"});
+    check_keys(root, "",
+               {"scene", "description", "t_end", "output", "solver", "units", "connections", "inputs", "summary",
+                "plots", "sweep", "notes", "links"});
     Scene s;
     s.path = label_;
     s.name = scalar(required(root, "scene", ""), "scene");
@@ -55,10 +61,12 @@ class Loader {
       if (u["settings"]) {
         if (!u["settings"].IsMap()) fail(at + ".settings", "expected a mapping, got " + kind_name(u["settings"]));
         check_unique(u["settings"], at + ".settings");
-        for (const auto& st : u["settings"]) settings[st.first.as<std::string>()] = scalar(st.second, at + ".settings." + st.first.as<std::string>());
+        for (const auto& st : u["settings"])
+          settings[st.first.as<std::string>()] = scalar(st.second, at + ".settings." + st.first.as<std::string>());
       }
       try {
-        fs.add_unit(name, units_.create(type, label_ + ": " + at + ".type"), Settings(label_ + ": " + at + ".settings", settings));
+        fs.add_unit(name, units_.create(type, label_ + ": " + at + ".type"),
+                    Settings(label_ + ": " + at + ".settings", settings));
       } catch (const ConfigError& e) {
         rethrow(e);
       }
@@ -119,7 +127,7 @@ class Loader {
         // A value given for a parameter that follows another would be overwritten at the start of every run.
         if (auto g = given.find(target); g != given.end())
           fail("links." + target, target + " follows " + source + " by this link but is also given as " + g->second +
-                                     "; remove one of them (set " + source + " instead)");
+                                      "; remove one of them (set " + source + " instead)");
         try {
           fs.link(target, source);
         } catch (const ConfigError& e) {
@@ -278,15 +286,18 @@ class Loader {
       const YAML::Node ts = required(n, "times", at), vs = required(n, "values", at);
       if (!ts.IsSequence() || !vs.IsSequence()) fail(at, "times and values must be lists");
       std::vector<double> t, v;
-      for (size_t i = 0; i < ts.size(); ++i) t.push_back(quantity(ts[i], at + ".times[" + std::to_string(i) + "]", "s"));
+      for (size_t i = 0; i < ts.size(); ++i)
+        t.push_back(quantity(ts[i], at + ".times[" + std::to_string(i) + "]", "s"));
       for (size_t i = 0; i < vs.size(); ++i)
         v.push_back(parse_param_value(fs, q, scalar(vs[i], at + ".values[" + std::to_string(i) + "]"),
                                       label_ + ": " + at + ".values[" + std::to_string(i) + "]"));
       auto interp = PiecewiseLinear::Interp::kLinear;
       if (n["interp"]) {
         const std::string s = scalar(n["interp"], at + ".interp");
-        if (s == "step") interp = PiecewiseLinear::Interp::kStep;
-        else if (s != "linear") fail(at + ".interp", "'" + s + "': not one of linear, step");
+        if (s == "step")
+          interp = PiecewiseLinear::Interp::kStep;
+        else if (s != "linear")
+          fail(at + ".interp", "'" + s + "': not one of linear, step");
       }
       try {
         fs.set_input(q, PiecewiseLinear(t, v, interp, label_ + ": " + at));
@@ -309,7 +320,8 @@ double parse_param_value(const Flowsheet& fs, const std::string& qualified, cons
   double v;
   std::string unit;
   if (!parse_quantity(text, &v, &unit) || !std::isfinite(v))
-    throw ConfigError(where + " = '" + text + "': expected a number with an optional unit (SI unit: " + spec.unit + ")");
+    throw ConfigError(where + " = '" + text + "': expected a number with an optional unit (SI unit: " + spec.unit +
+                      ")");
   return to_si(v, unit, spec.unit, where);
 }
 

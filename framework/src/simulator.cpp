@@ -38,8 +38,7 @@ void SimOptions::validate(bool scene_keys) const {
     if (!(t_out[i] >= 0 && t_out[i] <= t_end * (1 + 1e-12)))
       fail(field, key, t_out[i], scene_keys ? "s" : "", "0 <= t_out <= t_end (" + fmt_num(t_end) + " s)");
     if (i > 0 && !(t_out[i] > t_out[i - 1]))
-      fail(field, key, t_out[i], scene_keys ? "s" : "",
-           "t_out increasing (previous " + fmt_num(t_out[i - 1]) + " s)");
+      fail(field, key, t_out[i], scene_keys ? "s" : "", "t_out increasing (previous " + fmt_num(t_out[i - 1]) + " s)");
   }
   if (linear_solver != "auto" && linear_solver != "dense" && linear_solver != "sparse")
     throw ConfigError(name("linear_solver", "solver.linear_solver") + " = '" + linear_solver +
@@ -68,11 +67,15 @@ struct NVec {
 };
 struct Mat {
   SUNMatrix m = nullptr;
-  ~Mat() { if (m) SUNMatDestroy(m); }
+  ~Mat() {
+    if (m) SUNMatDestroy(m);
+  }
 };
 struct LinSol {
   SUNLinearSolver s = nullptr;
-  ~LinSol() { if (s) SUNLinSolFree(s); }
+  ~LinSol() {
+    if (s) SUNLinSolFree(s);
+  }
 };
 
 // Dense: Eigen's blocked LU behind a SUNDenseMatrix; sparse: KLU on the flowsheet's sparsity pattern.
@@ -107,12 +110,12 @@ void check(int flag, const char* call) {
 // or of their sensitivities) has failed to converge since; IDACalcIC and each segment start from a fresh one.
 struct JacobianCache {
   static constexpr long kMaxAge = 20;
-  std::vector<double> jac;         // column-major n x n, evaluated at cj
-  std::vector<int> differential;   // indices of the differential states
+  std::vector<double> jac;        // column-major n x n, evaluated at cj
+  std::vector<int> differential;  // indices of the differential states
   double cj = 0.0;
   long step = 0, conv_fails = 0;
   bool valid = false;
-  int reusable = -1;               // -1 unknown (checked on the first evaluation), 0 no, 1 yes
+  int reusable = -1;  // -1 unknown (checked on the first evaluation), 0 no, 1 yes
 };
 
 // State shared by the IDAS callbacks.
@@ -124,7 +127,7 @@ struct IdaUser {
   std::string last_error;
   std::vector<const double*> yS, ypS;
   std::vector<double*> rS;
-  void* mem = nullptr;             // the IDA integrator, when Jacobians may be reused (simulate, dense)
+  void* mem = nullptr;  // the IDA integrator, when Jacobians may be reused (simulate, dense)
   JacobianCache cache;
 };
 
@@ -256,7 +259,8 @@ SimResult simulate(Flowsheet& fs, const SimOptions& opt) {
   for (const auto& name : opt.sensitivities) {
     const int id = fs.param_id(name);
     if (fs.has_input(id))
-      throw ConfigError("sensitivity parameter '" + name + "' is a time-dependent input; only constants can be differentiated");
+      throw ConfigError("sensitivity parameter '" + name +
+                        "' is a time-dependent input; only constants can be differentiated");
     sens_ids.push_back(id);
   }
   std::vector<double> t_out = opt.t_out;
@@ -475,7 +479,8 @@ struct KinUser {
 int kin_res(N_Vector u, N_Vector f, void* ud) {
   auto* k = static_cast<KinUser*>(ud);
   try {
-    const int s = static_cast<int>(k->sys->residual(k->t, N_VGetArrayPointer(u), k->zeros.data(), N_VGetArrayPointer(f)));
+    const int s =
+        static_cast<int>(k->sys->residual(k->t, N_VGetArrayPointer(u), k->zeros.data(), N_VGetArrayPointer(f)));
     for (size_t i = 0; i < k->pinned.size(); ++i)
       N_VGetArrayPointer(f)[k->pinned[i]] = N_VGetArrayPointer(u)[k->pinned[i]] - k->pinned_value[i];
     return s;
@@ -613,7 +618,8 @@ SteadyResult solve_steady_state(Flowsheet& fs, const SteadyOptions& opt, const s
   if (flag < 0) {
     char* name = KINGetReturnFlagName(flag);
     std::string msg = std::string("steady-state solve (KINSOL) failed after ") + std::to_string(it) +
-                      " iterations: " + (name ? name : "") + (user.last_error.empty() ? "" : " (" + user.last_error + ")");
+                      " iterations: " + (name ? name : "") +
+                      (user.last_error.empty() ? "" : " (" + user.last_error + ")");
     free(name);
     // Name the unit with the largest residual at the last iterate (if the residual itself throws there, the
     // solver failure is still what the caller gets).

@@ -71,13 +71,20 @@ int UnitSpec::param_index(const std::string& name) const {
 
 std::string to_string(StreamKind k) {
   switch (k) {
-    case StreamKind::Gas: return "gas";
-    case StreamKind::Liquid: return "liquid";
-    case StreamKind::Solids: return "solids";
-    case StreamKind::Heat: return "heat";
-    case StreamKind::Vapour: return "vapour";
-    case StreamKind::Holdup: return "holdup";
-    case StreamKind::Wetting: return "wetting";
+    case StreamKind::Gas:
+      return "gas";
+    case StreamKind::Liquid:
+      return "liquid";
+    case StreamKind::Solids:
+      return "solids";
+    case StreamKind::Heat:
+      return "heat";
+    case StreamKind::Vapour:
+      return "vapour";
+    case StreamKind::Holdup:
+      return "holdup";
+    case StreamKind::Wetting:
+      return "wetting";
   }
   return "?";
 }
@@ -93,10 +100,14 @@ std::string to_string(PortDir d) { return d == PortDir::In ? "in" : d == PortDir
 
 std::vector<FieldSpec> stream_fields(StreamKind kind, int classes) {
   switch (kind) {
-    case StreamKind::Gas: return {{"mdot", "kg/s"}, {"Y", "kg/kg"}, {"T", "K"}, {"p", "Pa"}};
-    case StreamKind::Liquid: return {{"mdot", "kg/s"}, {"T", "K"}, {"w", "kg/kg"}};
-    case StreamKind::Heat: return {{"Q", "W"}, {"T", "K"}};
-    case StreamKind::Vapour: return {{"mdot", "kg/s"}, {"T", "K"}};
+    case StreamKind::Gas:
+      return {{"mdot", "kg/s"}, {"Y", "kg/kg"}, {"T", "K"}, {"p", "Pa"}};
+    case StreamKind::Liquid:
+      return {{"mdot", "kg/s"}, {"T", "K"}, {"w", "kg/kg"}};
+    case StreamKind::Heat:
+      return {{"Q", "W"}, {"T", "K"}};
+    case StreamKind::Vapour:
+      return {{"mdot", "kg/s"}, {"T", "K"}};
     case StreamKind::Holdup: {
       std::vector<FieldSpec> f;
       for (int i = 0; i < classes; ++i) f.push_back({"mass_" + std::to_string(i), "kg"});
@@ -126,10 +137,14 @@ std::vector<FieldSpec> stream_fields(StreamKind kind, int classes) {
 
 std::string to_string(SettingType t) {
   switch (t) {
-    case SettingType::Int: return "integer";
-    case SettingType::Real: return "number";
-    case SettingType::Bool: return "boolean";
-    case SettingType::String: return "string";
+    case SettingType::Int:
+      return "integer";
+    case SettingType::Real:
+      return "number";
+    case SettingType::Bool:
+      return "boolean";
+    case SettingType::String:
+      return "string";
   }
   return "?";
 }

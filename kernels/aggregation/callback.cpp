@@ -14,17 +14,22 @@ void CallbackKernel::evaluate(const ClassState<Jet>& s, const Jet* p, Jet* beta)
     return fields.back().data();
   };
   fields.reserve(5);
-  ClassState<double> sd{n, s.volume, s.diameter, values(s.number), values(s.moisture), values(s.spot_moisture),
-                        values(s.temperature), values(s.liquid_fraction)};
+  ClassState<double> sd{n,
+                        s.volume,
+                        s.diameter,
+                        values(s.number),
+                        values(s.moisture),
+                        values(s.spot_moisture),
+                        values(s.temperature),
+                        values(s.liquid_fraction)};
   fn_(sd, pv.data(), bv.data());
   for (size_t k = 0; k < bv.size(); ++k) beta[k] = Jet(bv[k]);
 }
 
 void register_callback_kernel(Registry<AggregationKernel>& r, const std::string& name, const std::string& description,
                               std::vector<ParamSpec> params, ClassNeeds needs, BetaCallback fn) {
-  r.add(name, description + " (callable, prototyping)", [params, needs, fn] {
-    return std::make_unique<CallbackKernel>(params, needs, fn);
-  });
+  r.add(name, description + " (callable, prototyping)",
+        [params, needs, fn] { return std::make_unique<CallbackKernel>(params, needs, fn); });
 }
 
 }  // namespace granuflow::kernels

@@ -31,8 +31,8 @@ class DemCollisionKernel : public PairKernel<DemCollisionKernel> {
   T pair(const ClassState<T>& s, int i, int j, const T* p) const {
     const bool wi = !(s.liquid_fraction[i] < p[1]), wj = !(s.liquid_fraction[j] < p[1]);
     const bool wet = rule_ == WetRule::kEither ? (wi || wj) : (wi && wj);
-    if (!wet) return T(0.0);                              // Eq. (13), paper 002
-    return frequency_->at(i, j) * p[0];                   // Eq. (11), paper 002
+    if (!wet) return T(0.0);             // Eq. (13), paper 002
+    return frequency_->at(i, j) * p[0];  // Eq. (11), paper 002
   }
 
  private:

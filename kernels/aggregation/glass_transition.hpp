@@ -22,7 +22,7 @@ class GlassTransitionKernel : public PairKernel<GlassTransitionKernel> {
   template <class T>
   T pair(const ClassState<T>& s, int i, int j, const T* p) const {
     using namespace paper001;
-    const T cf = collision_frequency(T(s.diameter[i]), T(s.diameter[j]), p[0], p[1]);    // Eq. (37)
+    const T cf = collision_frequency(T(s.diameter[i]), T(s.diameter[j]), p[0], p[1]);  // Eq. (37)
     const T psi_geom = geometric_success_factor(wet(s, i, p), wet(s, j, p));           // Eq. (40)
     const T psi_phys = physical_success_factor(sticky(s, i, p), sticky(s, j, p));      // Eq. (52)
     return agglomeration_kernel(cf, psi_geom, psi_phys);                               // Eq. (39)

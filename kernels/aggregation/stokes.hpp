@@ -31,8 +31,8 @@ class StokesKernel : public PairKernel<StokesKernel> {
     const T mi = p[6] * s.volume[i], mj = p[6] * s.volume[j];
     const T m = 2.0 * mi * mj / (mi + mj);
     const double d = 2.0 * s.diameter[i] * s.diameter[j] / (s.diameter[i] + s.diameter[j]);
-    const T st = 2.0 * m * p[1] / (3.0 * kPi * p[2] * d * d);     // Eq. (7.57), paper 003
-    const T st_crit = (1.0 + 1.0 / p[5]) * log(p[3] / p[4]);     // Eq. (7.58), paper 003
+    const T st = 2.0 * m * p[1] / (3.0 * kPi * p[2] * d * d);  // Eq. (7.57), paper 003
+    const T st_crit = (1.0 + 1.0 / p[5]) * log(p[3] / p[4]);   // Eq. (7.58), paper 003
     return st < st_crit ? p[0] : T(0.0);
   }
 };

@@ -64,8 +64,7 @@ T fragment_cutoff(const T& d, const T& d_min) {
 // fragment size, divided by the cut-off at the parent so that b_cum(d_parent, d_parent) = 1. Only ratios enter,
 // so the size unit does not matter.
 template <class T>
-T cumulative_fragment_distribution(const T& d_fragment, const T& d_parent,
-                                   const T& q = T(defaults::kFragmentExponent),
+T cumulative_fragment_distribution(const T& d_fragment, const T& d_parent, const T& q = T(defaults::kFragmentExponent),
                                    const T& d_min = T(defaults::kFragmentDiameterMin)) {
   using std::pow;
   return pow(d_fragment / d_parent, q) * fragment_cutoff(d_fragment, d_min) / fragment_cutoff(d_parent, d_min);

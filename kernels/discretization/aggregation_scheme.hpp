@@ -41,8 +41,10 @@ class AggregationSchemeT : public AggregationScheme {
 // Skips empty classes in double evaluations only: with Jets a zero value may still carry a derivative.
 template <class T>
 bool skip_empty(const T& v) {
-  if constexpr (std::is_same_v<T, double>) return v == 0.0;
-  else return false;
+  if constexpr (std::is_same_v<T, double>)
+    return v == 0.0;
+  else
+    return false;
 }
 
 // The pair loop both schemes share (paper 001, Eqs. (21), (24)): for every pair j <= k, numbered p along the

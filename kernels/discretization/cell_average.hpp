@@ -41,13 +41,15 @@ class CellAverageAggregation : public AggregationSchemeT<CellAverageAggregation>
   };
   template <class T>
   Scratch<T>& scratch() const {
-    if constexpr (std::is_same_v<T, double>) return sd_;
-    else return sj_;
+    if constexpr (std::is_same_v<T, double>)
+      return sd_;
+    else
+      return sj_;
   }
   const Grid* grid_ = nullptr;
   int n_ = 0;
-  std::vector<int> cell_;      // per pair j <= k: cell of x_j + x_k (n: above the grid)
-  std::vector<double> vsum_;   // per pair: x_j + x_k
+  std::vector<int> cell_;     // per pair j <= k: cell of x_j + x_k (n: above the grid)
+  std::vector<double> vsum_;  // per pair: x_j + x_k
   mutable Scratch<double> sd_;
   mutable Scratch<Jet> sj_;
   mutable std::vector<double> db_, dv_;

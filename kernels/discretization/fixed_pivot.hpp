@@ -31,9 +31,9 @@ class FixedPivotAggregation : public AggregationSchemeT<FixedPivotAggregation> {
     Weight w[3];
   };
   int n_ = 0;
-  std::vector<int> lower_;          // per pair j <= k (row-major upper triangle): lower pivot, or -(edge index + 1)
+  std::vector<int> lower_;  // per pair j <= k (row-major upper triangle): lower pivot, or -(edge index + 1)
   std::vector<double> w_lower_, w_upper_;
-  std::vector<EdgePair> edge_;      // pairs that reach the top (rows n + kNumberAbove ...)
+  std::vector<EdgePair> edge_;  // pairs that reach the top (rows n + kNumberAbove ...)
 };
 
 }  // namespace granuflow::kernels

@@ -92,9 +92,14 @@ template <class T>
 void FvGrowth::face_rates(const T* G, const std::vector<Face<T>>& fc, T* out) const {
   for (int f = 0; f <= n_; ++f) {
     const T F = G[f] * fc[f].phi;
-    if (f > 0) out[f - 1] -= F; else out[n_ + kVolumeBelow] -= F * grid_->lower_virtual();
-    if (f < n_) out[f] += F;
-    else out[n_ + kNumberAbove] += F, out[n_ + kVolumeAbove] += F * grid_->upper_virtual();
+    if (f > 0)
+      out[f - 1] -= F;
+    else
+      out[n_ + kVolumeBelow] -= F * grid_->lower_virtual();
+    if (f < n_)
+      out[f] += F;
+    else
+      out[n_ + kNumberAbove] += F, out[n_ + kVolumeAbove] += F * grid_->upper_virtual();
   }
 }
 
@@ -164,9 +169,12 @@ void FvGrowth::add_jacobian(const double* N, const GrowthTerms<double>& g, doubl
     const double* row = &dF[size_t(f) * n];
     for (int l = 0; l < n; ++l) {
       if (row[l] == 0.0) continue;
-      if (f > 0) J[size_t(f - 1) * n + l] -= row[l];
-      else J[size_t(n + kVolumeBelow) * n + l] -= row[l] * grid_->lower_virtual();
-      if (f < n) J[size_t(f) * n + l] += row[l];
+      if (f > 0)
+        J[size_t(f - 1) * n + l] -= row[l];
+      else
+        J[size_t(n + kVolumeBelow) * n + l] -= row[l] * grid_->lower_virtual();
+      if (f < n)
+        J[size_t(f) * n + l] += row[l];
       else {
         J[size_t(n + kNumberAbove) * n + l] += row[l];
         J[size_t(n + kVolumeAbove) * n + l] += row[l] * grid_->upper_virtual();

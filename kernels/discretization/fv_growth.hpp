@@ -70,10 +70,10 @@ class FvGrowth {
   Limiter limiter_;
   const Grid* grid_ = nullptr;
   int n_ = 0;
-  std::vector<double> width_;   // cell widths in d, m
+  std::vector<double> width_;           // cell widths in d, m
   std::vector<double> cplus_, cminus_;  // slope normalizations width_i / (centre distance) to the right / left
-  std::vector<double> d_face_;  // m, n + 1
-  std::vector<double> dx_face_; // m^3: pivot above minus pivot below each face (virtual pivots at the ends)
+  std::vector<double> d_face_;          // m, n + 1
+  std::vector<double> dx_face_;         // m^3: pivot above minus pivot below each face (virtual pivots at the ends)
 };
 
 }  // namespace granuflow::kernels

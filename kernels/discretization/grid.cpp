@@ -16,7 +16,8 @@ constexpr int kMinClasses = 2;  // the virtual pivots extrapolate from two pivot
 double diameter_of_volume(double v) { return std::cbrt(6.0 * v / kPi); }
 double volume_of_diameter(double d) { return kPi / 6.0 * d * d * d; }
 
-Grid::Grid(std::vector<double> edges, std::vector<double> pivots) : edges_(std::move(edges)), pivots_(std::move(pivots)) {
+Grid::Grid(std::vector<double> edges, std::vector<double> pivots)
+    : edges_(std::move(edges)), pivots_(std::move(pivots)) {
   const int n = size();
   if (n < kMinClasses || static_cast<int>(edges_.size()) != n + 1)
     throw ConfigError(violation("grid classes", n, "", "classes >= " + std::to_string(kMinClasses)));

@@ -23,8 +23,8 @@ class Grid {
   static Grid from_diameter_pivots(const std::vector<double>& diameter_pivots);
 
   int size() const { return static_cast<int>(pivots_.size()); }
-  const std::vector<double>& edges() const { return edges_; }    // m^3, n + 1
-  const std::vector<double>& pivots() const { return pivots_; }  // m^3, n
+  const std::vector<double>& edges() const { return edges_; }               // m^3, n + 1
+  const std::vector<double>& pivots() const { return pivots_; }             // m^3, n
   const std::vector<double>& diameter_edges() const { return d_edges_; }    // m
   const std::vector<double>& diameter_pivots() const { return d_pivots_; }  // m
   double edge(int i) const { return edges_[i]; }

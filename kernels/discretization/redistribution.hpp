@@ -27,8 +27,16 @@ void split_between(const Grid& g, int a, const T& number, const T& volume, T* ou
   const double xa = g.pivot_ext(a), xb = g.pivot_ext(a + 1);
   const T nu = (volume - xa * number) / (xb - xa);
   const T rest = number - nu;
-  if (a >= 0) out[a] += rest; else out[n + kVolumeBelow] += xa * rest;
-  if (a + 1 < n) out[a + 1] += nu; else { out[n + kNumberAbove] += nu; out[n + kVolumeAbove] += xb * nu; }
+  if (a >= 0)
+    out[a] += rest;
+  else
+    out[n + kVolumeBelow] += xa * rest;
+  if (a + 1 < n)
+    out[a + 1] += nu;
+  else {
+    out[n + kNumberAbove] += nu;
+    out[n + kVolumeAbove] += xb * nu;
+  }
 }
 
 // Coefficients of split_between: d out[row] / dB and d out[row] / dV for the (up to three) rows it touches.
@@ -42,8 +50,10 @@ inline int split_rows(const Grid& g, int a, SplitRow rows[3]) {
   const double xa = g.pivot_ext(a), xb = g.pivot_ext(a + 1), inv = 1.0 / (xb - xa);
   // nu = (V - xa B) inv: dnu/dB = -xa inv, dnu/dV = inv;  rest = B - nu.
   int k = 0;
-  if (a >= 0) rows[k++] = {a, 1.0 + xa * inv, -inv};
-  else rows[k++] = {n + kVolumeBelow, xa * (1.0 + xa * inv), -xa * inv};
+  if (a >= 0)
+    rows[k++] = {a, 1.0 + xa * inv, -inv};
+  else
+    rows[k++] = {n + kVolumeBelow, xa * (1.0 + xa * inv), -xa * inv};
   if (a + 1 < n) {
     rows[k++] = {a + 1, -xa * inv, inv};
   } else {

@@ -18,7 +18,8 @@ void MomentBasedGrowth::check(const ClassState<double>&, const double* p, const 
   double sum = 0;
   for (int k = 0; k < kMoments; ++k) sum += p[2 + k];
   if (std::abs(sum - 1.0) > 1e-12)
-    throw ConfigError(violation(where + " lambda_0 + ... + lambda_3", sum, "-", "sum = 1 (mass conservation, paper 003, Eq. (7.36))"));
+    throw ConfigError(violation(where + " lambda_0 + ... + lambda_3", sum, "-",
+                                "sum = 1 (mass conservation, paper 003, Eq. (7.36))"));
 }
 
 void register_growth_laws(Registry<GrowthLaw>& r) {

@@ -32,7 +32,8 @@ class SurfaceProportionalGrowth : public GrowthLawT<SurfaceProportionalGrowth> {
  public:
   bool volume_normalized() const override { return true; }
   std::vector<ParamSpec> params() const override {
-    return {{"m_dot", "kg/s", 1e-3, 0.0, 1e3, "solids mass flow sprayed onto the particles, M_sus", "paper 003, Eq. (7.33)"},
+    return {{"m_dot", "kg/s", 1e-3, 0.0, 1e3, "solids mass flow sprayed onto the particles, M_sus",
+             "paper 003, Eq. (7.33)"},
             {"rho_s", "kg/m3", 1000.0, 1.0, 1e5, "density of the solidified layer", "paper 003, Eq. (7.33)"}};
   }
   template <class T>
@@ -53,7 +54,7 @@ class MomentBasedGrowth : public GrowthLawT<MomentBasedGrowth> {
   void eval(const double* d, int nf, const T* p, T* shape, T* amount) const {
     for (int k = 0; k < kMoments; ++k) {
       for (int f = 0; f < nf; ++f) shape[size_t(k) * nf + f] = T(std::pow(d[f], k - 2));  // Eq. (7.35), paper 003
-      amount[k] = p[2 + k] * p[0] / p[1];                                                  // Eq. (7.36), paper 003
+      amount[k] = p[2 + k] * p[0] / p[1];                                                 // Eq. (7.36), paper 003
     }
   }
 };

@@ -52,8 +52,8 @@ inline LiquidSplit liquid_split_from_string(const std::string& name) {
 // Eqs. (35), (44), (64), paper 001: split m_liquid (kg/s, the spray after droplet evaporation in Eq. (44)) over
 // n classes into m_deposition. `number` (particles per class) is read only for kClassSurface.
 template <class T>
-void distribute_liquid(const T* tau, const T* d, const T* number, std::size_t n, const T& m_liquid,
-                       LiquidSplit split, T* m_deposition) {
+void distribute_liquid(const T* tau, const T* d, const T* number, std::size_t n, const T& m_liquid, LiquidSplit split,
+                       T* m_deposition) {
   T sum(0.0);
   for (std::size_t i = 0; i < n; ++i) {
     m_deposition[i] = tau[i] * d[i] * d[i];

@@ -9,7 +9,7 @@ namespace granuflow::python {
 void register_flowsheet(py::module_& m);
 void register_kernels(py::module_& m);
 void register_calibration(py::module_& m);
-}
+}  // namespace granuflow::python
 
 PYBIND11_MODULE(_core, m) {
   m.doc() = "granuflow compiled core (use the granuflow package)";

@@ -45,7 +45,8 @@ Experiment to_experiment(const py::dict& d) {
   Experiment e;
   e.name = d["name"].cast<std::string>();
   if (d.contains("settings"))
-    for (const auto& [k, v] : d["settings"].cast<py::dict>()) e.settings.emplace_back(k.cast<std::string>(), v.cast<double>());
+    for (const auto& [k, v] : d["settings"].cast<py::dict>())
+      e.settings.emplace_back(k.cast<std::string>(), v.cast<double>());
   read_optional(d, "t_end", e.t_end);
   for (const auto& o : d["observations"].cast<py::list>()) {
     const auto od = o.cast<py::dict>();
@@ -108,7 +109,8 @@ const std::vector<std::pair<std::string, OptionSetter>>& option_setters() {
       {"cost_change_tolerance", set_field<&O::cost_change_tolerance>},
       {"initial_trust_region_radius", set_field<&O::initial_trust_region_radius>},
       {"num_threads", set_field<&O::num_threads>},
-      {"sigma_basis", [](O& o, const py::handle& v) { o.sigma_basis = sigma_basis_from_string(v.cast<std::string>()); }},
+      {"sigma_basis",
+       [](O& o, const py::handle& v) { o.sigma_basis = sigma_basis_from_string(v.cast<std::string>()); }},
       {"max_reweighting_passes", set_field<&O::max_reweighting_passes>},
       {"reweighting_tolerance", set_field<&O::reweighting_tolerance>},
       {"jacobian", [](O& o, const py::handle& v) { o.jacobian = jacobian_method_from_string(v.cast<std::string>()); }},
@@ -152,8 +154,10 @@ CalibrationOptions to_options(const py::dict& d) {
 
 py::array_t<double> square(const std::vector<double>& v, size_t n) {
   py::array_t<double> a({static_cast<py::ssize_t>(n), static_cast<py::ssize_t>(n)});
-  if (v.size() == n * n) std::copy(v.begin(), v.end(), a.mutable_data());
-  else std::fill(a.mutable_data(), a.mutable_data() + n * n, std::nan(""));
+  if (v.size() == n * n)
+    std::copy(v.begin(), v.end(), a.mutable_data());
+  else
+    std::fill(a.mutable_data(), a.mutable_data() + n * n, std::nan(""));
   return a;
 }
 
@@ -175,10 +179,11 @@ py::dict stage_dict(const StageResult& s) {
   return py::dict("name"_a = s.name, "observables"_a = s.observables, "estimates"_a = est,
                   "covariance"_a = square(s.covariance, n), "correlation"_a = square(s.correlation, n),
                   "iteration_costs"_a = s.iteration_costs, "initial_cost"_a = s.initial_cost, "cost"_a = s.cost,
-                  "residuals"_a = s.residuals, "chi2_reduced"_a = s.chi2_reduced, "iterations"_a = s.iterations, "passes"_a = s.passes, "weight_change"_a = s.weight_change,
-                  "simulations"_a = s.simulations, "sensitivity_solves"_a = s.sensitivity_solves,
-                  "wall_time_s"_a = s.wall_time_s, "jacobian_method"_a = s.jacobian_method,
-                  "termination"_a = s.termination, "message"_a = s.message, "usable"_a = s.usable, "profiles"_a = prof);
+                  "residuals"_a = s.residuals, "chi2_reduced"_a = s.chi2_reduced, "iterations"_a = s.iterations,
+                  "passes"_a = s.passes, "weight_change"_a = s.weight_change, "simulations"_a = s.simulations,
+                  "sensitivity_solves"_a = s.sensitivity_solves, "wall_time_s"_a = s.wall_time_s,
+                  "jacobian_method"_a = s.jacobian_method, "termination"_a = s.termination, "message"_a = s.message,
+                  "usable"_a = s.usable, "profiles"_a = prof);
 }
 
 std::vector<Experiment> to_experiments(const py::list& l) {
@@ -218,70 +223,83 @@ class PyStageProblem {
 }  // namespace
 
 void register_calibration(py::module_& m) {
-  m.def("observable_unit", [](const Scene& s, const std::string& name) { return observable_unit(*s.flowsheet, name); },
-        "scene"_a, "name"_a, "SI unit of a state or reported output; ConfigError listing valid names otherwise.");
+  m.def(
+      "observable_unit", [](const Scene& s, const std::string& name) { return observable_unit(*s.flowsheet, name); },
+      "scene"_a, "name"_a, "SI unit of a state or reported output; ConfigError listing valid names otherwise.");
 
-  m.def("check_calibration_options", [](const py::dict& options) { to_options(options); }, "options"_a,
-        "ConfigError naming the field, the value and the rule if `options` are not valid CalibrationOptions.");
+  m.def(
+      "check_calibration_options", [](const py::dict& options) { to_options(options); }, "options"_a,
+      "ConfigError naming the field, the value and the rule if `options` are not valid CalibrationOptions.");
 
-  m.def("calibrate", [](const Scene& scene, const py::list& exps, const py::list& stages, const py::dict& options,
-                        const std::map<std::string, double>& start) {
-    const auto ex = to_experiments(exps);
-    const auto st = to_stages(stages);
-    const CalibrationOptions o = to_options(options);
-    CalibrationResult r;
-    {
-      py::gil_scoped_release release;
-      r = calibrate(scene, units::builtin(), ex, st, o, start);
-    }
-    py::list sd;
-    for (const auto& s : r.stages) sd.append(stage_dict(s));
-    return py::dict("status"_a = r.status, "message"_a = r.message, "brief"_a = r.brief(),
-                    "full_report"_a = r.full_report(), "parameters"_a = r.parameters, "simulations"_a = r.simulations,
-                    "sensitivity_solves"_a = r.sensitivity_solves, "wall_time_s"_a = r.wall_time_s, "stages"_a = sd);
-  }, "scene"_a, "experiments"_a, "stages"_a, "options"_a = py::dict(), "start"_a = std::map<std::string, double>{});
+  m.def(
+      "calibrate",
+      [](const Scene& scene, const py::list& exps, const py::list& stages, const py::dict& options,
+         const std::map<std::string, double>& start) {
+        const auto ex = to_experiments(exps);
+        const auto st = to_stages(stages);
+        const CalibrationOptions o = to_options(options);
+        CalibrationResult r;
+        {
+          py::gil_scoped_release release;
+          r = calibrate(scene, units::builtin(), ex, st, o, start);
+        }
+        py::list sd;
+        for (const auto& s : r.stages) sd.append(stage_dict(s));
+        return py::dict("status"_a = r.status, "message"_a = r.message, "brief"_a = r.brief(),
+                        "full_report"_a = r.full_report(), "parameters"_a = r.parameters,
+                        "simulations"_a = r.simulations, "sensitivity_solves"_a = r.sensitivity_solves,
+                        "wall_time_s"_a = r.wall_time_s, "stages"_a = sd);
+      },
+      "scene"_a, "experiments"_a, "stages"_a, "options"_a = py::dict(), "start"_a = std::map<std::string, double>{});
 
-  m.def("predict", [](const Scene& scene, const py::list& exps, const std::map<std::string, double>& params,
-                      const py::dict& options) {
-    const auto ex = to_experiments(exps);
-    const CalibrationOptions o = to_options(options);
-    std::vector<Prediction> p;
-    {
-      py::gil_scoped_release release;
-      p = predict(scene, units::builtin(), ex, params, o);
-    }
-    py::list out;
-    for (const auto& x : p)
-      out.append(py::dict("experiment"_a = x.experiment, "observable"_a = x.observable, "t"_a = x.t, "data"_a = x.data,
-                          "model"_a = x.model, "sigma"_a = x.sigma));
-    return out;
-  }, "scene"_a, "experiments"_a, "params"_a = std::map<std::string, double>{}, "options"_a = py::dict());
+  m.def(
+      "predict",
+      [](const Scene& scene, const py::list& exps, const std::map<std::string, double>& params,
+         const py::dict& options) {
+        const auto ex = to_experiments(exps);
+        const CalibrationOptions o = to_options(options);
+        std::vector<Prediction> p;
+        {
+          py::gil_scoped_release release;
+          p = predict(scene, units::builtin(), ex, params, o);
+        }
+        py::list out;
+        for (const auto& x : p)
+          out.append(py::dict("experiment"_a = x.experiment, "observable"_a = x.observable, "t"_a = x.t,
+                              "data"_a = x.data, "model"_a = x.model, "sigma"_a = x.sigma));
+        return out;
+      },
+      "scene"_a, "experiments"_a, "params"_a = std::map<std::string, double>{}, "options"_a = py::dict());
 
-  m.def("output_sensitivities", [](Scene& s, double t_end, const std::vector<double>& t_out,
-                                   const std::vector<std::string>& params, double rel_step) {
-    SimOptions o = s.options;
-    o.t_end = t_end;
-    o.t_out = t_out;
-    o.sensitivities = params;
-    std::vector<double> dz;
-    size_t no = 0;
-    {
-      py::gil_scoped_release release;
-      const SimResult r = simulate(*s.flowsheet, o);
-      OutputSensitivityOptions so;
-      so.rel_step = rel_step;
-      dz = output_sensitivities(*s.flowsheet, r, so);
-      no = r.output_names.size();
-    }
-    py::array_t<double> a({static_cast<py::ssize_t>(t_out.size()), static_cast<py::ssize_t>(params.size()),
-                           static_cast<py::ssize_t>(no)});
-    std::copy(dz.begin(), dz.end(), a.mutable_data());
-    return a;
-  }, "scene"_a, "t_end"_a, "t_out"_a, "params"_a, "rel_step"_a = 1e-6,
-     "d(output)/d(param) [time, param, output] from one forward-sensitivity solve.");
+  m.def(
+      "output_sensitivities",
+      [](Scene& s, double t_end, const std::vector<double>& t_out, const std::vector<std::string>& params,
+         double rel_step) {
+        SimOptions o = s.options;
+        o.t_end = t_end;
+        o.t_out = t_out;
+        o.sensitivities = params;
+        std::vector<double> dz;
+        size_t no = 0;
+        {
+          py::gil_scoped_release release;
+          const SimResult r = simulate(*s.flowsheet, o);
+          OutputSensitivityOptions so;
+          so.rel_step = rel_step;
+          dz = output_sensitivities(*s.flowsheet, r, so);
+          no = r.output_names.size();
+        }
+        py::array_t<double> a({static_cast<py::ssize_t>(t_out.size()), static_cast<py::ssize_t>(params.size()),
+                               static_cast<py::ssize_t>(no)});
+        std::copy(dz.begin(), dz.end(), a.mutable_data());
+        return a;
+      },
+      "scene"_a, "t_end"_a, "t_out"_a, "params"_a, "rel_step"_a = 1e-6,
+      "d(output)/d(param) [time, param, output] from one forward-sensitivity solve.");
 
   py::class_<PyStageProblem>(m, "StageProblem")
-      .def(py::init<const Scene&, const py::list&, const py::dict&, const py::dict&, const std::map<std::string, double>&>(),
+      .def(py::init<const Scene&, const py::list&, const py::dict&, const py::dict&,
+                    const std::map<std::string, double>&>(),
            "scene"_a, "experiments"_a, "stage"_a, "options"_a = py::dict(), "start"_a = std::map<std::string, double>{})
       .def_property_readonly("num_parameters", [](const PyStageProblem& p) { return p.p_.num_parameters(); })
       .def_property_readonly("num_residuals", [](const PyStageProblem& p) { return p.p_.num_residuals(); })

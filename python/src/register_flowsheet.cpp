@@ -37,8 +37,8 @@ double value_for(const Scene& s, const std::string& name, const py::handle& v) {
 }
 
 py::dict spec_dict(const ParamSpec& p, double value, bool input) {
-  return py::dict("unit"_a = p.unit, "value"_a = value, "default"_a = p.value, "lower"_a = p.lower,
-                  "upper"_a = p.upper, "description"_a = p.description, "source"_a = p.source, "input"_a = input);
+  return py::dict("unit"_a = p.unit, "value"_a = value, "default"_a = p.value, "lower"_a = p.lower, "upper"_a = p.upper,
+                  "description"_a = p.description, "source"_a = p.source, "input"_a = input);
 }
 
 py::dict simulate(Scene& s, std::optional<double> t_end, std::optional<std::vector<double>> t_out,
@@ -106,9 +106,8 @@ py::dict time_residual(Scene& s, int repeats, int dense_limit) {
     return t[t.size() / 2];
   };
   const double tr = median([&] { sys.residual(0.0, y.data(), yp.data(), r.data()); });
-  const double tj = median([&] {
-    sys.jacobian(0.0, y.data(), yp.data(), 1.0, dense ? jd.data() : nullptr, dense ? nullptr : js.data());
-  });
+  const double tj = median(
+      [&] { sys.jacobian(0.0, y.data(), yp.data(), 1.0, dense ? jd.data() : nullptr, dense ? nullptr : js.data()); });
   py::gil_scoped_acquire acquire;
   return py::dict("states"_a = n, "residual_s"_a = tr, "jacobian_s"_a = tj, "dense"_a = dense,
                   "nnz"_a = dense ? long(n) * n : long(sys.pattern().nnz()));
@@ -118,11 +117,14 @@ py::dict time_residual(Scene& s, int repeats, int dense_limit) {
 
 void register_flowsheet(py::module_& m) {
   const auto& reg = units::builtin();
-  m.def("unit_types", [&reg] {
-    py::dict d;
-    for (const auto& n : reg.names()) d[py::str(n)] = reg.description(n);
-    return d;
-  }, "Built-in unit types and their descriptions.");
+  m.def(
+      "unit_types",
+      [&reg] {
+        py::dict d;
+        for (const auto& n : reg.names()) d[py::str(n)] = reg.description(n);
+        return d;
+      },
+      "Built-in unit types and their descriptions.");
   m.def("to_si", &to_si, "value"_a, "unit"_a, "si_unit"_a, "where"_a = "value");
 
   py::class_<Scene>(m, "Scene")
@@ -137,68 +139,87 @@ void register_flowsheet(py::module_& m) {
       .def_property_readonly("atol", [](const Scene& s) { return s.options.atol; })
       .def_property_readonly("t_out", [](const Scene& s) { return s.options.t_out; })
       .def_property_readonly("n_out", [](const Scene& s) { return s.options.n_out; })
-      .def("set_t_end", [](Scene& s, double t) {
-        SimOptions o = s.options;
-        o.t_end = t;
-        o.t_out.clear();
-        o.validate();
-        s.options = o;
-      })
+      .def("set_t_end",
+           [](Scene& s, double t) {
+             SimOptions o = s.options;
+             o.t_end = t;
+             o.t_out.clear();
+             o.validate();
+             s.options = o;
+           })
       .def("clone", [&reg](const Scene& s) { return clone_scene(s, reg); })
       .def("param_names", [](const Scene& s) { return s.flowsheet->param_names(); })
       .def("state_names", [](const Scene& s) { return s.flowsheet->state_names(); })
       .def("output_names", [](const Scene& s) { return s.flowsheet->output_names(); })
       .def("n_states", [](const Scene& s) { return s.flowsheet->n_states(); })
-      .def("get", [](const Scene& s, const std::string& name) { return s.flowsheet->param(name); }, "name"_a)
-      .def("set", [](Scene& s, const std::string& name, const py::handle& v) {
-        s.flowsheet->set_param(name, value_for(s, name, v));
-      }, "name"_a, "value"_a)
-      .def("spec", [](const Scene& s, const std::string& name) {
-        const int id = s.flowsheet->param_id(name);
-        return spec_dict(s.flowsheet->param_spec(id), s.flowsheet->param_value(id), s.flowsheet->has_input(id));
-      }, "name"_a)
-      .def("set_input", [](Scene& s, const std::string& name, std::vector<double> times, const py::list& values,
-                           const std::string& interp) {
-        std::vector<double> v;
-        for (const auto& x : values) v.push_back(value_for(s, name, x));
-        PiecewiseLinear::Interp i = PiecewiseLinear::Interp::kLinear;
-        if (interp == "step") i = PiecewiseLinear::Interp::kStep;
-        else if (interp != "linear") throw ConfigError("input " + name + ": interp '" + interp + "' is not one of linear, step");
-        s.flowsheet->set_input(name, PiecewiseLinear(std::move(times), std::move(v), i, "input " + name));
-      }, "name"_a, "times"_a, "values"_a, "interp"_a = "linear")
-      .def("unit_settings", [](const Scene& s) {
-        py::dict d;
-        for (const auto& u : s.flowsheet->units()) {
-          py::dict st;
-          for (const auto& x : u.settings) st[py::str(x.name)] = setting_to_string(x.value);
-          d[py::str(u.name)] = py::make_tuple(u.unit->type(), st);
-        }
-        return d;
-      })
+      .def(
+          "get", [](const Scene& s, const std::string& name) { return s.flowsheet->param(name); }, "name"_a)
+      .def(
+          "set",
+          [](Scene& s, const std::string& name, const py::handle& v) {
+            s.flowsheet->set_param(name, value_for(s, name, v));
+          },
+          "name"_a, "value"_a)
+      .def(
+          "spec",
+          [](const Scene& s, const std::string& name) {
+            const int id = s.flowsheet->param_id(name);
+            return spec_dict(s.flowsheet->param_spec(id), s.flowsheet->param_value(id), s.flowsheet->has_input(id));
+          },
+          "name"_a)
+      .def(
+          "set_input",
+          [](Scene& s, const std::string& name, std::vector<double> times, const py::list& values,
+             const std::string& interp) {
+            std::vector<double> v;
+            for (const auto& x : values) v.push_back(value_for(s, name, x));
+            PiecewiseLinear::Interp i = PiecewiseLinear::Interp::kLinear;
+            if (interp == "step")
+              i = PiecewiseLinear::Interp::kStep;
+            else if (interp != "linear")
+              throw ConfigError("input " + name + ": interp '" + interp + "' is not one of linear, step");
+            s.flowsheet->set_input(name, PiecewiseLinear(std::move(times), std::move(v), i, "input " + name));
+          },
+          "name"_a, "times"_a, "values"_a, "interp"_a = "linear")
+      .def("unit_settings",
+           [](const Scene& s) {
+             py::dict d;
+             for (const auto& u : s.flowsheet->units()) {
+               py::dict st;
+               for (const auto& x : u.settings) st[py::str(x.name)] = setting_to_string(x.value);
+               d[py::str(u.name)] = py::make_tuple(u.unit->type(), st);
+             }
+             return d;
+           })
       .def("time_residual", &time_residual, "repeats"_a = 7, "dense_limit"_a = 400)
-      .def("steady_state", [](Scene& s, double t, double ftol, long max_iterations) {
-        SteadyOptions o;
-        o.t = t;
-        o.ftol = ftol;
-        o.max_iterations = max_iterations;
-        SteadyResult r;
-        {
-          py::gil_scoped_release release;
-          r = solve_steady_state(*s.flowsheet, o);
-        }
-        const auto names = s.flowsheet->state_names();
-        py::dict y;
-        for (size_t i = 0; i < r.y.size(); ++i) y[py::str(names[i])] = r.y[i];
-        return py::dict("y"_a = y, "iterations"_a = r.iterations, "residual_norm"_a = r.residual_norm);
-      }, py::kw_only(), "t"_a = 0.0, "ftol"_a = 1e-10, "max_iterations"_a = 200)
-      .def("simulate", &simulate, py::kw_only(), "t_end"_a = py::none(), "t_out"_a = py::none(),
-           "n_out"_a = py::none(), "rtol"_a = py::none(), "atol"_a = py::none(),
-           "sensitivities"_a = std::vector<std::string>{}, "linear_solver"_a = py::none(), "max_steps"_a = py::none());
+      .def(
+          "steady_state",
+          [](Scene& s, double t, double ftol, long max_iterations) {
+            SteadyOptions o;
+            o.t = t;
+            o.ftol = ftol;
+            o.max_iterations = max_iterations;
+            SteadyResult r;
+            {
+              py::gil_scoped_release release;
+              r = solve_steady_state(*s.flowsheet, o);
+            }
+            const auto names = s.flowsheet->state_names();
+            py::dict y;
+            for (size_t i = 0; i < r.y.size(); ++i) y[py::str(names[i])] = r.y[i];
+            return py::dict("y"_a = y, "iterations"_a = r.iterations, "residual_norm"_a = r.residual_norm);
+          },
+          py::kw_only(), "t"_a = 0.0, "ftol"_a = 1e-10, "max_iterations"_a = 200)
+      .def("simulate", &simulate, py::kw_only(), "t_end"_a = py::none(), "t_out"_a = py::none(), "n_out"_a = py::none(),
+           "rtol"_a = py::none(), "atol"_a = py::none(), "sensitivities"_a = std::vector<std::string>{},
+           "linear_solver"_a = py::none(), "max_steps"_a = py::none());
 
-  m.def("load_scene", [&reg](const std::string& path) { return load_scene(path, reg); }, "path"_a);
-  m.def("load_scene_text", [&reg](const std::string& text, const std::string& label) {
-    return load_scene_text(text, label, reg);
-  }, "text"_a, "label"_a = "<text>");
+  m.def(
+      "load_scene", [&reg](const std::string& path) { return load_scene(path, reg); }, "path"_a);
+  m.def(
+      "load_scene_text",
+      [&reg](const std::string& text, const std::string& label) { return load_scene_text(text, label, reg); }, "text"_a,
+      "label"_a = "<text>");
 }
 
 }  // namespace granuflow::python

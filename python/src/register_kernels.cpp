@@ -160,17 +160,23 @@ void register_kernels(py::module_& m) {
   m.def("register_aggregation_kernel", &register_kernel, "name"_a, "fn"_a, py::kw_only(), "description"_a = "",
         "replace"_a = false,
         "Add a Python aggregation kernel fn(diameters_m, volumes_m3) -> (n, n) beta in 1/s to the kernel registry.");
-  m.def("aggregation_kernels", [] {
-    const auto& reg = kernels::registries().aggregation;
-    py::dict d;
-    for (const auto& n : reg.names()) d[py::str(n)] = reg.description(n);
-    return d;
-  }, "Registered aggregation kernels (built in and from Python) and their descriptions.");
-  m.def("python_kernels", [] {
-    py::list l;
-    for (const auto& [k, s] : python_kernels()) l.append(k);
-    return l;
-  }, "Names of the aggregation kernels registered from Python.");
+  m.def(
+      "aggregation_kernels",
+      [] {
+        const auto& reg = kernels::registries().aggregation;
+        py::dict d;
+        for (const auto& n : reg.names()) d[py::str(n)] = reg.description(n);
+        return d;
+      },
+      "Registered aggregation kernels (built in and from Python) and their descriptions.");
+  m.def(
+      "python_kernels",
+      [] {
+        py::list l;
+        for (const auto& [k, s] : python_kernels()) l.append(k);
+        return l;
+      },
+      "Names of the aggregation kernels registered from Python.");
 }
 
 }  // namespace granuflow::python

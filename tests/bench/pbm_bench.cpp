@@ -35,7 +35,7 @@ namespace an = pbm_analytic;
 using clk = std::chrono::steady_clock;
 
 struct Case {
-  std::string name;        // constant, sum, product, growth, breakage
+  std::string name;  // constant, sum, product, growth, breakage
   double tau;
   int doublings;
   std::vector<std::string> methods;
@@ -67,7 +67,9 @@ pbm_test::Strings settings(const Case& c, const std::string& method, int q) {
   return s;
 }
 
-pbm_test::Values params(const Case& c) { return c.name == "growth" ? pbm_test::Values{{"growth_G", 1.0}} : pbm_test::Values{}; }
+pbm_test::Values params(const Case& c) {
+  return c.name == "growth" ? pbm_test::Values{{"growth_G", 1.0}} : pbm_test::Values{};
+}
 
 void analytic(const Case& c, const kernels::Grid& g, double& m0, double& m2, std::vector<double>& cells) {
   const double t = c.tau;
@@ -197,10 +199,11 @@ void print(const Record& r, bool json, int repeats, const std::string& meta) {
         num(r.solve_ms).c_str(), repeats, r.steps, r.jacobians, r.residuals, r.setups, num(r.setup_ms).c_str(),
         num(r.res_ms).c_str(), num(r.jac_ms).c_str(), num(r.lu_ms).c_str(), meta.c_str());
   } else {
-    std::printf("%-9s %-13s q=%d n=%3d rtol=%.0e  M0 %+.2e  M2 %+.3e  L1 %.2e  drift %+.1e  %8.3f ms  (setup %.2f, "
-                "res %.2f, jac %.2f, LU %.2f; %ld steps)\n",
-                r.case_name.c_str(), r.method.c_str(), r.q, r.classes, r.rtol, r.err_m0, r.err_m2, r.err_l1, r.drift,
-                r.solve_ms, r.setup_ms, r.res_ms, r.jac_ms, r.lu_ms, r.steps);
+    std::printf(
+        "%-9s %-13s q=%d n=%3d rtol=%.0e  M0 %+.2e  M2 %+.3e  L1 %.2e  drift %+.1e  %8.3f ms  (setup %.2f, "
+        "res %.2f, jac %.2f, LU %.2f; %ld steps)\n",
+        r.case_name.c_str(), r.method.c_str(), r.q, r.classes, r.rtol, r.err_m0, r.err_m2, r.err_l1, r.drift,
+        r.solve_ms, r.setup_ms, r.res_ms, r.jac_ms, r.lu_ms, r.steps);
   }
   std::fflush(stdout);
 }
@@ -215,20 +218,28 @@ int main(int argc, char** argv) {
   std::string only;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--json") json = true;
-    else if (a == "--quick") quick = true;
-    else if (a == "--repeats" && i + 1 < argc) repeats = std::max(1, std::atoi(argv[++i]));
-    else if (a == "--case" && i + 1 < argc) only = argv[++i];
+    if (a == "--json")
+      json = true;
+    else if (a == "--quick")
+      quick = true;
+    else if (a == "--repeats" && i + 1 < argc)
+      repeats = std::max(1, std::atoi(argv[++i]));
+    else if (a == "--case" && i + 1 < argc)
+      only = argv[++i];
     else {
       std::fprintf(stderr, "usage: granuflow_bench_pbm [--json] [--repeats R] [--quick] [--case NAME]\n");
       return 2;
     }
   }
   const std::vector<std::string> agg{"cell_average", "fixed_pivot"};
-  const std::vector<Case> cases{{"constant", 100.0, 27, agg}, {"sum", 3.0, 27, agg}, {"product", 0.4, 27, agg},
-                                {"growth", 1.0, 19, {"fv_koren", "fv_upwind"}}, {"breakage", 10.0, 27, agg}};
+  const std::vector<Case> cases{{"constant", 100.0, 27, agg},
+                                {"sum", 3.0, 27, agg},
+                                {"product", 0.4, 27, agg},
+                                {"growth", 1.0, 19, {"fv_koren", "fv_upwind"}},
+                                {"breakage", 10.0, 27, agg}};
   const std::vector<int> qs = quick ? std::vector<int>{1, 2, 4} : std::vector<int>{1, 2, 3, 4, 6, 8};
-  const std::vector<double> rtols = quick ? std::vector<double>{1e-4, 1e-6} : std::vector<double>{1e-4, 1e-5, 1e-6, 1e-7, 1e-8};
+  const std::vector<double> rtols =
+      quick ? std::vector<double>{1e-4, 1e-6} : std::vector<double>{1e-4, 1e-5, 1e-6, 1e-7, 1e-8};
   const std::string meta = meta_json();
   for (const auto& c : cases) {
     if (!only.empty() && c.name != only) continue;

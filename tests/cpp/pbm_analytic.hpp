@@ -75,7 +75,8 @@ inline double integrate(const std::function<double(double)>& f, double a, double
 // Volume (mass) in each cell of the exact density n(v): int_cell v n(v) dv.
 inline std::vector<double> cell_volumes(const kernels::Grid& g, const std::function<double(double)>& n) {
   std::vector<double> out(g.size());
-  for (int i = 0; i < g.size(); ++i) out[i] = integrate([&](double v) { return v * n(v); }, g.edge(i), g.edge(i + 1), 16);
+  for (int i = 0; i < g.size(); ++i)
+    out[i] = integrate([&](double v) { return v * n(v); }, g.edge(i), g.edge(i + 1), 16);
   return out;
 }
 

@@ -28,7 +28,9 @@ inline std::unique_ptr<Flowsheet> flowsheet(const Strings& settings, const Value
 inline Strings grid_settings(int q, int doublings = 27) {
   return {{"q", std::to_string(q)}, {"classes", std::to_string(doublings * q)}};
 }
-inline kernels::Grid grid(int q, int doublings = 27) { return kernels::Grid::geometric(std::exp2(-12.0), q, doublings * q); }
+inline kernels::Grid grid(int q, int doublings = 27) {
+  return kernels::Grid::geometric(std::exp2(-12.0), q, doublings * q);
+}
 
 // Position of `name` in `names`; a quantity that is not there (renamed, or not declared for these mechanisms) throws,
 // so a test fails instead of reading a silent 0.

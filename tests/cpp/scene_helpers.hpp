@@ -22,9 +22,9 @@ inline Scene scene_from_file(const std::string& rel) { return load_scene(repo_pa
 
 // Column `c` of dF/dy + cj dF/dy' at (y, yp) by a central difference with step h (y' moves with cj h, as the
 // integrator's Newton matrix does); `fd` receives n values, `r0`, `r1` are scratch of size n.
-inline void central_difference_column(DaeSystem& sys, double t, const std::vector<double>& y, const std::vector<double>& yp,
-                                      double cj, int c, double h, std::vector<double>& fd, std::vector<double>& r0,
-                                      std::vector<double>& r1) {
+inline void central_difference_column(DaeSystem& sys, double t, const std::vector<double>& y,
+                                      const std::vector<double>& yp, double cj, int c, double h,
+                                      std::vector<double>& fd, std::vector<double>& r0, std::vector<double>& r1) {
   const size_t n = y.size();
   fd.resize(n), r0.resize(n), r1.resize(n);
   auto yy = y, yyp = yp;

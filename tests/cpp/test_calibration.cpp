@@ -36,9 +36,12 @@ std::vector<Experiment> experiments(const std::vector<std::string>& observables)
       ob.name = o;
       ob.t = {300, 600, 900, 1200};
       ob.value.assign(4, 1.0);
-      if (o == "gas.T") ob.sigma_abs = 2.0;
-      else if (o == "bed.moisture") ob.sigma_abs = 0.01;
-      else ob.sigma_rel = 0.07;
+      if (o == "gas.T")
+        ob.sigma_abs = 2.0;
+      else if (o == "bed.moisture")
+        ob.sigma_abs = 0.01;
+      else
+        ob.sigma_rel = 0.07;
       e.observations.push_back(ob);
     }
     v.push_back(e);
@@ -152,8 +155,8 @@ TEST(Calibrate, RecoversTheParametersOfNoiseFreeDataExactly) {
   o.cost_change_tolerance = 0;
   for (auto method : {JacobianMethod::kSensitivities, JacobianMethod::kCentralDifferences}) {
     o.jacobian = method;
-    const CalibrationResult r =
-        calibrate(s, units::builtin(), exps, {two_parameter_stage()}, o, {{"wall.k_wall", 20.0}, {"bed.ln_beta0", -16.8}});
+    const CalibrationResult r = calibrate(s, units::builtin(), exps, {two_parameter_stage()}, o,
+                                          {{"wall.k_wall", 20.0}, {"bed.ln_beta0", -16.8}});
     ASSERT_EQ(r.stages.size(), 1u);
     const StageResult& st = r.stages[0];
     EXPECT_EQ(st.jacobian_method, to_string(method));
@@ -161,8 +164,10 @@ TEST(Calibrate, RecoversTheParametersOfNoiseFreeDataExactly) {
     EXPECT_LT(st.cost, 1e-6);
     EXPECT_NEAR(r.parameters.at("wall.k_wall"), k_wall, 1e-4 * k_wall);
     EXPECT_NEAR(r.parameters.at("bed.ln_beta0"), ln_beta0, 1e-4);
-    if (method == JacobianMethod::kCentralDifferences) EXPECT_EQ(r.sensitivity_solves, 0);
-    else EXPECT_GT(r.sensitivity_solves, 0);
+    if (method == JacobianMethod::kCentralDifferences)
+      EXPECT_EQ(r.sensitivity_solves, 0);
+    else
+      EXPECT_GT(r.sensitivity_solves, 0);
     for (const auto& e : st.estimates) EXPECT_TRUE(e.identifiable) << e.name << ": " << e.flag;
     EXPECT_NE(r.full_report().find("wall.k_wall"), std::string::npos);
   }

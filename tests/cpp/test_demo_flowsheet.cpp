@@ -2,9 +2,9 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
-#include <unsupported/Eigen/MatrixFunctions>
 #include <cmath>
 #include <random>
+#include <unsupported/Eigen/MatrixFunctions>
 
 #include "granuflow/dae_system.hpp"
 #include "granuflow/errors.hpp"
@@ -21,8 +21,12 @@ constexpr double kF = 0.5, kSplit = 0.6, kM1 = 100, kM2 = 200, kQ1 = 2e4, kCp = 
 std::unique_ptr<Flowsheet> demo(bool step_input = true) {
   auto fs = std::make_unique<Flowsheet>("demo");
   const auto& reg = units::builtin();
-  for (auto [name, type] : {std::pair{"feed", "liquid_feed"}, {"mixer", "liquid_mixer"}, {"tank1", "stirred_tank"},
-                            {"tank2", "stirred_tank"}, {"splitter", "liquid_splitter"}, {"product", "liquid_product"}})
+  for (auto [name, type] : {std::pair{"feed", "liquid_feed"},
+                            {"mixer", "liquid_mixer"},
+                            {"tank1", "stirred_tank"},
+                            {"tank2", "stirred_tank"},
+                            {"splitter", "liquid_splitter"},
+                            {"product", "liquid_product"}})
     fs->add_unit(name, reg.create(type), Settings(name, {}));
   fs->connect("feed.out", "mixer.in1");
   fs->connect("mixer.out", "tank1.in");

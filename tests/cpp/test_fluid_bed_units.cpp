@@ -72,7 +72,8 @@ TEST(WallHeatLoss, SteadyChamberTemperatureBalancesEnthalpyFlowAndLoss) {
   std::string text = kChamber;
   text = std::regex_replace(text, std::regex("  exhaust: \\{type: gas_outlet\\}"),
                             "  exhaust: {type: gas_outlet}\n  wall: {type: wall_heat_loss}");
-  text = std::regex_replace(text, std::regex("gas.out -> exhaust.in\\]"), "gas.out -> exhaust.in, gas.wall -> wall.in]");
+  text =
+      std::regex_replace(text, std::regex("gas.out -> exhaust.in\\]"), "gas.out -> exhaust.in, gas.wall -> wall.in]");
   Scene s = scene_from_text(text);
   const SteadyResult ss = solve_steady_state(*s.flowsheet, SteadyOptions{});
   const double m = ss.y[s.flowsheet->state_id("inlet.mdot")];
@@ -146,7 +147,8 @@ TEST(FluidBed, AnalyticJacobianMatchesFiniteDifferencesForEachMechanism) {
   // the bed supplies its whole Jacobian (pairs, breakage matrix, class-by-class local AD): check each branch
   for (const std::string settings : {"{aggregation: none, breakage: none}", "{aggregation: constant, breakage: none}",
                                      "{aggregation: constant, breakage: vogel_peukert, breakage_size_unit: mm}"}) {
-    std::string text = std::regex_replace(std::string(kDrying), std::regex("\\{aggregation: none, breakage: none\\}"), settings);
+    std::string text =
+        std::regex_replace(std::string(kDrying), std::regex("\\{aggregation: none, breakage: none\\}"), settings);
     text = std::regex_replace(text, std::regex("params: \\{X0: 0.12, T0: 30 degC\\}"),
                               "params: {X0: 0.12, T0: 30 degC, ln_beta0: -29}");  // beta N ~ 1e-3 / s
     Scene s = scene_from_text(text);
@@ -186,7 +188,6 @@ TEST(Gf25Scene, JacobianIsExactAtAStateInsideTheRun) {
   }
 }
 
-
 TEST(Gf25Scene, InlinedJacobianIsTheSchurComplementOfTheFullOne) {
   // The inlined Jacobian keeps the spray zone's weight-sum outer product factored and multiplies only the
   // nonzeros: it must equal J_RR - J_RS J_SS^-1 J_SR of the Jacobian over all states, formed densely here.
@@ -217,8 +218,8 @@ TEST(Gf25Scene, InlinedJacobianIsTheSchurComplementOfTheFullOne) {
 }
 TEST(Gf25Scene, SensitivitiesEqualFiniteDifferences) {
   // the bed's parameter tables (particle mass, breakage matrix) and its initial PSD carry parameter derivatives too
-  const std::vector<std::string> params{"bed.ln_beta0", "bed.k_break", "wall.k_wall", "bed.X_cr", "droplets.k_evap",
-                                        "bed.rho_s", "bed.q_frag", "bed.d_frag_min", "bed.d50_0", "bed.sigma_0"};
+  const std::vector<std::string> params{"bed.ln_beta0", "bed.k_break", "wall.k_wall",    "bed.X_cr",  "droplets.k_evap",
+                                        "bed.rho_s",    "bed.q_frag",  "bed.d_frag_min", "bed.d50_0", "bed.sigma_0"};
   Scene s = headline();
   SimOptions o = s.options;
   o.t_out = {0, 1200};
@@ -245,7 +246,8 @@ TEST(Gf25Scene, SensitivitiesEqualFiniteDifferences) {
       const double d1 = (run(p + h) - run(p - h)) / (2 * h), d2 = (run(p + h / 2) - run(p - h / 2)) / h;
       const double fd = (4 * d2 - d1) / 3;  // Richardson: truncation O(h^4)
       const double sens = r.sens[(1 * params.size() + k) * n + i];
-      EXPECT_NEAR(sens, fd, 5e-5 * std::abs(fd) + 1e-9 * std::abs(r.state(1, i)) / std::abs(p)) << obs << " / " << params[k];
+      EXPECT_NEAR(sens, fd, 5e-5 * std::abs(fd) + 1e-9 * std::abs(r.state(1, i)) / std::abs(p))
+          << obs << " / " << params[k];
     }
   }
 }
@@ -259,7 +261,8 @@ TEST(Gf25Scene, BalancesCloseAndTheBedBehavesAsPublished) {
   const size_t last = r.t.size() - 1;
   auto at = [&](double t_min) { return static_cast<size_t>(std::lround(t_min * 60.0 / (r.t[1] - r.t[0]))); };
   // moisture rises after spray start and levels off: 90 % of its total rise by 30 min
-  const double x0 = output(r, 0, "bed.moisture"), x30 = output(r, at(30), "bed.moisture"), x60 = output(r, last, "bed.moisture");
+  const double x0 = output(r, 0, "bed.moisture"), x30 = output(r, at(30), "bed.moisture"),
+               x60 = output(r, last, "bed.moisture");
   EXPECT_GT(x60, x0 * 1.3);
   EXPECT_GT(x30 - x0, 0.9 * (x60 - x0));
   // d50,3 grows, then approaches a plateau (agglomeration balanced by breakage) within about 30 min
@@ -289,10 +292,13 @@ TEST(Gf25Scene, MechanismsLeftOutCostNoStates) {
   std::string text = full.text;
   text = std::regex_replace(text, std::regex("  droplets:\n    type: droplet_evaporation\n"), "");
   text = std::regex_replace(text, std::regex("  wall:\n    type: wall_heat_loss\n.*\n"), "");
-  text = std::regex_replace(text, std::regex("  - (gas.state -> droplets.gas|droplets.vapour -> gas.evap|gas.wall -> wall.in)\n"), "");
-  text = std::regex_replace(text, std::regex("droplets.deposit -> spray_zone.liquid"), "nozzle.out -> spray_zone.liquid");
+  text = std::regex_replace(
+      text, std::regex("  - (gas.state -> droplets.gas|droplets.vapour -> gas.evap|gas.wall -> wall.in)\n"), "");
+  text =
+      std::regex_replace(text, std::regex("droplets.deposit -> spray_zone.liquid"), "nozzle.out -> spray_zone.liquid");
   text = std::regex_replace(text, std::regex("  - nozzle.out -> droplets.spray\n"), "");
-  text = std::regex_replace(text, std::regex("settings: \\{classes: 10, d_min"), "settings: {breakage: none, classes: 10, d_min");
+  text = std::regex_replace(text, std::regex("settings: \\{classes: 10, d_min"),
+                            "settings: {breakage: none, classes: 10, d_min");
   Scene lean = scene_from_text(text);
   EXPECT_EQ(full.flowsheet->n_states() - lean.flowsheet->n_states(), 4 + 2);  // droplet evaporation, wall
   const SimResult r = simulate(*lean.flowsheet, lean.options);

@@ -186,8 +186,7 @@ TEST(Paper001SprayZone, LiquidDistributionBothReadings) {
   EXPECT_NEAR(m[0], 2.5, 1e-14);
   EXPECT_NEAR(m[1], 0.5, 1e-14);
   // literal ignores the counts
-  distribute_liquid(tau.data(), d.data(), static_cast<const double*>(nullptr), 2, 3.0, LiquidSplit::kLiteral,
-                    m.data());
+  distribute_liquid(tau.data(), d.data(), static_cast<const double*>(nullptr), 2, 3.0, LiquidSplit::kLiteral, m.data());
   EXPECT_NEAR(m[0], 1.0, 1e-14);
   EXPECT_EQ(liquid_split_from_string("literal"), LiquidSplit::kLiteral);
   EXPECT_EQ(liquid_split_from_string(to_string(LiquidSplit::kClassSurface)), LiquidSplit::kClassSurface);
@@ -338,32 +337,61 @@ TEST(Paper001Correlations, JetDerivativesMatchFiniteDifferences) {
   const double rho = props::dry_air_density(kT60, kP);
   const double mu = props::air_viscosity(kT60);
   // u_mf in d (Eqs. (31)-(33))
-  expect_jet_matches_fd([&](auto d) { using T = decltype(d); return wen_yu_umf(d, T(1081.5), T(rho), T(mu)); },
-                        200e-6, 1e-9, 1e-6);
+  expect_jet_matches_fd(
+      [&](auto d) {
+        using T = decltype(d);
+        return wen_yu_umf(d, T(1081.5), T(rho), T(mu));
+      },
+      200e-6, 1e-9, 1e-6);
   // bulk Sherwood in Re (Eqs. (74), (75))
-  expect_jet_matches_fd([](auto re) { using T = decltype(re);
-                          return bulk_sherwood(sherwood_single(re, T(0.94)), re, T(0.94), T(1600.0)); },
-                        8.0, 1e-5, 1e-7, 2);
+  expect_jet_matches_fd(
+      [](auto re) {
+        using T = decltype(re);
+        return bulk_sherwood(sherwood_single(re, T(0.94)), re, T(0.94), T(1600.0));
+      },
+      8.0, 1e-5, 1e-7, 2);
   // Gordon-Taylor in X, and the sticky probability through it (Eqs. (53), (54))
-  expect_jet_matches_fd([](auto x) { using T = decltype(x); return sticky_probability(T(360.0), gordon_taylor(x)); },
-                        0.12, 1e-7, 1e-6, 5);
+  expect_jet_matches_fd(
+      [](auto x) {
+        using T = decltype(x);
+        return sticky_probability(T(360.0), gordon_taylor(x));
+      },
+      0.12, 1e-7, 1e-6, 5);
   // a calibrated parameter: d C_f / d ln(beta0) = C_f (Eq. (37))
-  expect_jet_matches_fd([](auto lnb) { using T = decltype(lnb); return collision_frequency(T(1e-4), T(3e-4), lnb); },
-                        -17.24, 1e-5, 1e-7, 7);
+  expect_jet_matches_fd(
+      [](auto lnb) {
+        using T = decltype(lnb);
+        return collision_frequency(T(1e-4), T(3e-4), lnb);
+      },
+      -17.24, 1e-5, 1e-7, 7);
   // regularized normalized moisture in X on both sides of its kinks (Eq. (80))
-  expect_jet_matches_fd([](auto x) { using T = decltype(x); return normalized_moisture(x, T(0.02), T(0.07)).value; },
-                        0.05, 1e-7, 1e-8);
-  expect_jet_matches_fd([](auto x) { using T = decltype(x); return normalized_moisture(x, T(0.068), T(0.07)).value; },
-                        0.075, 1e-7, 1e-8);
+  expect_jet_matches_fd(
+      [](auto x) {
+        using T = decltype(x);
+        return normalized_moisture(x, T(0.02), T(0.07)).value;
+      },
+      0.05, 1e-7, 1e-8);
+  expect_jet_matches_fd(
+      [](auto x) {
+        using T = decltype(x);
+        return normalized_moisture(x, T(0.068), T(0.07)).value;
+      },
+      0.075, 1e-7, 1e-8);
   // BET through the water activity at the solids temperature (Eqs. (81)-(83))
-  expect_jet_matches_fd([](auto t) { using T = decltype(t);
-                          return bet_equilibrium_moisture(water_activity(T(0.02), t, T(kP))); },
-                        320.0, 1e-4, 1e-6);
+  expect_jet_matches_fd(
+      [](auto t) {
+        using T = decltype(t);
+        return bet_equilibrium_moisture(water_activity(T(0.02), t, T(kP)));
+      },
+      320.0, 1e-4, 1e-6);
   // breakage rate, mm reading (Eq. (92)), and the fragment distribution (Eq. (93))
-  expect_jet_matches_fd([](auto d) { return breakage_rate(d, BreakageSizeUnit::kMillimetre); }, 300e-6, 1e-10,
-                        1e-6);
-  expect_jet_matches_fd([](auto d) { using T = decltype(d); return cumulative_fragment_distribution(d, T(400e-6)); },
-                        80e-6, 1e-10, 1e-6);
+  expect_jet_matches_fd([](auto d) { return breakage_rate(d, BreakageSizeUnit::kMillimetre); }, 300e-6, 1e-10, 1e-6);
+  expect_jet_matches_fd(
+      [](auto d) {
+        using T = decltype(d);
+        return cumulative_fragment_distribution(d, T(400e-6));
+      },
+      80e-6, 1e-10, 1e-6);
 }
 
 }  // namespace

@@ -63,13 +63,15 @@ TEST(PbmAggregation, DiscreteEquationsConserveVolumeAndNumberChangeToRoundOff) {
       std::vector<double> y(ns, 0.0), yp(ns, 0.0), r(ns);
       for (int i = 0; i < n; ++i) y[i] = u(rng);
       sys.residual(0, y.data(), yp.data(), r.data());  // r = -rates
-      const int ia = fs->state_id("pbm.number_above") , iv = fs->state_id("pbm.volume_above");
+      const int ia = fs->state_id("pbm.number_above"), iv = fs->state_id("pbm.volume_above");
       double dv = -r[iv], dv_scale = 0, dn = -r[ia], events = 0;
       for (int i = 0; i < n; ++i) dv -= r[i] * g.pivot(i), dv_scale += std::abs(r[i]) * g.pivot(i), dn -= r[i];
       for (int j = 0; j < n; ++j)
         for (int k = 0; k < n; ++k) {
           const double vj = g.pivot(j), vk = g.pivot(k);
-          const double beta = std::string(kernel) == "constant" ? 1.0 : std::string(kernel) == "sum" ? vj + vk : vj * vk;
+          const double beta = std::string(kernel) == "constant" ? 1.0
+                              : std::string(kernel) == "sum"    ? vj + vk
+                                                                : vj * vk;
           events += 0.5 * beta * y[j] * y[k];
         }
       EXPECT_NEAR(dv / dv_scale, 0.0, 1e-14) << scheme << " " << kernel;
@@ -158,7 +160,8 @@ TEST(PbmAggregation, CellAverageDensityConvergesUnderRefinement) {
   const auto err = refinement_errors("sum", "cell_average", 3, [](const kernels::Grid& g, const double* N) {
     return an::l1_mass_error(g, N, an::cell_volumes(g, [](double v) { return an::golovin_density(v, 3); }));
   });
-  for (size_t k = 1; k < err.size(); ++k) EXPECT_GT(std::log2(err[k - 1] / err[k]), 0.9) << "errors " << err[k - 1] << " " << err[k];
+  for (size_t k = 1; k < err.size(); ++k)
+    EXPECT_GT(std::log2(err[k - 1] / err[k]), 0.9) << "errors " << err[k - 1] << " " << err[k];
 }
 
 // Outside = fold (paper 001): aggregates beyond the top stay in the last class with their volume; the volume

@@ -60,9 +60,10 @@ TEST(PbmGrowth, SizeIndependentGrowthShiftsTheDistribution) {
 TEST(PbmGrowth, MassGrowthRateIsExactForTheNormalizedLaws) {
   const double m_dot = 2e-3, rho_s = 1500.0;  // kg/s, kg/m3
   for (const char* law : {"surface_proportional", "moment_based"}) {
-    pbm_test::Strings s{{"grid", "log_diameter"}, {"classes", "20"}, {"d_max", "3e-3"}, {"growth", law},
-                        {"initial", "lognormal_mass"}};
-    pbm_test::Values p{{"rho", rho_s}, {"mass0", 4.0}, {"d50_3", 300e-6}, {"growth_m_dot", m_dot}, {"growth_rho_s", rho_s}};
+    pbm_test::Strings s{
+        {"grid", "log_diameter"}, {"classes", "20"}, {"d_max", "3e-3"}, {"growth", law}, {"initial", "lognormal_mass"}};
+    pbm_test::Values p{
+        {"rho", rho_s}, {"mass0", 4.0}, {"d50_3", 300e-6}, {"growth_m_dot", m_dot}, {"growth_rho_s", rho_s}};
     if (std::string(law) == "moment_based") p["growth_lambda_2"] = 0.0, p["growth_lambda_3"] = 1.0;
     auto fs = pbm_test::flowsheet(s, p);
     const auto r = pbm_test::run(*fs, {0, 100, 600}, 1e-8, 1e-3);

@@ -62,7 +62,9 @@ Strings with(Strings s, const Strings& more) {
 
 class PbmJacobian : public ::testing::TestWithParam<Strings> {};
 
-TEST_P(PbmJacobian, AnalyticEqualsAdAndFiniteDifferences) { check_jacobian(with(pbm_test::grid_settings(2, 12), GetParam())); }
+TEST_P(PbmJacobian, AnalyticEqualsAdAndFiniteDifferences) {
+  check_jacobian(with(pbm_test::grid_settings(2, 12), GetParam()));
+}
 
 INSTANTIATE_TEST_SUITE_P(
     Mechanisms, PbmJacobian,
@@ -72,7 +74,8 @@ INSTANTIATE_TEST_SUITE_P(
                       Strings{{"aggregation", "sum"}, {"aggregation_scheme", "fixed_pivot"}, {"outside", "fold"}},
                       Strings{{"aggregation", "eke"}, {"aggregation_scheme", "cell_average"}},
                       Strings{{"breakage", "linear"}, {"breakage_scheme", "cell_average"}},
-                      Strings{{"breakage", "power_law"}, {"fragments", "power_law"}, {"breakage_scheme", "fixed_pivot"}},
+                      Strings{
+                          {"breakage", "power_law"}, {"fragments", "power_law"}, {"breakage_scheme", "fixed_pivot"}},
                       Strings{{"breakage", "linear"}, {"fragments", "tanh_power_law"}, {"outside", "fold"}},
                       Strings{{"growth", "constant"}, {"growth_scheme", "fv_koren"}},
                       Strings{{"growth", "constant"}, {"growth_scheme", "fv_upwind"}},
@@ -81,8 +84,10 @@ INSTANTIATE_TEST_SUITE_P(
                       Strings{{"aggregation", "kapur"}, {"breakage", "linear"}, {"growth", "surface_proportional"}}));
 
 TEST(PbmJacobianAll, PaperOneKernelsWithStateFromParameters) {
-  check_jacobian(with(pbm_test::grid_settings(1, 12), {{"aggregation", "glass_transition"}, {"breakage", "vogel_peukert"},
-                                                       {"fragments", "tanh_power_law"}, {"v_min", "1e-13"}}),
+  check_jacobian(with(pbm_test::grid_settings(1, 12), {{"aggregation", "glass_transition"},
+                                                       {"breakage", "vogel_peukert"},
+                                                       {"fragments", "tanh_power_law"},
+                                                       {"v_min", "1e-13"}}),
                  {{"X", 0.05}, {"X_spot", 0.2}, {"T", 330.0}});
 }
 

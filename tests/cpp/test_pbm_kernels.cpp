@@ -29,7 +29,8 @@ TEST(PbmGrid, GeometricGridHasRatioTwoToTheOneOverQ) {
     for (int i = 0; i < g.size(); ++i) {
       EXPECT_NEAR(g.edge(i + 1) / g.edge(i), std::exp2(1.0 / q), 1e-14);
       EXPECT_DOUBLE_EQ(g.pivot(i), 0.5 * (g.edge(i) + g.edge(i + 1)));
-      EXPECT_NEAR(g.diameter_pivots()[i], std::cbrt(6 * g.pivot(i) / pbm_analytic::kPi), 1e-15 * g.diameter_pivots()[i]);
+      EXPECT_NEAR(g.diameter_pivots()[i], std::cbrt(6 * g.pivot(i) / pbm_analytic::kPi),
+                  1e-15 * g.diameter_pivots()[i]);
       EXPECT_EQ(g.cell_of(g.pivot(i)), i);
       EXPECT_EQ(g.interval_of(g.pivot(i)), i);
     }
@@ -105,8 +106,8 @@ TEST(PbmKernels, EveryRegisteredPluginDeclaresItsParameters) {
   expect_declared(r.selection);
   expect_declared(r.fragments);
   expect_declared(r.growth);
-  for (const char* name : {"constant", "sum", "product", "kapur", "eke", "shear", "dem_collision", "stokes",
-                           "glass_transition"})
+  for (const char* name :
+       {"constant", "sum", "product", "kapur", "eke", "shear", "dem_collision", "stokes", "glass_transition"})
     EXPECT_TRUE(r.aggregation.contains(name)) << name;
   for (const char* name : {"linear", "power_law", "vogel_peukert"}) EXPECT_TRUE(r.selection.contains(name));
   for (const char* name : {"uniform_binary", "power_law", "tanh_power_law"}) EXPECT_TRUE(r.fragments.contains(name));
@@ -126,9 +127,11 @@ TEST(PbmKernels, EveryRegisteredPluginDeclaresItsParameters) {
 
 TEST(PbmKernels, AggregationKernelsAreSymmetricFiniteAndNonNegative) {
   const auto g = Grid::from_diameter_pivots({60e-6, 120e-6, 250e-6, 500e-6, 1000e-6});
-  set_table("test_collisions", collision_frequency_table(std::vector<double>(25, 10.0), std::vector<double>(5, 1e3), 0.5, "test"));
+  set_table("test_collisions",
+            collision_frequency_table(std::vector<double>(25, 10.0), std::vector<double>(5, 1e3), 0.5, "test"));
   std::vector<double> X(5, 0.05), T(5, 330.0), LC{0.1, 0.3, 0.1, 0.3, 0.5};
-  ClassState<double> cs{5, g.pivots().data(), g.diameter_pivots().data(), nullptr, X.data(), X.data(), T.data(), LC.data()};
+  ClassState<double> cs{5,        g.pivots().data(), g.diameter_pivots().data(), nullptr, X.data(), X.data(),
+                        T.data(), LC.data()};
   for (const auto& name : registries().aggregation.names()) {
     auto k = registries().aggregation.create(name);
     Settings st("test", {{"agg_collisions", "test_collisions"}});
@@ -159,7 +162,8 @@ TEST(PbmKernels, AggregationKernelsAreSymmetricFiniteAndNonNegative) {
       }
     if (name == "eke") {  // Eq. (37), paper 001, by hand
       const double di = 60e-6, dj = 1000e-6;
-      EXPECT_NEAR(beta[4], std::exp(-17.24) * (di + dj) * (di + dj) * std::sqrt(1 / (di * di * di) + 1 / (dj * dj * dj)) * 0.22,
+      EXPECT_NEAR(beta[4],
+                  std::exp(-17.24) * (di + dj) * (di + dj) * std::sqrt(1 / (di * di * di) + 1 / (dj * dj * dj)) * 0.22,
                   1e-12 * beta[4]);
     }
     if (name == "dem_collision") {  // Eqs. (12)-(13), paper 002: C = 10 / (1e3 1e3 0.5); wet if either LC >= 0.2

@@ -53,25 +53,25 @@ JacobianMethod jacobian_method_from_string(const std::string& s);  // "sensitivi
 
 // One measured quantity of one run, sampled in time. Exactly one of sigma_abs, sigma_rel is > 0.
 struct Observation {
-  std::string name;            // "unit.output" (reported) or "unit.state"
-  std::vector<double> t;       // s, increasing, >= 0
-  std::vector<double> value;   // SI; NaN = not measured at that time
-  double sigma_abs = 0.0;      // SI
-  double sigma_rel = 0.0;      // fraction of the value (SigmaBasis says of which)
+  std::string name;           // "unit.output" (reported) or "unit.state"
+  std::vector<double> t;      // s, increasing, >= 0
+  std::vector<double> value;  // SI; NaN = not measured at that time
+  double sigma_abs = 0.0;     // SI
+  double sigma_rel = 0.0;     // fraction of the value (SigmaBasis says of which)
 };
 
 // One batch run: operating conditions and initial state as parameter values, and its observations.
 struct Experiment {
   std::string name;
   std::vector<std::pair<std::string, double>> settings;  // "unit.param" -> SI value, applied over the scene
-  double t_end = 0.0;                                     // s; 0: the last sample time
+  double t_end = 0.0;                                    // s; 0: the last sample time
   std::vector<Observation> observations;
 };
 
 struct FreeParameter {
-  std::string name;                     // "unit.param"
+  std::string name;  // "unit.param"
   Transform transform = Transform::kNone;
-  std::optional<double> lower, upper;   // SI; default: the declared bounds (kLog needs lower > 0)
+  std::optional<double> lower, upper;  // SI; default: the declared bounds (kLog needs lower > 0)
   // The parameter is itself a logarithm (ln β0): its standard error is already relative. Default: name
   // starts with "ln_".
   std::optional<bool> logarithmic;
@@ -85,11 +85,11 @@ struct Stage {
 
 struct CalibrationOptions {
   // Ceres Levenberg-Marquardt, per stage.
-  int max_iterations = 50;             // >= 1
-  double function_tolerance = 1e-5;    // |Δcost| / cost at which a stage has converged, > 0 (1e-5 of a
-                                       // χ²/2 near N/2: far below Δχ² = 1, above the integration noise)
-  double gradient_tolerance = 1e-10;   // > 0
-  double parameter_tolerance = 1e-6;   // |Δθ| / (|θ| + tol), > 0
+  int max_iterations = 50;            // >= 1
+  double function_tolerance = 1e-5;   // |Δcost| / cost at which a stage has converged, > 0 (1e-5 of a
+                                      // χ²/2 near N/2: far below Δχ² = 1, above the integration noise)
+  double gradient_tolerance = 1e-10;  // > 0
+  double parameter_tolerance = 1e-6;  // |Δθ| / (|θ| + tol), > 0
   // Also converged when an accepted step lowers the cost ½χ² by less than this (absolute): the optimum is then
   // within about sqrt(4 x this) = 0.2 standard errors, and further steps only chase integration noise or
   // crawl along directions the data do not determine. >= 0 (0: off)
@@ -98,28 +98,28 @@ struct CalibrationOptions {
   // Gauss-Newton, whose first steps on ill-conditioned stages (k_evap against X_cr) are rejected one after
   // another, each costing a simulation per experiment. > 0
   double initial_trust_region_radius = 1e2;
-  int num_threads = 1;                 // experiments solved in parallel, >= 1
+  int num_threads = 1;  // experiments solved in parallel, >= 1
   SigmaBasis sigma_basis = SigmaBasis::kModel;
-  int max_reweighting_passes = 4;      // kModel: least-squares solves per stage, >= 1
-  double reweighting_tolerance = 0.02; // kModel: stop when no σ changes by more than this fraction, >= 0
+  int max_reweighting_passes = 4;       // kModel: least-squares solves per stage, >= 1
+  double reweighting_tolerance = 0.02;  // kModel: stop when no σ changes by more than this fraction, >= 0
   JacobianMethod jacobian = JacobianMethod::kSensitivities;
-  double fd_step = 1e-3;               // central differences: step in θ (times max(|θ|, 1) for kNone), > 0
+  double fd_step = 1e-3;  // central differences: step in θ (times max(|θ|, 1) for kNone), > 0
   // Simulations inside the calibration.
   // Tolerances well below the measurement noise (1-11 %): the model error they leave (~1e-5 relative) is
   // hundreds of times smaller than the standard errors, and a sensitivity solve costs ~1.4x less than at 1e-6.
-  double rtol = 1e-5;                  // 0 < rtol < 1
-  double atol = 1e-7;                  // > 0 (times each state's scale)
-  bool sens_error_control = false;     // sensitivities in IDAS's error test (SimOptions::sens_error_control)
-  double output_rel_step = 1e-6;       // output_sensitivities() step
+  double rtol = 1e-5;               // 0 < rtol < 1
+  double atol = 1e-7;               // > 0 (times each state's scale)
+  bool sens_error_control = false;  // sensitivities in IDAS's error test (SimOptions::sens_error_control)
+  double output_rel_step = 1e-6;    // output_sensitivities() step
   // Statistics at the optimum.
-  bool scale_covariance = false;       // multiply the covariance by the reduced χ² (σ not trusted)
-  double rse_threshold = 0.3;          // flag (and profile): relative standard error above this, > 0
-  double correlation_threshold = 0.95; // flag: |correlation| above this, in (0, 1]
-  bool profile = true;                 // profile the loss over flagged parameters of the last stage
-  double profile_delta_chi2 = 3.84;    // Δχ² of a 95 % interval (1 dof), > 0
-  double profile_max_offset = 2.3;     // farthest profile point from the optimum in θ, in units of
-                                       // max(SE_θ, 1) for kLog/logarithmic (2.3 = a factor of 10), else of SE
-  int profile_max_points = 4;          // per side, >= 1
+  bool scale_covariance = false;        // multiply the covariance by the reduced χ² (σ not trusted)
+  double rse_threshold = 0.3;           // flag (and profile): relative standard error above this, > 0
+  double correlation_threshold = 0.95;  // flag: |correlation| above this, in (0, 1]
+  bool profile = true;                  // profile the loss over flagged parameters of the last stage
+  double profile_delta_chi2 = 3.84;     // Δχ² of a 95 % interval (1 dof), > 0
+  double profile_max_offset = 2.3;      // farthest profile point from the optimum in θ, in units of
+                                        // max(SE_θ, 1) for kLog/logarithmic (2.3 = a factor of 10), else of SE
+  int profile_max_points = 4;           // per side, >= 1
   // Throws ConfigError naming the field, the value and the rule.
   void validate() const;
 };
@@ -134,38 +134,38 @@ struct Estimate {
   double rel_se = 0.0;                 // se/|value|; se_theta for kLog; se for logarithmic parameters
   double lower = 0.0, upper = 0.0;     // SI bounds used
   bool at_bound = false;
-  bool identifiable = true;            // false: flagged, not reported as recovered
-  std::string flag;                    // why it is flagged ("" if not)
+  bool identifiable = true;  // false: flagged, not reported as recovered
+  std::string flag;          // why it is flagged ("" if not)
 };
 
 struct Profile {
-  std::string name;                    // parameter
-  std::vector<double> values;          // SI, increasing, including the optimum
-  std::vector<double> delta_chi2;      // 2 (C(value) - C(optimum)), other free parameters re-optimized
+  std::string name;                       // parameter
+  std::vector<double> values;             // SI, increasing, including the optimum
+  std::vector<double> delta_chi2;         // 2 (C(value) - C(optimum)), other free parameters re-optimized
   double lower_95 = 0.0, upper_95 = 0.0;  // where Δχ² crosses profile_delta_chi2 (bounds/limits if it never does)
   bool bounded_below = false, bounded_above = false;  // the crossing was found on that side
-  bool linear_trustworthy = false;     // Δχ² at ±2 SE_θ within a factor 2 of the linear 4
+  bool linear_trustworthy = false;                    // Δχ² at ±2 SE_θ within a factor 2 of the linear 4
   long simulations = 0, sensitivity_solves = 0;
-  std::string verdict;                 // "identifiable" | "unidentifiable" | "nonlinear"
+  std::string verdict;  // "identifiable" | "unidentifiable" | "nonlinear"
 };
 
 struct StageResult {
   std::string name;
   std::vector<std::string> observables;
-  std::vector<Estimate> estimates;     // the free parameters, in stage order
-  std::vector<double> covariance;      // row-major n x n, in θ
-  std::vector<double> correlation;     // row-major n x n
-  std::vector<double> iteration_costs; // Ceres cost after each iteration (iteration 0 = start)
+  std::vector<Estimate> estimates;        // the free parameters, in stage order
+  std::vector<double> covariance;         // row-major n x n, in θ
+  std::vector<double> correlation;        // row-major n x n
+  std::vector<double> iteration_costs;    // Ceres cost after each iteration (iteration 0 = start)
   double initial_cost = 0.0, cost = 0.0;  // ½ χ²
   long residuals = 0;
-  double chi2_reduced = 0.0;           // 2 cost / (residuals - free parameters)
-  int iterations = 0;                  // Ceres iterations over all passes
-  int passes = 0;                      // least-squares solves (reweighting passes)
-  double weight_change = 0.0;          // largest relative change of a σ in the last reweighting
+  double chi2_reduced = 0.0;   // 2 cost / (residuals - free parameters)
+  int iterations = 0;          // Ceres iterations over all passes
+  int passes = 0;              // least-squares solves (reweighting passes)
+  double weight_change = 0.0;  // largest relative change of a σ in the last reweighting
   long simulations = 0, sensitivity_solves = 0;
   double wall_time_s = 0.0;
-  std::string jacobian_method;         // "sensitivities" | "central_differences"
-  std::string termination;             // Ceres: CONVERGENCE, NO_CONVERGENCE, FAILURE, ...
+  std::string jacobian_method;  // "sensitivities" | "central_differences"
+  std::string termination;      // Ceres: CONVERGENCE, NO_CONVERGENCE, FAILURE, ...
   std::string message;
   bool usable = false;
   std::vector<Profile> profiles;
@@ -176,10 +176,10 @@ struct CalibrationResult {
   std::map<std::string, double> parameters;  // the start values, updated by every stage (SI)
   long simulations = 0, sensitivity_solves = 0;
   double wall_time_s = 0.0;
-  std::string status = "ok";           // "ok" | "no_convergence" (a stage stopped without converging)
+  std::string status = "ok";  // "ok" | "no_convergence" (a stage stopped without converging)
   std::string message;
-  std::string brief() const;           // one line
-  std::string full_report() const;     // tables: stages, estimates, correlation, flags, profiles
+  std::string brief() const;        // one line
+  std::string full_report() const;  // tables: stages, estimates, correlation, flags, profiles
 };
 
 // The units, names and validity of observables: the SI unit of a state or reported output of `fs`; throws
@@ -198,8 +198,8 @@ struct Prediction {
   std::vector<double> t, data, model, sigma;  // sigma: σ_abs, or σ_rel times the model (kModel) or data (kData)
 };
 std::vector<Prediction> predict(const Scene& scene, const Registry<Unit>& registry,
-                                const std::vector<Experiment>& experiments,
-                                const std::map<std::string, double>& params, const CalibrationOptions& options);
+                                const std::vector<Experiment>& experiments, const std::map<std::string, double>& params,
+                                const CalibrationOptions& options);
 
 // R² = 1 - SS_res / SS_tot and RMSE per observable over all experiments and samples (NaN data skipped).
 struct FitStatistics {
@@ -219,7 +219,7 @@ class StageProblem {
   StageProblem& operator=(const StageProblem&) = delete;
   int num_parameters() const;
   int num_residuals() const;
-  std::vector<double> theta0() const;           // the start in θ
+  std::vector<double> theta0() const;  // the start in θ
   std::vector<double> to_theta(const std::vector<double>& p) const;
   std::vector<double> to_params(const std::vector<double>& theta) const;  // SI
   // Residuals at θ, and the row-major num_residuals x num_parameters Jacobian if `jacobian` != nullptr. With

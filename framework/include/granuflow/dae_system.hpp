@@ -30,8 +30,8 @@ class DaeSystem {
   explicit DaeSystem(Flowsheet& fs, bool inline_explicit = true);
   void reconfigure();
 
-  int size() const { return n_; }              // unknowns of the integrator
-  int full_size() const { return n_ext_; }     // every state of the flowsheet, explicit ones last
+  int size() const { return n_; }           // unknowns of the integrator
+  int full_size() const { return n_ext_; }  // every state of the flowsheet, explicit ones last
   bool inlined() const { return inline_; }
   // Fraction of the entries of the Jacobian over all states that can be nonzero (the units' blocks).
   double fill() const { return fill_; }
@@ -85,11 +85,11 @@ class DaeSystem {
   void params_as(int unit, std::vector<T>& out) const;
 
   Flowsheet& fs_;
-  int n_;                       // unknowns
-  int n_ext_;                   // all states
+  int n_;      // unknowns
+  int n_ext_;  // all states
   bool inline_ = false;
   double fill_ = 0.0;
-  std::vector<int> explicit_order_;  // explicit units, each after the explicit units it reads
+  std::vector<int> explicit_order_;                  // explicit units, each after the explicit units it reads
   std::vector<std::pair<int, int>> explicit_reads_;  // (u, v): explicit unit u reads explicit unit v, in order
   class FactoringSink;
   struct OuterTerm {  // u w^T on the rows of an explicit unit, columns integrated states
@@ -100,17 +100,18 @@ class DaeSystem {
   std::vector<OuterTerm> outer_;  // storage reused between Jacobians; the first n_outer_ are current
   size_t n_outer_ = 0;
   Eigen::MatrixXd schur_z_, schur_u_, schur_a_, schur_au_, schur_p_;
-  std::vector<int> schur_rows_, schur_cols_;  // where the Schur correction can be nonzero
-  std::vector<int> schur_col_pos_;            // integrated column -> position in schur_cols_, or -1
+  std::vector<int> schur_rows_, schur_cols_;               // where the Schur correction can be nonzero
+  std::vector<int> schur_col_pos_;                         // integrated column -> position in schur_cols_, or -1
   std::vector<std::tuple<int, int, int>> schur_row_runs_;  // (position in schur_rows_, first row, length)
   std::vector<double> y_ext_, yp_ext_, jac_ext_, scratch_;
   double segment_start_ = 0.0;
-  std::vector<std::vector<double>> pvals_;   // per unit, at the last fill time
-  std::vector<std::vector<int>> local_cols_; // per unit: global columns its rows depend on
+  std::vector<std::vector<double>> pvals_;    // per unit, at the last fill time
+  std::vector<std::vector<int>> local_cols_;  // per unit: global columns its rows depend on
   // Sparse structure, built on first use (dense runs never need it).
-  mutable std::vector<std::vector<int>> block_pos_;  // per unit: row-major [local row][local col] -> position in sparse values
+  mutable std::vector<std::vector<int>>
+      block_pos_;  // per unit: row-major [local row][local col] -> position in sparse values
   mutable std::vector<std::unordered_map<int, int>> col_map_;  // per unit: global column -> local column
-  std::vector<std::vector<size_t>> ad_pos_;             // per unit: positions in local_cols_ found by AD
+  std::vector<std::vector<size_t>> ad_pos_;                    // per unit: positions in local_cols_ found by AD
   mutable SparsityPattern pattern_;
   std::vector<Jet> xj_, xdj_, rj_, jet_scratch_;
   std::vector<std::vector<Jet>> pj_;  // per unit: parameters as Jets (seeded for sensitivities)

@@ -43,8 +43,7 @@ inline std::string fmt_num(double v) {
 }
 
 // Message template "where = value unit: violates rule" (Ceres OPTION_GE style).
-inline std::string violation(const std::string& where, double value, const std::string& unit,
-                             const std::string& rule) {
+inline std::string violation(const std::string& where, double value, const std::string& unit, const std::string& rule) {
   std::ostringstream os;
   os.precision(12);
   os << where << " = " << value << (unit.empty() || unit == "-" ? "" : " " + unit) << ": violates " << rule;

@@ -45,11 +45,11 @@ struct UnitInstance {
   std::unique_ptr<Unit> unit;
   UnitSpec spec;
   std::vector<SettingSpec> settings;
-  int offset = 0;                                 // global index of own state 0
-  std::vector<double> params;                     // current constant values (SI)
+  int offset = 0;                                      // global index of own state 0
+  std::vector<double> params;                          // current constant values (SI)
   std::vector<std::optional<PiecewiseLinear>> inputs;  // per param: time-dependent override
-  std::vector<std::vector<int>> port_index;       // per port, per field: global state index
-  std::vector<std::pair<int, int>> peers;         // per port: (unit index, port index) of the connected port
+  std::vector<std::vector<int>> port_index;            // per port, per field: global state index
+  std::vector<std::pair<int, int>> peers;              // per port: (unit index, port index) of the connected port
 };
 
 class Flowsheet {
@@ -87,7 +87,7 @@ class Flowsheet {
   // names the link; param() of a link target is its source's value.
   void link(const std::string& target, const std::string& source);
   void apply_links();
-  int link_source(int target) const;  // -1 unless `target` follows a parameter
+  int link_source(int target) const;         // -1 unless `target` follows a parameter
   std::string qualified_name(int id) const;  // "unit.param"
   // apply_links(), then every unit's configure(); a ConfigError from a unit names the unit instance.
   void configure_units();
@@ -99,9 +99,9 @@ class Flowsheet {
   // Layout (after finalize).
   int n_states() const { return n_states_; }
   int n_explicit_states() const { return n_explicit_; }  // the last ones, belonging to explicit units
-  std::vector<std::string> state_names() const;  // "unit.state"
+  std::vector<std::string> state_names() const;          // "unit.state"
   const StateSpec& state_spec(int global) const;
-  int state_unit(int global) const;              // unit index owning a state
+  int state_unit(int global) const;  // unit index owning a state
   int state_id(const std::string& qualified) const;
   std::vector<std::string> output_names() const;  // "unit.output"
   int n_outputs() const;

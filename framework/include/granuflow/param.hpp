@@ -10,13 +10,13 @@
 namespace granuflow {
 
 struct ParamSpec {
-  std::string name;         // local name; addressed from outside as "unit.name"
-  std::string unit;         // SI unit from the checked set in quantity.hpp
-  double value;             // default
-  double lower;             // inclusive bounds; validation and calibration use them
+  std::string name;  // local name; addressed from outside as "unit.name"
+  std::string unit;  // SI unit from the checked set in quantity.hpp
+  double value;      // default
+  double lower;      // inclusive bounds; validation and calibration use them
   double upper;
   std::string description;
-  std::string source;       // e.g. "paper 001, Table 9"
+  std::string source;  // e.g. "paper 001, Table 9"
 };
 
 enum class SettingType { Int, Real, Bool, String };

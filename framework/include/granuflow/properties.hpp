@@ -12,30 +12,29 @@
 namespace granuflow::props {
 
 // --- constants (unit in the comment; source in brackets) ---
-inline constexpr double kT0 = 273.15;                 // K, enthalpy reference and degC offset
-inline constexpr double kGasConstant = 8.314462618;   // J/(mol K) [CODATA 2018]
-inline constexpr double kGravity = 9.80665;           // m/s^2 [standard gravity]
-inline constexpr double kPressureAtm = 101325.0;      // Pa, operating pressure [PAPER001_DECISIONS]
-inline constexpr double kMolarMassWater = 0.01801528; // kg/mol
-inline constexpr double kMolarMassAir = 0.0289647;    // kg/mol, dry air
-inline constexpr double kCpAir = 1006.0;              // J/(kg K), dry air [PAPER001_DECISIONS]
-inline constexpr double kCpVapour = 1870.0;           // J/(kg K), water vapour [PAPER001_DECISIONS]
-inline constexpr double kCpWater = 4180.0;            // J/(kg K), liquid water [PAPER001_DECISIONS, Table 6]
-inline constexpr double kLatentHeat0 = 2.501e6;       // J/kg, evaporation of water at T0 [PAPER001_DECISIONS]
-inline constexpr double kAntoineA = 16.262;           // -, ln(p/kPa) form [paper 001, Table 8]
-inline constexpr double kAntoineB = 3800.0;           // degC (K difference) [paper 001, Table 8]
-inline constexpr double kAntoineC = 226.3;            // degC [paper 001, Table 8]
-inline constexpr double kSutherlandMuRef = 1.716e-5;  // Pa s, air at kSutherlandTRef [White, Viscous Fluid Flow]
-inline constexpr double kSutherlandTRef = 273.15;     // K
-inline constexpr double kSutherlandS = 110.4;         // K, Sutherland constant of air
+inline constexpr double kT0 = 273.15;                  // K, enthalpy reference and degC offset
+inline constexpr double kGasConstant = 8.314462618;    // J/(mol K) [CODATA 2018]
+inline constexpr double kGravity = 9.80665;            // m/s^2 [standard gravity]
+inline constexpr double kPressureAtm = 101325.0;       // Pa, operating pressure [PAPER001_DECISIONS]
+inline constexpr double kMolarMassWater = 0.01801528;  // kg/mol
+inline constexpr double kMolarMassAir = 0.0289647;     // kg/mol, dry air
+inline constexpr double kCpAir = 1006.0;               // J/(kg K), dry air [PAPER001_DECISIONS]
+inline constexpr double kCpVapour = 1870.0;            // J/(kg K), water vapour [PAPER001_DECISIONS]
+inline constexpr double kCpWater = 4180.0;             // J/(kg K), liquid water [PAPER001_DECISIONS, Table 6]
+inline constexpr double kLatentHeat0 = 2.501e6;        // J/kg, evaporation of water at T0 [PAPER001_DECISIONS]
+inline constexpr double kAntoineA = 16.262;            // -, ln(p/kPa) form [paper 001, Table 8]
+inline constexpr double kAntoineB = 3800.0;            // degC (K difference) [paper 001, Table 8]
+inline constexpr double kAntoineC = 226.3;             // degC [paper 001, Table 8]
+inline constexpr double kSutherlandMuRef = 1.716e-5;   // Pa s, air at kSutherlandTRef [White, Viscous Fluid Flow]
+inline constexpr double kSutherlandTRef = 273.15;      // K
+inline constexpr double kSutherlandS = 110.4;          // K, Sutherland constant of air
 
 // --- water ---
 
 // Eq. (69), paper 001: Antoine, p in kPa, T in degC. With the paper's coefficients the fit is 1.6 % low at
 // 20 degC and within 0.4 % of IAPWS from 60 to 100 degC.
 template <class T>
-T saturation_pressure(const T& temp, const T& a = T(kAntoineA), const T& b = T(kAntoineB),
-                      const T& c = T(kAntoineC)) {
+T saturation_pressure(const T& temp, const T& a = T(kAntoineA), const T& b = T(kAntoineB), const T& c = T(kAntoineC)) {
   using std::exp;
   return 1000.0 * exp(a - b / (c + (temp - kT0)));
 }
@@ -143,8 +142,7 @@ T humid_air_density(const T& temp, const T& p, const T& y_abs) {
 template <class T>
 T air_viscosity(const T& temp) {
   using std::pow;
-  return kSutherlandMuRef * pow(temp / kSutherlandTRef, 1.5) * (kSutherlandTRef + kSutherlandS) /
-         (temp + kSutherlandS);
+  return kSutherlandMuRef * pow(temp / kSutherlandTRef, 1.5) * (kSutherlandTRef + kSutherlandS) / (temp + kSutherlandS);
 }
 
 // Kinematic viscosity, m^2/s.

@@ -11,34 +11,35 @@
 namespace granuflow {
 
 struct SimOptions {
-  double t_end = 0.0;                     // s, > 0
-  std::vector<double> t_out;              // output times in [0, t_end], increasing; empty: n_out equispaced
-  int n_out = 101;                        // used when t_out is empty
-  double rtol = 1e-6;                     // relative tolerance
-  double atol = 1e-8;                     // absolute tolerance, multiplied by each state's declared scale
-  long max_steps = 200000;                // per segment between breakpoints
-  double max_step = 0.0;                  // s; 0 = no limit
-  std::vector<std::string> sensitivities; // "unit.param" names for forward sensitivities
+  double t_end = 0.0;                      // s, > 0
+  std::vector<double> t_out;               // output times in [0, t_end], increasing; empty: n_out equispaced
+  int n_out = 101;                         // used when t_out is empty
+  double rtol = 1e-6;                      // relative tolerance
+  double atol = 1e-8;                      // absolute tolerance, multiplied by each state's declared scale
+  long max_steps = 200000;                 // per segment between breakpoints
+  double max_step = 0.0;                   // s; 0 = no limit
+  std::vector<std::string> sensitivities;  // "unit.param" names for forward sensitivities
   // Include the sensitivities in the local error test (IDASetSensErrCon). Off, they are still computed by
   // the staggered corrector at every step of the state, only without their own step-size control: about
   // half the steps, and accurate to roughly the states' tolerance on smooth problems (calibration Jacobians).
   bool sens_error_control = true;
-  std::string linear_solver = "auto";     // auto | dense | sparse (auto: dense up to dense_limit states)
+  std::string linear_solver = "auto";  // auto | dense | sparse (auto: dense up to dense_limit states)
   int dense_limit = 400;
-  // Throws ConfigError naming the value and the rule, and the field as SimOptions.<field> or, with scene_keys, as the scene file's key.
+  // Throws ConfigError naming the value and the rule, and the field as SimOptions.<field> or, with scene_keys, as the
+  // scene file's key.
   void validate(bool scene_keys = false) const;
 };
 
 struct SolverStats {
   long steps = 0;
-  long residuals = 0;      // residual evaluations (including those inside consistent initialization)
+  long residuals = 0;  // residual evaluations (including those inside consistent initialization)
   long jacobians = 0;
   long linear_setups = 0;
   long nonlinear_iterations = 0;
   long error_test_failures = 0;
   long nonlinear_failures = 0;
-  long reinits = 0;        // restarts at input breakpoints
-  long states = 0;         // unknowns of the integrator
+  long reinits = 0;          // restarts at input breakpoints
+  long states = 0;           // unknowns of the integrator
   long explicit_states = 0;  // states of explicit units, evaluated inline
   std::string linear_solver;
 };
@@ -61,8 +62,8 @@ struct SimResult {
 SimResult simulate(Flowsheet& fs, const SimOptions& options);
 
 struct SteadyOptions {
-  double t = 0.0;          // time at which inputs are evaluated
-  double ftol = 1e-10;     // scaled residual tolerance
+  double t = 0.0;       // time at which inputs are evaluated
+  double ftol = 1e-10;  // scaled residual tolerance
   long max_iterations = 200;
   void validate() const;
 };
@@ -74,6 +75,7 @@ struct SteadyResult {
 };
 
 // Solves F(y, y' = 0) = 0 from the initial values (or from `guess` when given) with KINSOL (line search).
-SteadyResult solve_steady_state(Flowsheet& fs, const SteadyOptions& options, const std::vector<double>* guess = nullptr);
+SteadyResult solve_steady_state(Flowsheet& fs, const SteadyOptions& options,
+                                const std::vector<double>* guess = nullptr);
 
 }  // namespace granuflow

@@ -38,10 +38,10 @@ struct PortSpec {
   std::string name;
   StreamKind kind;
   PortDir dir;
-  int classes = 0;               // solids: number of size classes
-  bool optional = false;         // may stay unconnected: its read fields are then zero (a mechanism left out)
-  std::vector<double> grid;      // per-class streams: pivot diameters (m); connected ports must agree
-  std::vector<int> provided;     // per field: own state index providing it, or -1 (read from the peer)
+  int classes = 0;            // solids: number of size classes
+  bool optional = false;      // may stay unconnected: its read fields are then zero (a mechanism left out)
+  std::vector<double> grid;   // per-class streams: pivot diameters (m); connected ports must agree
+  std::vector<int> provided;  // per field: own state index providing it, or -1 (read from the peer)
 };
 
 struct OutputSpec {
@@ -89,13 +89,13 @@ class UnitSpec {
 template <class T>
 struct Ctx {
   double t;
-  const T* x;            // global states
-  const T* xdot;         // global state derivatives
-  const T* p;            // this unit's parameters (value at time t for inputs)
-  T* r;                  // this unit's residual rows
-  int offset;            // global index of own state 0
+  const T* x;                                       // global states
+  const T* xdot;                                    // global state derivatives
+  const T* p;                                       // this unit's parameters (value at time t for inputs)
+  T* r;                                             // this unit's residual rows
+  int offset;                                       // global index of own state 0
   const std::vector<std::vector<int>>* port_index;  // per port, per field: global state index
-  double t_seg = 0.0;    // start of the current integration segment (between breakpoints)
+  double t_seg = 0.0;                               // start of the current integration segment (between breakpoints)
 
   const T& x_(int k) const { return x[offset + k]; }
   const T& xd(int k) const { return xdot[offset + k]; }
@@ -136,8 +136,10 @@ class JacobianSink {
  public:
   virtual ~JacobianSink() = default;
   void add(int local_row, int global_col, double value) {
-    if (dense_) dense_[size_t(global_col) * ld_ + size_t(local_row)] += value;
-    else add_entry(local_row, global_col, value);
+    if (dense_)
+      dense_[size_t(global_col) * ld_ + size_t(local_row)] += value;
+    else
+      add_entry(local_row, global_col, value);
   }
   // The outer product u w^T on local rows 0..n_rows-1 and the global columns `cols`: how rows that all depend on
   // one shared intermediate (a sum over classes) enter. A sink that can keep the product factored does (the
