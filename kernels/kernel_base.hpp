@@ -47,9 +47,10 @@ struct ClassState {
 
 // The reference volume of the power-law kernels (sum, product, Kapur; power-law and linear selection). It only
 // keeps the rate coefficient in 1/s; v_ref = 1 m^3 with coefficient 1 is the dimensionless textbook form of the
-// analytic cases (VERIFY.md).
+// analytic cases (docs/verification.md).
 inline ParamSpec reference_volume_param() {
-  return {"v_ref", "m3", 1.0, 1e-30, 1e6, "reference volume", "scaling choice; VERIFY.md analytic cases use 1"};
+  return {
+      "v_ref", "m3", 1.0, 1e-30, 1e6, "reference volume", "scaling choice; docs/verification.md analytic cases use 1"};
 }
 
 class KernelBase {

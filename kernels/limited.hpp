@@ -1,6 +1,6 @@
 // Result of a closure that may leave the paper's literal equation through a floor, cap or regularization.
 // Units count `active` so a run reports how often the model was outside the equations as printed
-// (PAPER001_DECISIONS: "every regularization must be reported when it becomes active").
+// (docs/paper001_decisions.md: "every regularization must be reported when it becomes active").
 #pragma once
 
 namespace granuflow::kernels {

@@ -1,5 +1,5 @@
 // Parameter values of paper 001 (Stoeckl et al., GF25 batch agglomeration of maltodextrin), Tables 5-10, in SI,
-// plus the defaults PAPER001_DECISIONS adds where the paper is silent. Unit ParamSpecs take their defaults
+// plus the defaults docs/paper001_decisions.md adds where the paper is silent. Unit ParamSpecs take their defaults
 // from here, so each number exists once. Temperatures that the paper gives in degC are stored in K; the
 // paper's value stays in the comment.
 #pragma once
@@ -79,7 +79,7 @@ inline constexpr double kBreakageEnergyMin = 0.3;      // J/kg ("mass based"; th
 inline constexpr double kFragmentExponent = 0.5;       // -, q in Eq. (93)
 inline constexpr double kFragmentDiameterMin = 50e-6;  // m (50 um), d_j,min in Eq. (93)
 
-// --- PAPER001_DECISIONS: regularizations (each reported when active) ---
+// --- docs/paper001_decisions.md: regularizations (each reported when active) ---
 inline constexpr double kWsFloor = 0.05;              // -, floor of Eq. (47) (the fit turns negative at Re ~ 32)
 inline constexpr double kEtaDenominatorFloor = 0.01;  // kg/kg, floor of X_cr - X_eq in Eq. (80)
 inline constexpr double kEtaMin = -1.0;               // -, limit of re-adsorption in Eq. (80)

@@ -18,7 +18,7 @@ T sphere_volume(const T& d) {
 }
 
 // Total surface of n equal spheres: the area of a size class in Eq. (70) and in A_p of Eqs. (74), (87)
-// (PAPER001_DECISIONS).
+// (docs/paper001_decisions.md).
 template <class T>
 T class_surface(const T& n, const T& d) {
   return n * sphere_surface(d);

@@ -15,9 +15,10 @@ class ChamberGas : public UnitBase<ChamberGas> {
   std::string type() const override { return "chamber_gas"; }
   void declare(UnitSpec& s, Settings&) override {
     s.add_param({"m_gas", "kg", kernels::paper001::defaults::kGasHoldup, 1e-3, 1e4, "dry-air hold-up of the chamber",
-                 "paper 001, Table 7; PAPER001_DECISIONS"});
-    s.add_param({"Y0", "kg/kg", 0.005, 0.0, 0.5, "initial humidity", "PAPER001_DECISIONS: gas at inlet state"});
-    s.add_param({"T0", "K", 333.15, 250.0, 600.0, "initial temperature", "PAPER001_DECISIONS: gas at inlet state"});
+                 "paper 001, Table 7; docs/paper001_decisions.md"});
+    s.add_param({"Y0", "kg/kg", 0.005, 0.0, 0.5, "initial humidity", "docs/paper001_decisions.md: gas at inlet state"});
+    s.add_param(
+        {"T0", "K", 333.15, 250.0, 600.0, "initial temperature", "docs/paper001_decisions.md: gas at inlet state"});
     s.add_state("water", StateKind::Differential, "kg", 0.01);
     s.add_state("enthalpy", StateKind::Differential, "J", 1e5);
     s.add_state("Y", StateKind::Algebraic, "kg/kg", 0.01);
@@ -52,7 +53,7 @@ class ChamberGas : public UnitBase<ChamberGas> {
     // Eq. (61), paper 001, as a water-mass balance
     c.res(kW) = c.xd(kW) - (m_in * y_in - c.x_(kMdot) * c.x_(kY) + m_ev + m_dr);
     // Eq. (62), paper 001, conservative: inflows at their own enthalpy; the evaporating spray enters as
-    // liquid, so the gas supplies its sensible and latent heat (PAPER001_DECISIONS sign)
+    // liquid, so the gas supplies its sensible and latent heat (docs/paper001_decisions.md sign)
     c.res(kH) = c.xd(kH) - (m_in * props::humid_air_enthalpy(c.port(kIn, gas::kT), y_in) -
                             c.x_(kMdot) * props::humid_air_enthalpy(c.x_(kT), c.x_(kY)) +
                             m_ev * props::liquid_water_enthalpy(c.port(kEvap, liquid::kT)) +

@@ -19,8 +19,8 @@ class DropletEvaporation : public UnitBase<DropletEvaporation> {
                  "evaporation coefficient per droplet surface and unit humidity difference", "paper 001, Table 8"});
     s.add_param({"d_drop", "m", def::kDropletDiameter, 1e-6, 1e-3, "droplet diameter", "paper 001, Table 9"});
     s.add_param({"rho_l", "kg/m3", def::kLiquidDensity, 500.0, 2000.0, "liquid density", "paper 001, Table 6"});
-    s.add_param(
-        {"multiplier", "-", 1.0, 0.0, 100.0, "scales Eq. (66) (option; 1 = as published)", "PAPER001_DECISIONS"});
+    s.add_param({"multiplier", "-", 1.0, 0.0, 100.0, "scales Eq. (66) (option; 1 = as published)",
+                 "docs/paper001_decisions.md"});
     s.add_state("m_evap", StateKind::Algebraic, "kg/s", 1e-4);
     s.add_state("m_dep", StateKind::Algebraic, "kg/s", 1e-3);
     s.add_state("T", StateKind::Algebraic, "K", 300.0);
@@ -37,7 +37,7 @@ class DropletEvaporation : public UnitBase<DropletEvaporation> {
     s.add_output("evaporated_fraction", "-");
     s.add_output("reg_evaporation_capped", "-");
   }
-  // Eq. (66) with A = droplet surface produced per second (PAPER001_DECISIONS), Y_eq at the gas temperature;
+  // Eq. (66) with A = droplet surface produced per second (docs/paper001_decisions.md), Y_eq at the gas temperature;
   // returns the uncapped rate.
   template <class T>
   T raw_rate(const Ctx<T>& c) const {

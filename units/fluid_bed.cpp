@@ -77,8 +77,8 @@ class FluidBed : public UnitBase<FluidBed> {
                                      : Aggregation::kNone;
     breakage_ = st.get_choice("breakage", "vogel_peukert", {"vogel_peukert", "none"},
                               "breakage: paper 001 Eqs. (90)-(93), or off") == "vogel_peukert";
-    size_unit_ = p1::breakage_size_unit_from_string(
-        st.get_choice("breakage_size_unit", "um", {"um", "mm"}, "unit of d in Eq. (92) (PAPER001_DECISIONS: um)"));
+    size_unit_ = p1::breakage_size_unit_from_string(st.get_choice(
+        "breakage_size_unit", "um", {"um", "mm"}, "unit of d in Eq. (92) (docs/paper001_decisions.md: um)"));
     per_volume_ = st.get_choice("beta0_basis", "absolute", {"absolute", "per_m3"},
                                 "beta0 for absolute particle numbers (default) or per m^3 of vessel") == "per_m3";
     grid_ = std::make_unique<kernels::Grid>(kernels::Grid::from_diameter_pivots(d));
@@ -86,7 +86,7 @@ class FluidBed : public UnitBase<FluidBed> {
     sj_.resize(n_);
 
     const std::string t7 = "paper 001, Table 7", t6 = "paper 001, Table 6", t9 = "paper 001, Table 9",
-                      t10 = "paper 001, Table 10", t8 = "paper 001, Table 8", dec = "PAPER001_DECISIONS";
+                      t10 = "paper 001, Table 10", t8 = "paper 001, Table 8", dec = "docs/paper001_decisions.md";
     const ParamSpec specs[kNParams] = {
         {"bed_mass", "kg", 15.0, 1e-3, 1e4, "initial wet bed mass", "paper 001, section 3.1.3"},
         {"X0", "kg/kg", 0.03 / 0.97, 0.0, 1.0, "initial moisture, dry basis", dec},
@@ -172,7 +172,7 @@ class FluidBed : public UnitBase<FluidBed> {
     const auto& dp = grid_->diameter_pivots();
     // Aggregation targets of every pair (mass-based fixed pivot): the aggregate of volume x_j + x_k is split
     // between the pivots around it keeping number and mass; beyond the top pivot it stays in the top class
-    // with its mass (PAPER001_DECISIONS), and that mass is tracked.
+    // with its mass (docs/paper001_decisions.md), and that mass is tracked.
     pairs_.clear();
     for (int j = 0; j < n_; ++j)
       for (int k = j; k < n_; ++k) {
@@ -264,7 +264,7 @@ class FluidBed : public UnitBase<FluidBed> {
     if (breakage_) {
       for (int k = 0; k < n_; ++k) {
         // Eq. (92) selection times the fragment mass split: linear in M and W (fragments keep the parent's
-        // moisture, PAPER001_DECISIONS)
+        // moisture, docs/paper001_decisions.md)
         const T sk = c.par(kKBreak) * tb.shape[k];
         for (int cl = 0; cl <= k; ++cl) {
           const T& f = tb.frag[size_t(cl) * n_ + k];
@@ -664,7 +664,7 @@ class FluidBed : public UnitBase<FluidBed> {
     const auto a = kernels::cap_at(p1::water_activity(y, t_s, p), T(0.99));
     g.activity_capped = a.active;
     g.x_eq = p1::bet_equilibrium_moisture(a.value, par[kBetMm], par[kBetN]);  // Eq. (81)
-    const auto ys = p1::saturation_humidity(t_s, p);  // Y_eq at T_S (PAPER001_DECISIONS), capped near boiling
+    const auto ys = p1::saturation_humidity(t_s, p);  // Y_eq at T_S (docs/paper001_decisions.md), capped near boiling
     g.y_sat = ys.value;
     g.saturation_capped = ys.active;
     return g;
@@ -676,7 +676,7 @@ class FluidBed : public UnitBase<FluidBed> {
   bool class_transfer(int i, const T& m, const T& w, const T& particle_mass, const GasSide<T>& g, const T* par, T* dry,
                       T* q) const {
     const T di(grid_->diameter_pivots()[i]);
-    const T area = kernels::class_surface(T(m / particle_mass), di);  // N_i pi d_i^2 (PAPER001_DECISIONS)
+    const T area = kernels::class_surface(T(m / particle_mass), di);  // N_i pi d_i^2 (docs/paper001_decisions.md)
     const T re0 = tr::particle_reynolds_number(g.u0, di, g.nu);       // Eq. (76)
     const T shb = tr::bulk_sherwood(tr::sherwood_single(re0, g.sc), re0, g.sc, g.ratio, par[kShCorr]);  // (74), (75)
     const T j =

@@ -15,11 +15,12 @@ class GasInlet : public UnitBase<GasInlet> {
   void declare(UnitSpec& s, Settings& settings) override {
     normal_basis_ = settings.get_choice("flow_basis", "inlet", {"inlet", "normal"},
                                         "volume flow measured at the inlet temperature and pressure (default, "
-                                        "PAPER001_DECISIONS) or at 0 degC and 1 atm") == "normal";
+                                        "docs/paper001_decisions.md) or at 0 degC and 1 atm") == "normal";
     s.add_param({"V_dot", "m3/s", 700.0 / 3600.0, 0.0, 100.0, "air volume flow", "paper 001, Table 1"});
     s.add_param({"T", "K", 333.15, 250.0, 600.0, "air temperature", "paper 001, Table 1"});
-    s.add_param({"Y", "kg/kg", 0.005, 0.0, 0.5, "absolute humidity, kg water per kg dry air", "PAPER001_DECISIONS"});
-    s.add_param({"p", "Pa", props::kPressureAtm, 5e4, 5e5, "pressure", "PAPER001_DECISIONS"});
+    s.add_param(
+        {"Y", "kg/kg", 0.005, 0.0, 0.5, "absolute humidity, kg water per kg dry air", "docs/paper001_decisions.md"});
+    s.add_param({"p", "Pa", props::kPressureAtm, 5e4, 5e5, "pressure", "docs/paper001_decisions.md"});
     s.add_state("mdot", StateKind::Algebraic, "kg/s", 0.2);
     s.add_state("Y", StateKind::Algebraic, "kg/kg", 0.01);
     s.add_state("T", StateKind::Algebraic, "K", 300.0);
@@ -32,7 +33,8 @@ class GasInlet : public UnitBase<GasInlet> {
     s.add_output("balance_water_in", "kg");
     s.add_output("balance_energy_in", "J");
   }
-  // Dry-air mass flow of the volume flow V_dot on the chosen basis (PAPER001_DECISIONS: inlet state by default).
+  // Dry-air mass flow of the volume flow V_dot on the chosen basis (docs/paper001_decisions.md: inlet state by
+  // default).
   template <class T>
   T dry_mass_flow(const T* p) const {
     const T t_basis = normal_basis_ ? T(props::kT0) : p[kT];

@@ -201,12 +201,13 @@ void PbmBatch::declare(UnitSpec& s, Settings& st) {
       {"rho", "kg/m3", 1000.0, 1e-3, 1e5, "particle density (mass <-> volume)", "material property (user)"});
   p_init_ = static_cast<int>(s.params().size());
   if (initial_ == Initial::kExponential) {
-    s.add_param({"N0", "-", 1.0, 0.0, 1e30, "initial particle number", "VERIFY.md"});
-    s.add_param({"v0", "m3", 1.0, 1e-30, 1e6, "initial mean particle volume", "VERIFY.md"});
+    s.add_param({"N0", "-", 1.0, 0.0, 1e30, "initial particle number", "docs/verification.md"});
+    s.add_param({"v0", "m3", 1.0, 1e-30, 1e6, "initial mean particle volume", "docs/verification.md"});
   } else {
     s.add_param({"mass0", "kg", 1.0, 0.0, 1e6, "initial particle mass", "initial state (user)"});
-    s.add_param({"d50_3", "m", 200e-6, 1e-9, 1.0, "initial mass median diameter", "PAPER001_DECISIONS"});
-    s.add_param({"sigma_g", "-", 1.5, 1.0001, 10.0, "initial geometric standard deviation", "PAPER001_DECISIONS"});
+    s.add_param({"d50_3", "m", 200e-6, 1e-9, 1.0, "initial mass median diameter", "docs/paper001_decisions.md"});
+    s.add_param(
+        {"sigma_g", "-", 1.5, 1.0001, 10.0, "initial geometric standard deviation", "docs/paper001_decisions.md"});
   }
 
   const std::string agg = st.get_choice("aggregation", kNone, with_none(reg.aggregation.names()), "aggregation kernel");

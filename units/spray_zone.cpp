@@ -45,13 +45,13 @@ class SprayZone : public UnitBase<SprayZone> {
     sj_.resize(n_);
     split_ = p1::liquid_split_from_string(settings.get_choice(
         "liquid_split", "class_surface", {"class_surface", "literal"},
-        "Eq. (44) weights: N_i tau_i d_i^2 (default, PAPER001_DECISIONS) or tau_i d_i^2 as printed"));
+        "Eq. (44) weights: N_i tau_i d_i^2 (default, docs/paper001_decisions.md) or tau_i d_i^2 as printed"));
     s.add_param({"tau_c1", "-", def::kTauC1, -1.0, 1.0, "Eq. (29) slope on Re", "paper 001, Table 8"});
     s.add_param({"tau_c2", "-", def::kTauC2, 0.0, 1.0, "Eq. (29) intercept", "paper 001, Table 8"});
     s.add_param({"ws_c1", "-", def::kWsC1, -1.0, 1.0, "Eq. (47) Re^2 coefficient", "paper 001, Table 9"});
     s.add_param({"ws_c2", "-", def::kWsC2, -1.0, 1.0, "Eq. (47) Re coefficient", "paper 001, Table 9"});
     s.add_param({"ws_c3", "-", def::kWsC3, 0.0, 1.0, "Eq. (47) intercept", "paper 001, Table 9"});
-    s.add_param({"ws_floor", "-", def::kWsFloor, 1e-6, 1.0, "floor of Eq. (47)", "PAPER001_DECISIONS"});
+    s.add_param({"ws_floor", "-", def::kWsFloor, 1e-6, 1.0, "floor of Eq. (47)", "docs/paper001_decisions.md"});
     s.add_param({"v_c1", "m/s", def::kVelocityC1, -1.0, 1.0, "Eq. (49) Re coefficient", "paper 001, Table 9"});
     s.add_param({"v_c2", "m/s", def::kVelocityC2, 1e-4, 10.0, "Eq. (49) intercept", "paper 001, Table 9"});
     s.add_param(
@@ -60,7 +60,7 @@ class SprayZone : public UnitBase<SprayZone> {
     s.add_param(
         {"rho_drop", "kg/m3", def::kDropletDensity, 100.0, 3000.0, "droplet density, Eq. (42)", "paper 001, Table 9"});
     s.add_param({"rho_p", "kg/m3", def::kParticleDensity, 100.0, 5000.0, "particle density in Eqs. (33), (42)",
-                 "paper 001, Table 9; PAPER001_DECISIONS"});
+                 "paper 001, Table 9; docs/paper001_decisions.md"});
     s.add_param({"rho_env", "kg/m3", def::kEnvelopeDensity, 100.0, 5000.0, "envelope density for size <-> mass",
                  "paper 001, Table 6-7: 1545 (1 - 0.3)"});
     s.add_param(

@@ -16,7 +16,7 @@ class WallHeatLoss : public UnitBase<WallHeatLoss> {
     s.add_param({"k_wall", "W/(m2 K)", def::kWallHeatTransfer, 0.0, 1e3, "wall heat-transfer coefficient",
                  "paper 001, Table 8"});
     s.add_param({"A_wall", "m2", def::kWallArea, 0.0, 1e3, "wall surface", "paper 001, Table 6"});
-    s.add_param({"T_env", "K", 293.15, 200.0, 400.0, "environment temperature", "PAPER001_DECISIONS"});
+    s.add_param({"T_env", "K", 293.15, 200.0, 400.0, "environment temperature", "docs/paper001_decisions.md"});
     s.add_state("Q", StateKind::Algebraic, "W", 1e3);
     s.add_state("energy_lost", StateKind::Differential, "J", 1e6);
     const int p = s.add_port("in", StreamKind::Heat, PortDir::In);

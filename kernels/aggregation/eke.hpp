@@ -1,6 +1,6 @@
 // EKE kernel of paper 001, Eq. (37): the collision frequency in the spray zone
 //     beta_ij = beta0 (d_i + d_j)^2 sqrt(1/d_i^3 + 1/d_j^3) tau_spray,   beta0 = exp(ln_beta0),
-// with d in m and absolute particle numbers (PAPER001_DECISIONS). The formula is
+// with d in m and absolute particle numbers (docs/paper001_decisions.md). The formula is
 // kernels/wetting/paper001_spray_zone.hpp's collision_frequency(); this wraps it as a registered kernel.
 #pragma once
 #include "aggregation/aggregation_kernel.hpp"

@@ -1,5 +1,5 @@
 // Product kernel beta = beta0 u v / v_ref^2 (gels at finite time; analytic moments before gelation in
-// VERIFY.md). beta0 = v_ref = 1 is beta = u v.
+// docs/verification.md). beta0 = v_ref = 1 is beta = u v.
 #pragma once
 #include "aggregation/aggregation_kernel.hpp"
 #include "granuflow/registry.hpp"

@@ -1,5 +1,5 @@
-// Sum kernel beta = beta0 (u + v) / v_ref (Golovin 1963; analytic solution in VERIFY.md). The reference volume
-// keeps beta0 in 1/s; beta0 = v_ref = 1 is Golovin's beta = u + v.
+// Sum kernel beta = beta0 (u + v) / v_ref (Golovin 1963; analytic solution in docs/verification.md). The reference
+// volume keeps beta0 in 1/s; beta0 = v_ref = 1 is Golovin's beta = u + v.
 #pragma once
 #include "aggregation/aggregation_kernel.hpp"
 #include "granuflow/registry.hpp"

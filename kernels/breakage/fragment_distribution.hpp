@@ -2,7 +2,7 @@
 //     B(v|u) = (volume of the fragments of volume <= v) / u,   0 <= v <= u,
 // so that b(v|u) = (u / v) dB/dv is the number density of fragments (paper 001, Eq. (26): b from b_cum).
 // The discretization divides by B(u|u), so a law need not be normalized at the parent ("renormalized to 1 at
-// the parent", PAPER001_DECISIONS), and mass is conserved to round-off whatever B is.
+// the parent", docs/paper001_decisions.md), and mass is conserved to round-off whatever B is.
 //
 // Derive from FragmentLaw<Derived> and write once
 //     template <class T> T cumulative_t(double v, double u, const T* p) const;     // B(v|u)

@@ -3,7 +3,7 @@
 //
 // Templates on the scalar type T (double or ceres::Jet). Arguments in SI (diameters in m, energies in J/kg);
 // Eq. (92) is a dimensional fit whose diameter unit the paper does not state: micrometres by default
-// (PAPER001_DECISIONS), millimetres as an option; the conversion happens inside breakage_rate().
+// (docs/paper001_decisions.md), millimetres as an option; the conversion happens inside breakage_rate().
 #pragma once
 #include <cmath>
 #include <string>
@@ -60,7 +60,7 @@ T fragment_cutoff(const T& d, const T& d_min) {
 }
 
 // Eq. (93), paper 001: cumulative distribution of fragments of size <= d_fragment from a parent of size
-// d_parent. Read as PAPER001_DECISIONS fixes it: power law in d_fragment / d_parent, tanh cut-off on the
+// d_parent. Read as docs/paper001_decisions.md fixes it: power law in d_fragment / d_parent, tanh cut-off on the
 // fragment size, divided by the cut-off at the parent so that b_cum(d_parent, d_parent) = 1. Only ratios enter,
 // so the size unit does not matter.
 template <class T>

@@ -1,5 +1,5 @@
 // Power-law selection rate S(v) = S0 (v / v_ref)^a; a = 1 is the linear rate of Ziff & McGrady's analytic
-// solution (VERIFY.md: S(v) = v with S0 = v_ref = 1).
+// solution (docs/verification.md: S(v) = v with S0 = v_ref = 1).
 #pragma once
 #include <cmath>
 

@@ -1,6 +1,6 @@
 // Vogel-Peukert selection rate of paper 001, Eq. (92) (Eqs. (90)-(91) combined):
 //     K_break(d) = k' (1 - exp(-f_Mat E_m,min d (d / d_min,break - 1))),  0 below d_min,break,
-// with d in the fit's size unit (setting <prefix>size_unit: um by default, mm; PAPER001_DECISIONS). The formula
+// with d in the fit's size unit (setting <prefix>size_unit: um by default, mm; docs/paper001_decisions.md). The formula
 // is kernels/breakage/paper001_breakage_laws.hpp's breakage_rate(); this wraps it as a registered kernel.
 #pragma once
 #include "breakage/paper001_breakage_laws.hpp"

@@ -2,7 +2,7 @@
 // the class numbers N into rates dN/dt on a Grid, conserving in the discrete equations
 //     number:  sum_i dN_i/dt + d(number_above)/dt = -1/2 sum_{j,k} beta_jk N_j N_k   (one particle per event)
 //     volume:  sum_i x_i dN_i/dt + d(volume_above)/dt = 0
-// (paper 001, Eqs. (21), (24); VERIFY.md "Conservation"). Two schemes are registered: fixed_pivot
+// (paper 001, Eqs. (21), (24); docs/verification.md "Conservation"). Two schemes are registered: fixed_pivot
 // (Kumar & Ramkrishna 1996) and cell_average (Kumar et al. 2006).
 //
 // Contract: rates are added to out[0, n + kOutsideRows) (redistribution.hpp); the Jacobian d out / dN is added

@@ -33,7 +33,7 @@ void exponential_cells(const Grid& g, const T& n0, const T& v0, T* number, T* vo
   }
 }
 
-// Log-normal distribution in mass over the diameter (paper 001's initial PSD, PAPER001_DECISIONS): total
+// Log-normal distribution in mass over the diameter (paper 001's initial PSD, docs/paper001_decisions.md): total
 // particle volume v_total (m^3), mass median diameter d50_3 (m), geometric standard deviation sigma_g (-).
 // The number distribution is then log-normal with median d50_3 exp(-3 ln^2 sigma_g) (Hatch-Choate).
 template <class T>

@@ -11,7 +11,7 @@
 
 namespace granuflow::kernels::paper001 {
 
-// Eq. (81), paper 001: BET isotherm, m_m in kg/kg dry basis at all temperatures (PAPER001_DECISIONS).
+// Eq. (81), paper 001: BET isotherm, m_m in kg/kg dry basis at all temperatures (docs/paper001_decisions.md).
 // Singular at a = 1: a gas saturated at the solids temperature has no finite equilibrium moisture, so a unit
 // that can reach it caps a first (cap_at in limited.hpp) and counts it.
 template <class T>
@@ -20,13 +20,13 @@ T bet_equilibrium_moisture(const T& a, const T& m_m = T(defaults::kBetMonolayer)
 }
 
 // Eqs. (82)-(83), paper 001: a = y P / p_sat(T_S), y the vapour mole fraction of the bulk gas and p_sat at the
-// solids temperature (PAPER001_DECISIONS).
+// solids temperature (docs/paper001_decisions.md).
 template <class T>
 T water_activity(const T& y_abs_bulk, const T& t_solid, const T& p) {
   return props::relative_humidity(y_abs_bulk, t_solid, p);
 }
 
-// Eq. (80), paper 001, regularized (PAPER001_DECISIONS): the denominator X_cr - X_eq is floored (the literal
+// Eq. (80), paper 001, regularized (docs/paper001_decisions.md): the denominator X_cr - X_eq is floored (the literal
 // eta flips sign and diverges when a humid gas lifts X_eq to X_cr) and eta >= eta_min limits re-adsorption
 // when X < X_eq. `active` reports either.
 template <class T>
@@ -54,27 +54,27 @@ T linear_drying_curve(const T& eta) {
 }
 
 // Eq. (72), paper 001: kg/(m^2 s). With Y per kg dry air, rho_g is best the dry-air partial density
-// (props::dry_air_partial_density); Y_eq at the solids temperature (PAPER001_DECISIONS).
+// (props::dry_air_partial_density); Y_eq at the solids temperature (docs/paper001_decisions.md).
 template <class T>
 T drying_mass_flux(const T& rho_g, const T& k_drying, const T& y_eq, const T& y_bulk) {
   return rho_g * k_drying * (y_eq - y_bulk);
 }
 
-// Eq. (70), paper 001: kg/s from a class of total surface `area` (N_i pi d_i^2, PAPER001_DECISIONS).
+// Eq. (70), paper 001: kg/s from a class of total surface `area` (N_i pi d_i^2, docs/paper001_decisions.md).
 template <class T>
 T drying_rate(const T& nu, const T& area, const T& j) {
   return nu * area * j;
 }
 
 // Droplet surface produced per second by spraying `m_liquid` kg/s as droplets of diameter d_d: m^2/s, the A_drop
-// of Eq. (66) (PAPER001_DECISIONS).
+// of Eq. (66) (docs/paper001_decisions.md).
 template <class T>
 T droplet_surface_rate(const T& m_liquid, const T& rho_l, const T& d_d) {
   return 6.0 * m_liquid / (rho_l * d_d);
 }
 
 // Eq. (66), paper 001: kg/s; k_evap in kg/m^2 per unit Delta Y because A_drop is m^2/s; Y_eq at the gas
-// temperature (PAPER001_DECISIONS).
+// temperature (docs/paper001_decisions.md).
 template <class T>
 T droplet_evaporation_rate(const T& k_evap, const T& a_drop, const T& y_eq, const T& y_bulk) {
   return k_evap * a_drop * (y_eq - y_bulk);
@@ -88,7 +88,7 @@ T deposition_enthalpy_flow(const T& m_deposition, const T& t_spray, const T& cp_
 
 // Common form of Eqs. (67) and (71), paper 001: W needed to turn m kg/s of liquid at t_liquid into vapour at
 // t_gas. With cp_i = cp_vapour and the latent heat taken at t_liquid this equals m (h_vapour(t_gas) -
-// h_liquid(t_liquid)) exactly, so the balances close. It is drawn from the gas (PAPER001_DECISIONS on the sign
+// h_liquid(t_liquid)) exactly, so the balances close. It is drawn from the gas (docs/paper001_decisions.md on the sign
 // of Eqs. (62), (67)).
 template <class T>
 T phase_change_enthalpy_flow(const T& m, const T& t_gas, const T& t_liquid, const T& cp_v = T(props::kCpVapour),

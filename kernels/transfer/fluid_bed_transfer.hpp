@@ -5,7 +5,7 @@
 //
 // Templates on the scalar type T (double or ceres::Jet); SI units; all dimensionless groups use diameters in m.
 // In Eqs. (74) and (87) the paper writes A_i/A_inlet in one place and A_p/A_inlet in the other; both are the
-// total particle surface of the bed over the distributor cross-section (PAPER001_DECISIONS), see
+// total particle surface of the bed over the distributor cross-section (docs/paper001_decisions.md), see
 // bed_area_ratio().
 #pragma once
 #include <cmath>

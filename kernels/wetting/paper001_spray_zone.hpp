@@ -5,7 +5,7 @@
 //
 // Templates on the scalar type T (double or ceres::Jet); SI units (diameters in m, temperatures in K).
 // The Reynolds number of the surrogates is Eq. (30) (transfer::excess_reynolds_number). Closures that may
-// leave the printed equation (a floor or a cap from PAPER001_DECISIONS) return Limited<T> so units count it.
+// leave the printed equation (a floor or a cap from docs/paper001_decisions.md) return Limited<T> so units count it.
 #pragma once
 #include <cmath>
 #include <cstddef>
@@ -38,7 +38,7 @@ void normalize_residence_times(const T* tau, std::size_t n, T* tau_norm) {
 
 // How Eqs. (35), (44), (64) weight the classes. The printed weight tau_i d_i^2 is per particle, so a class
 // with few particles would get as much liquid as a full one; kClassSurface multiplies by the class particle
-// count N_i (class surface x residence), the default of PAPER001_DECISIONS.
+// count N_i (class surface x residence), the default of docs/paper001_decisions.md.
 enum class LiquidSplit { kClassSurface, kLiteral };
 
 inline std::string to_string(LiquidSplit s) { return s == LiquidSplit::kClassSurface ? "class_surface" : "literal"; }
@@ -64,7 +64,7 @@ void distribute_liquid(const T* tau, const T* d, const T* number, std::size_t n,
 }
 
 // Eq. (47), paper 001: solids mass fraction of a class inside the spray zone (Table 9). The fit turns negative
-// at Re ~ 32, so it is floored (PAPER001_DECISIONS; the floor is a parameter).
+// at Re ~ 32, so it is floored (docs/paper001_decisions.md; the floor is a parameter).
 template <class T>
 Limited<T> spray_zone_solids_fraction(const T& re, const T& floor = T(defaults::kWsFloor),
                                       const T& c1 = T(defaults::kWsC1), const T& c2 = T(defaults::kWsC2),
@@ -92,7 +92,7 @@ T spray_zone_holdup(const T& w_s, const T& m_bed_class) {
 }
 
 // Eq. (45), paper 001: solids mass flow of a class through the spray zone, kg/s (hold-up over crossing time,
-// PAPER001_DECISIONS; the paper prints the same symbol on both sides).
+// docs/paper001_decisions.md; the paper prints the same symbol on both sides).
 template <class T>
 T spray_zone_solids_flow(const T& m_holdup, const T& t_spray) {
   return m_holdup / t_spray;
@@ -107,7 +107,7 @@ T moisture_loading(const T& m_deposition, const T& m_solids_flow) {
 }
 
 // Eq. (42), paper 001, with A_contact from Eq. (50) and A_p from Eq. (51): Kariuki coating number.
-// rho_env is the 900 kg/m^3 of Table 9 (PAPER001_DECISIONS), not the 1081.5 used for size <-> mass.
+// rho_env is the 900 kg/m^3 of Table 9 (docs/paper001_decisions.md), not the 1081.5 used for size <-> mass.
 template <class T>
 T coating_number(const T& x_ls, const T& d, const T& d_d, const T& rho_env = T(defaults::kParticleDensity),
                  const T& rho_d = T(defaults::kDropletDensity)) {
@@ -134,7 +134,7 @@ T geometric_success_factor(const T& f_wet_i, const T& f_wet_j) {
 }
 
 // Eq. (57), paper 001, as the fraction V_wet / V_particle that Eq. (56) needs: a cylinder of depth h_pen under
-// the wetted surface. Capped at `cap` (1: the whole particle, PAPER001_DECISIONS) because h_pen A f_wet exceeds
+// the wetted surface. Capped at `cap` (1: the whole particle, docs/paper001_decisions.md) because h_pen A f_wet exceeds
 // the particle volume for d < 6 h_pen f_wet.
 template <class T>
 Limited<T> wetted_volume_fraction(const T& f_wet, const T& d, const T& h_pen = T(defaults::kPenetrationDepth),
@@ -164,7 +164,7 @@ T wet_spot_moisture(const T& m_deposition, const T& m_exposed, const T& x0) {
 // --- glass transition and stickiness ---
 
 // Liquid mass fraction x = X / (1 + X) of a solid with moisture X (kg/kg dry), the x_l of Eq. (54)
-// (PAPER001_DECISIONS).
+// (docs/paper001_decisions.md).
 template <class T>
 T liquid_mass_fraction(const T& x_dry_basis) {
   return x_dry_basis / (1.0 + x_dry_basis);
@@ -196,7 +196,7 @@ T physical_success_factor(const T& p_sticky_i, const T& p_sticky_j) {
 // --- agglomeration kernel ---
 
 // Eq. (37), paper 001: EKE collision frequency in the spray zone, 1/s per pair with beta0 = exp(ln_beta0),
-// d in m and absolute particle numbers (PAPER001_DECISIONS); calibration moves ln_beta0 (Table 9: -17.24).
+// d in m and absolute particle numbers (docs/paper001_decisions.md); calibration moves ln_beta0 (Table 9: -17.24).
 template <class T>
 T collision_frequency(const T& d_i, const T& d_j, const T& ln_beta0 = T(defaults::kLnBeta0),
                       const T& tau_spray = T(defaults::kTauSpray)) {

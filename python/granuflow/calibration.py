@@ -92,7 +92,7 @@ TABLE5_SIGMA: dict[str, dict[str, float]] = {
     **{d: {"rel": 0.07} for d in ("bed.d5", "bed.d10", "bed.d16", "bed.d25", "bed.d50")},
     "bed.d75": {"rel": 0.08}, "bed.d84": {"rel": 0.09}, "bed.d90": {"rel": 0.10}, "bed.d95": {"rel": 0.11},
 }
-# Paper 001, Table 1 levels (upper inlet temperature 80 degC as in Fig. 11, see PAPER001_DECISIONS.md).
+# Paper 001, Table 1 levels (upper inlet temperature 80 degC as in Fig. 11, see docs/paper001_decisions.md).
 TABLE1_LEVELS = {"inlet.V_dot": ("m3/h", (600.0, 700.0, 800.0)), "inlet.T": ("degC", (40.0, 60.0, 80.0)),
                  "nozzle.mdot": ("g/min", (60.0, 90.0, 120.0))}
 # Display units of the observables in files, tables and plots.

@@ -124,7 +124,7 @@ class Result:
 
     @property
     def summary(self) -> dict:
-        """The fields of summary.json (DESIGN.md contract); null where the scene has no such quantity."""
+        """The fields of summary.json (docs/design.md contract); null where the scene has no such quantity."""
         s = {"scene": self.scene_name, "t_end_s": float(self.t[-1])}
         for key in _STANDARD_KEYS:
             s[key] = None
@@ -133,7 +133,7 @@ class Result:
             s[key] = _finite(v * 1e6 if key.endswith("_um") else v)
         s["balance"] = self.balance_closure()
         # Where a model left the paper's literal equations (floors, caps, regularizations): the largest count of
-        # classes or instances affected at any output time, per unit (PAPER001_DECISIONS asks for this).
+        # classes or instances affected at any output time, per unit (docs/paper001_decisions.md asks for this).
         s["regularizations"] = {n: _finite(np.max(self.outputs[:, j])) for j, n in enumerate(self.output_names)
                                 if ".reg_" in n}
         s["wall_time_s"] = self.wall_time_s

@@ -1,4 +1,4 @@
-// Work-precision of granuflow's population-balance schemes against the analytic solutions of VERIFY.md
+// Work-precision of granuflow's population-balance schemes against the analytic solutions of docs/verification.md
 // (N0 = v0 = 1, n(v, 0) = exp(-v)), through the full framework (Flowsheet + pbm_batch + simulate() on IDAS).
 //
 //   granuflow_bench_pbm [--json] [--repeats R] [--quick] [--case constant|sum|product|growth|breakage]

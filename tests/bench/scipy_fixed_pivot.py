@@ -130,7 +130,7 @@ def growth_rhs(e, x, x_hi, G=1.0):
     return rhs, 3
 
 
-# ------------------------------------------------------------------ analytic references (VERIFY.md)
+# ------------------------------------------------------------------ analytic references (docs/verification.md)
 def gl_cells(f, lo, hi, panels=16):
     xg, wg = np.polynomial.legendre.leggauss(8)
     out = np.zeros(len(lo))

@@ -3,7 +3,7 @@
 batch agglomeration of maltodextrin in the Glatt GF25 fluid bed (paper 001, Stoeckl, Bellinghausen, Heinrich),
 one ODE system y' = f(t, y) in NumPy integrated by scipy.integrate.solve_ivp (BDF, SciPy's finite-difference
 Jacobian, rtol 1e-6, atol 1e-6 x the state scales granuflow declares). Same equations and defaults as the
-granuflow units (units/*.cpp, kernels/*, PAPER001_DECISIONS.md); everything granuflow holds as an algebraic
+granuflow units (units/*.cpp, kernels/*, docs/paper001_decisions.md); everything granuflow holds as an algebraic
 state (bed temperature, u0, spray zone, droplet evaporation, gas T and Y, heat and vapour flows) is computed
 explicitly inside f. The speed and cross-check reference of `granuflow bench scene`.
 

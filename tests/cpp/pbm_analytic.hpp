@@ -1,5 +1,5 @@
-// Analytic solutions of the population balance (VERIFY.md), with N0 = v0 = 1 and n(v, 0) = exp(-v), and their
-// integrals over grid cells, shared by the PBM tests and tests/bench/.
+// Analytic solutions of the population balance (docs/verification.md), with N0 = v0 = 1 and n(v, 0) = exp(-v), and
+// their integrals over grid cells, shared by the PBM tests and tests/bench/.
 #pragma once
 #include <cmath>
 #include <functional>

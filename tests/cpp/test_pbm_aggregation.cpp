@@ -1,4 +1,4 @@
-// Aggregation on the grid against the analytic solutions of VERIFY.md (N0 = v0 = 1, n(v, 0) = exp(-v)):
+// Aggregation on the grid against the analytic solutions of docs/verification.md (N0 = v0 = 1, n(v, 0) = exp(-v)):
 // constant (Scott), sum (Golovin) and product kernels; discrete conservation of number change and volume to
 // round-off; observed convergence order of the fixed pivot under grid refinement.
 #include <gtest/gtest.h>

@@ -70,7 +70,7 @@ TEST(PbmBreakage, BinaryBreakageMatchesZiffMcGrady) {
 
 TEST(PbmBreakage, PaperOneLawsConserveMassWithFinesFolded) {
   // Paper 001: Vogel-Peukert rate (Eq. (92)) and tanh power-law fragments (Eq. (93)); fines below the first
-  // class stay in it with their mass (PAPER001_DECISIONS).
+  // class stay in it with their mass (docs/paper001_decisions.md).
   pbm_test::Strings s{{"grid", "log_diameter"},        {"classes", "10"},   {"breakage", "vogel_peukert"},
                       {"fragments", "tanh_power_law"}, {"outside", "fold"}, {"initial", "lognormal_mass"}};
   auto fs = pbm_test::flowsheet(s, {{"rho", 1081.5}, {"mass0", 15.0}, {"d50_3", 400e-6}, {"sel_k_break", 1e-2}});

@@ -1,5 +1,5 @@
 // Growth (layering) on the size grid: size-independent growth shifts the distribution in diameter without
-// changing its shape (VERIFY.md), the limited scheme converges and keeps N >= 0, and the volume-normalized
+// changing its shape (docs/verification.md), the limited scheme converges and keeps N >= 0, and the volume-normalized
 // laws of paper 003 (Eqs. (7.33), (7.35)-(7.36)) deliver exactly the sprayed solids to the particles.
 #include <gtest/gtest.h>
 

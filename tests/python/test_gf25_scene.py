@@ -1,6 +1,6 @@
 """The headline scene (paper 001, GF25 batch agglomeration of maltodextrin) through the Python API and the CLI,
 and the published trends over the Table-1 design. Nothing here is tuned: the scene's defaults are the paper's
-values and PAPER001_DECISIONS.md; a trend that did not hold would be reported, not forced."""
+values and docs/paper001_decisions.md; a trend that did not hold would be reported, not forced."""
 import math
 import os
 

@@ -4,7 +4,7 @@
 // forward AD; property parameters that calibration might move (Antoine coefficients, heat capacities) are T
 // arguments with defaults, true physical constants are plain doubles. SI inside: K, Pa, kg, m, s, J.
 // Enthalpy reference: liquid water and dry air at T0 = 273.15 K (0 degC) have zero enthalpy; vapour at T0 has
-// the latent heat kLatentHeat0 (PAPER001_DECISIONS "missing gas properties").
+// the latent heat kLatentHeat0 (docs/paper001_decisions.md "missing gas properties").
 // Humidity Y is kg water vapour per kg dry air throughout.
 #pragma once
 #include <cmath>
@@ -15,13 +15,13 @@ namespace granuflow::props {
 inline constexpr double kT0 = 273.15;                  // K, enthalpy reference and degC offset
 inline constexpr double kGasConstant = 8.314462618;    // J/(mol K) [CODATA 2018]
 inline constexpr double kGravity = 9.80665;            // m/s^2 [standard gravity]
-inline constexpr double kPressureAtm = 101325.0;       // Pa, operating pressure [PAPER001_DECISIONS]
+inline constexpr double kPressureAtm = 101325.0;       // Pa, operating pressure [docs/paper001_decisions.md]
 inline constexpr double kMolarMassWater = 0.01801528;  // kg/mol
 inline constexpr double kMolarMassAir = 0.0289647;     // kg/mol, dry air
-inline constexpr double kCpAir = 1006.0;               // J/(kg K), dry air [PAPER001_DECISIONS]
-inline constexpr double kCpVapour = 1870.0;            // J/(kg K), water vapour [PAPER001_DECISIONS]
-inline constexpr double kCpWater = 4180.0;             // J/(kg K), liquid water [PAPER001_DECISIONS, Table 6]
-inline constexpr double kLatentHeat0 = 2.501e6;        // J/kg, evaporation of water at T0 [PAPER001_DECISIONS]
+inline constexpr double kCpAir = 1006.0;               // J/(kg K), dry air [docs/paper001_decisions.md]
+inline constexpr double kCpVapour = 1870.0;            // J/(kg K), water vapour [docs/paper001_decisions.md]
+inline constexpr double kCpWater = 4180.0;             // J/(kg K), liquid water [docs/paper001_decisions.md, Table 6]
+inline constexpr double kLatentHeat0 = 2.501e6;        // J/kg, evaporation of water at T0 [docs/paper001_decisions.md]
 inline constexpr double kAntoineA = 16.262;            // -, ln(p/kPa) form [paper 001, Table 8]
 inline constexpr double kAntoineB = 3800.0;            // degC (K difference) [paper 001, Table 8]
 inline constexpr double kAntoineC = 226.3;             // degC [paper 001, Table 8]
@@ -91,7 +91,7 @@ T equilibrium_humidity(const T& temp, const T& p) {
 }
 
 // Eq. (82), paper 001: relative humidity = water activity of a solid in equilibrium with the gas, evaluated
-// with p_sat at `temp` (the solids temperature in the drying model, PAPER001_DECISIONS).
+// with p_sat at `temp` (the solids temperature in the drying model, docs/paper001_decisions.md).
 template <class T>
 T relative_humidity(const T& y_abs, const T& temp, const T& p) {
   return vapour_partial_pressure(y_abs, p) / saturation_pressure(temp);
