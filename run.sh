@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # granuflow's two entry points for a fresh Debian 12 / Ubuntu machine (see README.md):
 #   ./run.sh main   install what is missing (apt-get), build (CMake, Release), run the main job into out/main
-#   ./run.sh test   same setup, then every test: GoogleTest (ctest), pytest, notebooks
-# Also: ./run.sh setup | build | bench
+#   ./run.sh test   same setup, then lint (clang-format-14, flake8) and every test: GoogleTest (ctest), pytest,
+#                   notebooks
+# Also: ./run.sh setup | build | lint | bench
 set -euo pipefail
 cd "$(dirname "$0")"
 
@@ -11,7 +12,7 @@ PACKAGES=(cmake ninja-build g++ pkg-config
   libyaml-cpp-dev nlohmann-json3-dev
   python3-dev python3-numpy python3-scipy python3-matplotlib python3-pandas python3-yaml python3-pytest
   python3-nbclient python3-nbformat python3-ipykernel jupyter-nbconvert python3-distributed python3-tqdm
-  python3-nlopt)
+  python3-nlopt clang-format-14 flake8)
 MAIN_SCENE=flowsheets/stoeckl_gf25_batch.yaml
 
 setup() {
@@ -34,7 +35,16 @@ build() {
   cmake --build build -j "$(nproc)"
 }
 
+# Formatting and lint with Debian's tools: every C++ file against the committed .clang-format, and flake8 (config in
+# .flake8) over the Python package and the tests.
+lint() {
+  git ls-files -z '*.cpp' '*.hpp' '*.h' '*.cc' | xargs -0 clang-format-14 --dry-run --Werror
+  flake8 python/ tests/
+  echo "lint: clang-format-14 and flake8 clean"
+}
+
 run_tests() {
+  lint
   (cd build && ctest --output-on-failure -j "$(nproc)" -L fast)
   PYTHONPATH="$PWD/build/python" /usr/bin/python3 -m pytest -q tests/python
 }
@@ -42,8 +52,9 @@ run_tests() {
 case "${1:-}" in
   setup) setup ;;
   build) setup && build ;;
+  lint) setup && lint ;;
   main) setup && build && ./build/granuflow run "$MAIN_SCENE" --out out/main ;;
   test) setup && build && run_tests ;;
   bench) setup && build && ./build/granuflow bench core && ./build/granuflow bench pbm ;;
-  *) echo "usage: ./run.sh main|test|setup|build|bench" >&2; exit 2 ;;
+  *) echo "usage: ./run.sh main|test|setup|build|lint|bench" >&2; exit 2 ;;
 esac

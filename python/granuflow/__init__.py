@@ -6,14 +6,21 @@ Typical use::
     fs = gf.load("flowsheets/demo_tanks.yaml")
     fs.set("tank1.Q", "25 kW")
     res = fs.simulate()
-    res.timeseries          # pandas DataFrame
+    res.timeseries          # pandas DataFrame (SI; units in .attrs["units"])
     res.summary             # the fields of summary.json
+    gf.unit_reference("fluid_bed")   # ports, settings, parameters, outputs of a unit type
+
+Layers (no module imports one above it; tests/python/test_package_layers.py checks it):
+``_core`` (C++) < ``quantity``, ``outputs``, ``progress`` < ``result``, ``flowsheet``, ``kernels``, ``reference``
+< ``plots`` < ``sweep`` < ``design_space``, ``calibration`` < ``bench`` < ``cli``.
 """
-from ._core import CalibrationError, ConfigError, SolverError, unit_types
+from ._core import CalibrationError, ConfigError, SolverError
 from .flowsheet import Flowsheet, load, load_text
 from .kernels import aggregation_kernels, register_kernel
+from .reference import kernel_reference, unit_reference, unit_types
 from .result import Result
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"
 __all__ = ["load", "load_text", "Flowsheet", "Result", "ConfigError", "SolverError", "CalibrationError",
-           "unit_types", "register_kernel", "aggregation_kernels", "__version__"]
+           "unit_types", "unit_reference", "kernel_reference", "register_kernel", "aggregation_kernels",
+           "__version__"]

@@ -55,14 +55,18 @@ def tank_chain_text(n_tanks: int) -> str:
     return "\n".join(lines) + "\n"
 
 
-def bench_core(repeats: int) -> list[dict]:
-    from . import load, load_text
+def bench_core(repeats: int, quick: bool = False, progress: bool = False) -> list[dict]:
+    """Residual and Jacobian cost per state on tank chains of about 100, 1000 and 10000 states (``quick``: 100 and
+    1000), and the wall time of the demo flowsheet."""
+    from .flowsheet import load, load_text
 
     records = []
-    for target in (100, 1000, 10000):
+    for target in (100, 1000) if quick else (100, 1000, 10000):
+        if progress:
+            print(f"core: tank chain of about {target} states", file=sys.stderr, flush=True)
         n_tanks = max(1, (target - 9) // 4)
         fs = load_text(tank_chain_text(n_tanks), f"tank_chain_{n_tanks}")
-        t = fs._scene.time_residual(repeats)
+        t = fs.time_residual(repeats)
         records.append({"bench": "residual", "states": t["states"], "units": n_tanks + 2,
                         "residual_ns_per_state": t["residual_s"] / t["states"] * 1e9,
                         "jacobian_over_residual": t["jacobian_s"] / t["residual_s"],
@@ -121,7 +125,7 @@ def bench_scene(repeats: int, classes=(10, 20, 40), scipy: bool = True, scipy_re
     """Wall time of the 60-min headline scene (median of ``repeats``), solver statistics and results, per class
     count with and without breakage; with ``scipy``, the SciPy implementation on the same variant right after
     it (median of ``scipy_repeats``), its results and the speed ratio measured in this run."""
-    from . import load_text
+    from .flowsheet import load_text
 
     scene = os.path.join(_repo_root(), "flowsheets", "stoeckl_gf25_batch.yaml")
     script = scipy_scene_script() if scipy else None
@@ -151,7 +155,8 @@ def bench_scene(repeats: int, classes=(10, 20, 40), scipy: bool = True, scipy_re
                 "speedup_vs_issue_reference": ref / wall if ref else None,
                 "command": "granuflow bench scene", **_meta()}
             if script:
-                flags = ["--classes", str(n), "--repeats", str(int(scipy_repeats))] + ([] if breakage else ["--no-breakage"])
+                flags = ["--classes", str(n), "--repeats", str(int(scipy_repeats))] + \
+                                          ([] if breakage else ["--no-breakage"])
                 sp = _json_lines([sys.executable, script, "--json", *flags], "scipy_gf25_batch.py")[0]
                 rec.update({"scipy_ms_median": sp["wall_s_median"] * 1e3, "scipy_nfev": sp.get("nfev"),
                             "scipy_njev": sp.get("njev"), "speedup_vs_scipy": sp["wall_s_median"] / wall,
@@ -173,8 +178,9 @@ def scene_summary(records) -> list[str]:
                if r["speedup_vs_issue_reference"] else "")
         sp = (f" {r['scipy_ms_median']:10.1f} {r['scipy_d50_um']:10.1f} {'x%.1f' % r['speedup_vs_scipy']:>8s}"
               if same_run else "")
-        lines.append(f"  {r['classes']:7d} {'on' if r['breakage'] else 'off':8s} {r['unknowns']:8d} + {r['inlined_states']:<6d}"
-                     f" {r['wall_ms_median']:8.2f} {r['steps']:6d} {r['residuals']:9d} {r['jacobians']:9d}"
+        lines.append(f"  {r['classes']:7d} {'on' if r['breakage'] else 'off':8s} {r['unknowns']:8d}"
+                     f" + {r['inlined_states']:<6d} {r['wall_ms_median']:8.2f} {r['steps']:6d}"
+                     f" {r['residuals']:9d} {r['jacobians']:9d}"
                      f" {r['d50_um']:8.1f} {r['bed_moisture']:9.4f}{sp}  {ref}")
     return lines
 
@@ -317,7 +323,7 @@ def format_speed_ratios(rows) -> list[str]:
         for r in group:
             ratio = f", x{r['ratio']:.1f}" if r["ratio"] is not None else ""
             desc.append(f"{r['baseline']}: " + _run_text(r["baseline_method"], r["baseline_q"], r["baseline_rtol"],
-                                                          r["baseline_err_M2"], r["baseline_ms"]) + ratio)
+                                                         r["baseline_err_M2"], r["baseline_ms"]) + ratio)
         lines.append(f"{key[0]:9s} |err_M2| <= {key[1]:g}:  " + "  |  ".join(desc))
     return lines
 
@@ -354,8 +360,9 @@ def pbm_summary(recs, levels=PBM_LEVELS) -> list[str]:
     if g:
         r0 = g[0]
         drift = max(abs(r["mass_drift"]) for r in g if r.get("mass_drift") is not None)
-        lines += [f"Population balance, work precision against the analytic solutions (N0 = v0 = 1): {len(g)} granuflow "
-                  f"runs, {len(recs) - len(g)} SciPy runs, median of {r0.get('repeats')} solves each",
+        lines += [f"Population balance, work precision against the analytic solutions (N0 = v0 = 1): "
+                  f"{len(g)} granuflow runs, {len(recs) - len(g)} SciPy runs, "
+                  f"median of {r0.get('repeats')} solves each",
                   f"({r0.get('cpu', '')}, {r0.get('cores', '')} cores, commit {r0.get('commit', '')}). "
                   f"Largest |mass_drift| of granuflow's runs: {drift:.1e}.", ""]
     lines.append("Work-precision envelope, |err_M2| @ solve time (runs that no faster run beats by 10 % in |err_M2|):")
@@ -367,7 +374,8 @@ def pbm_summary(recs, levels=PBM_LEVELS) -> list[str]:
                 f"{abs(r['err_M2']):.1e} @ {r['solve_ms']:.2f} ms (q={r['q']})" for r in pts))
     rows = [r for r in speed_ratios(recs, levels) if r["baseline"].endswith("LSODA")]
     if rows:
-        lines += ["", "Speed at equal error vs SciPy LSODA (fastest run with |err_M2| <= level; ratio = SciPy / granuflow):",
+        lines += ["", "Speed at equal error vs SciPy LSODA (fastest run with |err_M2| <= level; "
+                  "ratio = SciPy / granuflow):",
                   f"  {'case':9s} {'level':>6s}  {'granuflow':28s} {'ms':>7s}  {'SciPy LSODA':27s} {'ms':>7s}  ratio"]
         for r in rows:
             gtxt = (f"{r['granuflow_method']} q={r['granuflow_q']} rtol={r['granuflow_rtol']:.0e}"
@@ -405,7 +413,7 @@ def bench_sweep(*, n: int = 25, repeats: int = 3, workers: int = 2, dask: bool =
     import numpy as np
 
     from . import design_space as ds
-    from . import load
+    from .flowsheet import load
 
     scene = os.path.join(_repo_root(), "flowsheets", "stoeckl_gf25_batch.yaml")
     fs = load(scene)
@@ -480,23 +488,6 @@ def sweep_summary(records) -> list[str]:
     return lines
 
 
-def _core_summary(records) -> list[str]:
+def core_summary(records) -> list[str]:
     return ["  ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}" for k, v in r.items()
                       if k not in ("machine", "cpu", "python", "date")) for r in records]
-
-
-def main(args) -> int:
-    if args.what == "sweep":  # design-space throughput
-        records, summary = bench_sweep(repeats=args.repeats, progress=not args.json), sweep_summary
-    elif args.what == "scene":
-        records = bench_scene(args.repeats, scipy=not args.no_scipy, scipy_repeats=max(1, min(3, args.repeats)),
-                              progress=not args.json)
-        summary = scene_summary
-    elif args.what == "pbm":
-        records = bench_pbm(quick=getattr(args, "quick", False), repeats=args.repeats, progress=not args.json)
-        summary = pbm_summary
-    else:
-        records, summary = bench_core(args.repeats), _core_summary
-    for line in [json.dumps(r) for r in records] if args.json else summary(records):
-        print(line)
-    return 0

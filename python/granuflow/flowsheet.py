@@ -5,7 +5,7 @@ from typing import Iterable, Mapping, Sequence
 
 import numpy as np
 
-from . import _core
+from . import _core, outputs
 from .result import Result
 
 
@@ -48,6 +48,33 @@ class Flowsheet:
     @property
     def output_names(self) -> list[str]:
         return self._scene.output_names()
+
+    @property
+    def text(self) -> str:
+        """The scene text the flowsheet was built from (what a remote worker rebuilds it from)."""
+        return self._scene.text
+
+    @property
+    def summary_map(self) -> dict[str, str]:
+        """The scene's summary keys and the state or output each one reads (``{"d50_um": "bed.d50", ...}``)."""
+        return dict(self._scene.summary_map)
+
+    def summary_keys(self) -> list[str]:
+        """Every key of this scene's summary.json that holds a number: the standard ones, then the scene's."""
+        std = list(outputs.STANDARD_SUMMARY_KEYS)
+        return std + [k for k in self._scene.summary_map if k not in std]
+
+    def unit_of(self, name: str) -> str:
+        """SI unit of a state or reported output; ConfigError listing the valid names otherwise."""
+        return _core.observable_unit(self._scene, name)
+
+    def units(self) -> dict[str, str]:
+        """SI unit of every state and reported output."""
+        return dict(_core.scene_units(self._scene))
+
+    def parameter_values(self) -> dict[str, float]:
+        """Every parameter's current value (SI)."""
+        return {p: self.get(p) for p in self.params}
 
     @property
     def extra(self) -> dict:
@@ -120,7 +147,29 @@ class Flowsheet:
             t_out=None if t_out is None else [float(x) for x in np.asarray(list(t_out), dtype=float)],
             n_out=n_out, rtol=rtol, atol=atol, sensitivities=list(sensitivities),
             linear_solver=linear_solver, max_steps=max_steps)
-        return Result(raw, scene_name=self.name, summary_map=dict(self._scene.summary_map))
+        return Result(raw, scene_name=self.name, summary_map=dict(self._scene.summary_map), units=self.units())
+
+    def output_sensitivities(self, params: Sequence[str], *, t_end: float | None = None,
+                             times: Sequence[float] | None = None, rel_step: float = 1e-6):
+        """Exact sensitivities of every reported output to ``params``: ``d output / d param`` as an array
+        [time, param, output] (SI per SI) at ``times`` (default: the end time), from one forward-sensitivity solve
+        (outputs that are explicit functions of the states are chained; ``rel_step`` only for the few evaluated by
+        differences)."""
+        t_end = self.t_end if t_end is None else float(t_end)
+        times = [t_end] if times is None else [float(x) for x in times]
+        return _core.output_sensitivities(self._scene, t_end, times, list(params), float(rel_step))
+
+    def time_residual(self, repeats: int = 7) -> dict:
+        """Median time of one residual and one Jacobian evaluation at the initial state (benchmarks)."""
+        return self._scene.time_residual(repeats)
+
+    def calibrate_raw(self, experiments: list, stages: list, options: dict, start: Mapping[str, float]) -> dict:
+        """The core's staged calibration on this flowsheet (use :func:`granuflow.calibration.calibrate`)."""
+        return _core.calibrate(self._scene, experiments, stages, options, dict(start))
+
+    def predict_raw(self, experiments: list, params: Mapping[str, float], options: dict) -> list:
+        """The core's predictions of the experiments' observables (use :func:`granuflow.calibration.predict`)."""
+        return _core.predict(self._scene, experiments, dict(params), options)
 
     def __repr__(self) -> str:
         return f"<granuflow.Flowsheet {self.name!r}: {len(self.state_names)} states, {len(self.params)} parameters>"

@@ -2,13 +2,11 @@
 from __future__ import annotations
 
 import math
-import re
 
 import numpy as np
 
-_BALANCE = re.compile(r"^(?:.*\.)?balance_(water|solids|energy)_(in|out|hold)$")
-_PSD = re.compile(r"^(.*)\.psd_(d|m)_(\d+)$")
-_STANDARD_KEYS = ("d10_um", "d50_um", "d90_um", "bed_moisture", "T_gas_out_K")
+from . import outputs
+from .quantity import from_si, label
 
 
 class Result:
@@ -16,10 +14,12 @@ class Result:
 
     Attributes: ``t`` (s), ``y`` [time, state], ``state_names``, ``outputs`` [time, output],
     ``output_names``, ``sens`` [time, param, state], ``sens_params``, ``stats`` (solver statistics),
-    ``wall_time_s``.
+    ``wall_time_s``, ``units`` (SI unit of every state and output). Arrays are SI; files and tables made for
+    people (:meth:`table`, :meth:`to_csv`, :attr:`summary`) show sizes in µm and say so.
     """
 
-    def __init__(self, raw: dict, scene_name: str = "", summary_map: dict | None = None):
+    def __init__(self, raw: dict, scene_name: str = "", summary_map: dict | None = None,
+                 units: dict | None = None):
         self.t = raw["t"]
         self.y = raw["y"]
         self.yp = raw["yp"]
@@ -34,6 +34,7 @@ class Result:
         self.t_end = raw.get("t_end", float(self.t[-1]))
         self.scene_name = scene_name
         self.summary_map = dict(summary_map or {})
+        self.units = dict(units or {})
         self._index = {n: ("y", i) for i, n in enumerate(self.state_names)}
         self._index.update({n: ("o", i) for i, n in enumerate(self.output_names)})
 
@@ -58,19 +59,52 @@ class Result:
             raise ValueError(f"sensitivity: '{state}' is not a state (e.g. {', '.join(self.state_names[:8])}, ...)")
         return self.sens[:, self.sens_params.index(param), self.state_names.index(state)]
 
+    def unit(self, name: str) -> str:
+        """SI unit of a state or output ("" if unknown)."""
+        return self.units.get(name, "")
+
     @property
     def timeseries(self):
-        """All states and outputs as a DataFrame indexed by time in s."""
+        """All states and outputs as a DataFrame indexed by time in s, in SI; ``df.attrs["units"]`` maps every column
+        (and the index ``t_s``) to its unit."""
         import pandas as pd
 
         data = np.hstack([self.y, self.outputs]) if self.outputs.size else self.y
-        df = pd.DataFrame(data, columns=self.state_names + self.output_names)
+        names = self.state_names + self.output_names
+        df = pd.DataFrame(data, columns=names)
         df.index = pd.Index(self.t, name="t_s")
+        df.attrs["units"] = {"t_s": "s", **{n: self.unit(n) for n in names}}
         return df
+
+    def _display_columns(self):
+        """(header, values) of every state and output as files show them: sizes in µm, the rest SI."""
+        cols = []
+        for names, block in ((self.state_names, self.y), (self.output_names, self.outputs)):
+            for j, n in enumerate(names):
+                si = self.unit(n)
+                shown = outputs.display_unit(n, si)
+                cols.append((label(n, shown), from_si(block[:, j], shown, si)))
+        return cols
+
+    def table(self):
+        """The time series as people read them: headers with units (``bed.d50 [um]``), sizes in µm, time in s and
+        min; a DataFrame (what :meth:`to_csv` writes)."""
+        import pandas as pd
+
+        cols = [("t [s]", self.t), ("t [min]", self.t / 60.0)] + self._display_columns()
+        return pd.DataFrame({h: v for h, v in cols})
+
+    def to_csv(self, path: str) -> str:
+        """Write :meth:`table` as CSV (no pandas needed: the command line writes it on every run)."""
+        cols = [("t [s]", self.t), ("t [min]", self.t / 60.0)] + self._display_columns()
+        header = ",".join('"' + h + '"' if "," in h else h for h, _ in cols)
+        data = np.column_stack([v for _, v in cols])
+        np.savetxt(path, data, delimiter=",", header=header, comments="", fmt="%.10g")
+        return path
 
     # -- particle size distribution -------------------------------------------------------------
     def psd_units(self) -> list[str]:
-        return sorted({m.group(1) for n in self.output_names if (m := _PSD.match(n))})
+        return outputs.psd_units(self.output_names)
 
     def psd(self, t: float, unit: str | None = None):
         """Mass-based size distribution at the output time nearest to ``t``.
@@ -86,34 +120,31 @@ class Result:
         if unit not in units:
             raise ValueError(f"psd: unit '{unit}' reports no size distribution (units with one: {', '.join(units)})")
         k = int(np.argmin(np.abs(self.t - t)))
-        cols: dict[str, list] = {"d": [], "m": []}
-        for j, n in enumerate(self.output_names):
-            if (m := _PSD.match(n)) and m.group(1) == unit:
-                cols[m.group(2)].append((int(m.group(3)), j))
-        d = np.array([self.outputs[k, j] for _, j in sorted(cols["d"])])
-        w = np.array([self.outputs[k, j] for _, j in sorted(cols["m"])])
+        dcols, mcols = outputs.psd_columns(self.output_names, unit)
+        d = self.outputs[k, dcols]
+        w = self.outputs[k, mcols]
         frac = w / w.sum() if w.sum() > 0 else w
-        return pd.DataFrame({"d_um": d * 1e6, "mass_kg": w, "mass_fraction": frac,
-                             "Q3": np.cumsum(frac)}).rename_axis("class")
+        df = pd.DataFrame({"d_um": from_si(d, "um", "m"), "mass_kg": w, "mass_fraction": frac,
+                           "Q3": np.cumsum(frac)}).rename_axis("class")
+        df.attrs["units"] = {"d_um": "um", "mass_kg": "kg", "mass_fraction": "-", "Q3": "-"}
+        df.attrs["t_s"] = float(self.t[k])
+        return df
 
     # -- summary --------------------------------------------------------------------------------
     def balance_closure(self) -> dict:
         """Relative closure error per conserved quantity at the final time:
         |hold(t) - hold(0) - (in - out)| / max(|hold(0)|, |hold(t)|, |in|, |out|); None if not tracked."""
         acc: dict = {}
-        for j, n in enumerate(self.output_names):
-            m = _BALANCE.match(n)
-            if m:
-                q, kind = m.groups()
-                acc.setdefault(q, {"in": 0.0, "out": 0.0, "hold0": 0.0, "hold": 0.0})
-                col = self.outputs[:, j]
-                if kind == "hold":
-                    acc[q]["hold0"] += col[0]
-                    acc[q]["hold"] += col[-1]
-                else:
-                    acc[q][kind] += col[-1] - col[0]
+        for j, q, kind in outputs.balance_terms(self.output_names):
+            acc.setdefault(q, {"in": 0.0, "out": 0.0, "hold0": 0.0, "hold": 0.0})
+            col = self.outputs[:, j]
+            if kind == "hold":
+                acc[q]["hold0"] += col[0]
+                acc[q]["hold"] += col[-1]
+            else:
+                acc[q][kind] += col[-1] - col[0]
         out = {}
-        for q in ("water", "solids", "energy"):
+        for q in outputs.BALANCE_QUANTITIES:
             if q not in acc:
                 out[f"{q}_rel"] = None
                 continue
@@ -126,21 +157,27 @@ class Result:
     def summary(self) -> dict:
         """The fields of summary.json (docs/design.md contract); null where the scene has no such quantity."""
         s = {"scene": self.scene_name, "t_end_s": float(self.t[-1])}
-        for key in _STANDARD_KEYS:
+        for key in outputs.STANDARD_SUMMARY_KEYS:
             s[key] = None
+        units = {}
         for key, src in self.summary_map.items():
-            v = float(self[src][-1])
-            s[key] = _finite(v * 1e6 if key.endswith("_um") else v)
+            si = self.unit(src)
+            shown = outputs.summary_unit(key, si)
+            s[key] = _finite(float(from_si(self[src][-1], shown, si)))
+            units[key] = shown
         s["balance"] = self.balance_closure()
         # Where a model left the paper's literal equations (floors, caps, regularizations): the largest count of
         # classes or instances affected at any output time, per unit (docs/paper001_decisions.md asks for this).
-        s["regularizations"] = {n: _finite(np.max(self.outputs[:, j])) for j, n in enumerate(self.output_names)
-                                if ".reg_" in n}
+        s["regularizations"] = {n: _finite(np.max(self.outputs[:, j]))
+                                for j, n in outputs.regularization_columns(self.output_names)}
         s["wall_time_s"] = self.wall_time_s
         st = self.stats
         s["solver"] = {"states": st["states"], "steps": st["steps"], "residuals": st["residuals"],
                        "jacobians": st["jacobians"], "linear_solver": st["linear_solver"],
                        "reinits": st["reinits"], "rtol": self.rtol}
+        s["units"] = {"t_end_s": "s", **{k: units.get(k, "um" if outputs.summary_in_um(k) else "")
+                                         for k in outputs.STANDARD_SUMMARY_KEYS}, **units,
+                      "balance": "-", "regularizations": "classes or instances", "wall_time_s": "s"}
         return s
 
     def __repr__(self) -> str:

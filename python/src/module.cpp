@@ -9,6 +9,7 @@ namespace granuflow::python {
 void register_flowsheet(py::module_& m);
 void register_kernels(py::module_& m);
 void register_calibration(py::module_& m);
+void register_reference(py::module_& m);
 }  // namespace granuflow::python
 
 PYBIND11_MODULE(_core, m) {
@@ -35,4 +36,5 @@ PYBIND11_MODULE(_core, m) {
   granuflow::python::register_flowsheet(m);
   granuflow::python::register_kernels(m);
   granuflow::python::register_calibration(m);
+  granuflow::python::register_reference(m);
 }

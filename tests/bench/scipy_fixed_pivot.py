@@ -161,9 +161,14 @@ def reference(case, tau, e, x):
         return 1 - tau / 2, 2 / (1 - 2 * tau), None
     if case == "breakage":
         return 1 + tau, 2 / (1 + tau), gl_cells(lambda v: v * (1 + tau) ** 2 * np.exp(-v * (1 + tau)), lo, hi)
+
     # growth: shifted distribution in diameter
-    vol = lambda L: math.pi / 6 * L ** 3
-    dens = lambda L: np.where(L > tau, np.exp(-vol(np.maximum(L - tau, 0))) * 0.5 * math.pi * np.maximum(L - tau, 0) ** 2, 0.0)
+    def vol(L):
+        return math.pi / 6 * L ** 3
+
+    def dens(L):
+        s = np.maximum(L - tau, 0)
+        return np.where(L > tau, np.exp(-vol(s)) * 0.5 * math.pi * s ** 2, 0.0)
     Lg = np.linspace(0, 6, 6001)[:-1] + 0.0005
     m0 = np.sum(dens(Lg + tau)) * 0.001
     m2 = np.sum(vol(Lg + tau) ** 2 * dens(Lg + tau)) * 0.001

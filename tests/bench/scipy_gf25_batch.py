@@ -417,7 +417,8 @@ def main():
     else:
         print(f"scipy BDF, {r['classes']} classes, breakage {'on' if r['breakage'] else 'off'}: "
               f"{r['wall_s_median'] * 1e3:.1f} ms (median of {r['repeats']}), {r['steps']} steps, nfev {r['nfev']} "
-              f"({r['rhs_calls']} f calls with the Jacobian columns), njev {r['njev']}, nlu {r['nlu']}; d10/d50/d90 {r['d10_um']:.1f}/{r['d50_um']:.1f}/{r['d90_um']:.1f} um, "
+              f"({r['rhs_calls']} f calls with the Jacobian columns), njev {r['njev']}, nlu {r['nlu']}; "
+              f"d10/d50/d90 {r['d10_um']:.1f}/{r['d50_um']:.1f}/{r['d90_um']:.1f} um, "
               f"moisture {r['bed_moisture']:.5f} kg/kg, T_gas {r['T_gas_out_K']:.3f} K, status {r['status']}")
 
 

@@ -81,4 +81,3 @@ def run_bad_scene(tmp_path, path, *needles, out=None):
     assert sha256(path) == before
     assert not os.path.exists(os.path.join(out, "summary.json"))
     return p
-

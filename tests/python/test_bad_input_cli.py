@@ -11,7 +11,8 @@ from granuflow import calibration as cal
 
 with open(SCENE) as _f:
     SCENE_TEXT = _f.read()
-DIAMETER_PLOT = "{title: Characteristic diameters, y: [bed.d10, bed.d50, bed.d90], unit: um, ylabel: d_x3, file: diameters.png}"
+DIAMETER_PLOT = ("{title: Characteristic diameters, y: [bed.d10, bed.d50, bed.d90], unit: um, ylabel: d_x3, "
+                 "file: diameters.png}")
 PSD_PLOT = "{kind: psd, times_min: [0, 5, 15, 30, 60], file: psd.png}"
 assert DIAMETER_PLOT in SCENE_TEXT and PSD_PLOT in SCENE_TEXT
 
@@ -19,7 +20,7 @@ assert DIAMETER_PLOT in SCENE_TEXT and PSD_PLOT in SCENE_TEXT
 # ------------------------------------------------------------------------------------------------ run: plots
 @pytest.mark.parametrize("unit, needles", [
     ("furlong", ["plots[0].unit", "'furlong'", "allowed", "um"]),
-    ("degC", ["plots[0].unit", "'degC'", "bed.d10", "allowed: um"]),
+    ("degC", ["plots[0].unit", "'degC'", "bed.d10", "allowed: m, mm, um"]),
 ])
 def test_plot_unit_unknown_or_of_the_wrong_dimension(tmp_path, unit, needles):
     path = scene_with(tmp_path, DIAMETER_PLOT, DIAMETER_PLOT.replace("unit: um", f"unit: {unit}"))
@@ -27,14 +28,17 @@ def test_plot_unit_unknown_or_of_the_wrong_dimension(tmp_path, unit, needles):
     assert not (tmp_path / "out").exists()  # rejected before the run
 
 
-def test_plot_convert_refuses_unknown_units():
-    from granuflow import plots
+def test_display_conversion_refuses_unknown_units():
+    from granuflow import quantity
 
     with pytest.raises(ValueError, match="furlong"):
-        plots.convert([1.0], "furlong")
+        quantity.convert([1.0], "furlong", "m")
     with pytest.raises(ValueError, match="degC"):
-        plots.convert([1.0], "degC", "m")
-    assert plots.convert([300.0], "degC", "K")[0] == pytest.approx(26.85)
+        quantity.convert([1.0], "degC", "m")
+    assert quantity.convert([300.0], "degC", "K")[0] == pytest.approx(26.85)
+    assert quantity.convert([2e-4], "um", "m")[0] == pytest.approx(200.0)
+    assert quantity.from_si(0.05, "wt%", "kg/kg") == pytest.approx(5.0)
+    assert quantity.difference_to_si("2 degC", "K", "sigma") == pytest.approx(2.0)
 
 
 @pytest.mark.parametrize("times, bad", [("[-5, 5, 60]", "-5"), ("[0, 30, 90]", "90")])

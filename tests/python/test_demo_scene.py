@@ -133,13 +133,17 @@ def test_cli_run_writes_summary_csv_and_plots(tmp_path):
     import pandas as pd
 
     ts = pd.read_csv(out / "timeseries.csv", index_col=0)
-    assert ts.index[0] == 0.0 and ts.index[-1] == 600.0
-    assert ts["tank2.T"].iloc[-1] == pytest.approx(s["T_out_K"], rel=1e-9)
+    assert ts.index.name == "t [s]" and ts.index[0] == 0.0 and ts.index[-1] == 600.0
+    assert ts["t [min]"].iloc[-1] == pytest.approx(10.0)
+    # every column carries its unit in the header
+    assert all(c.endswith("]") for c in ts.columns), [c for c in ts.columns if not c.endswith("]")]
+    assert ts["tank2.T [K]"].iloc[-1] == pytest.approx(s["T_out_K"], rel=1e-9)
+    assert s["units"]["T_out_K"] == "K"
     for t in (50.0, 150.0, 400.0):
         k = int(np.argmin(np.abs(ts.index.to_numpy() - t)))
         T1, T2 = exact_tank_temperatures(ts.index[k], Q1=2.5e4)
-        assert ts["tank1.T"].iloc[k] == pytest.approx(T1, rel=1e-6)
-        assert ts["tank2.T"].iloc[k] == pytest.approx(T2, rel=1e-6)
+        assert ts["tank1.T [K]"].iloc[k] == pytest.approx(T1, rel=1e-6)
+        assert ts["tank2.T [K]"].iloc[k] == pytest.approx(T2, rel=1e-6)
     assert (out / "plot_0.png").read_bytes()[:4] == b"\x89PNG"
 
 
@@ -154,7 +158,8 @@ def test_steady_state_of_the_recycle_loop_from_python():
 
 def test_unit_settings_report_the_values_in_use():
     text = open(DEMO).read().replace("settings: {inlets: 2}", "settings: {inlets: 3}")
-    text = text.replace("  - splitter.out2 -> mixer.in2\n", "  - splitter.out2 -> mixer.in2\n  - feed2.out -> mixer.in3\n")
+    text = text.replace("  - splitter.out2 -> mixer.in2\n",
+                        "  - splitter.out2 -> mixer.in2\n  - feed2.out -> mixer.in3\n")
     text = text.replace("  product:\n", "  feed2:\n    type: liquid_feed\n    params: {mdot: 0.1 kg/s}\n  product:\n")
     fs = gf.load_text(text, "three_inlets")
     assert fs.unit_settings()["mixer"] == ("liquid_mixer", {"inlets": "3"})

@@ -92,8 +92,14 @@ def test_cli_run_writes_summary_csv_and_plots(tmp_path, headline):
 
     ts = pd.read_csv(out / "timeseries.csv", index_col=0)
     assert len(ts) == 121 and ts.index[-1] == 3600.0
-    assert {"bed.d10", "bed.d50", "bed.d90", "bed.moisture_wet", "gas.T", "bed.T"} <= set(ts.columns)
+    assert {"bed.d10 [um]", "bed.d50 [um]", "bed.d90 [um]", "bed.moisture_wet [kg/kg]", "gas.T [K]",
+            "bed.T [K]"} <= set(ts.columns)
     assert np.isfinite(ts.to_numpy()).all()
+    # sizes in µm in the CSV as in summary.json (the same number, not 5e-4 m in one file and 500 µm in the other)
+    for d in ("d10", "d50", "d90"):
+        assert ts[f"bed.{d} [um]"].iloc[-1] == pytest.approx(s[f"{d}_um"], rel=1e-9)
+        assert s["units"][f"{d}_um"] == "um"
+    assert not any(c.startswith("bed.d50 [m]") for c in ts.columns)
     plots = yaml.safe_load(open(SCENE))["plots"]
     names = [spec["file"] for spec in plots]
     assert names == ["diameters.png", "moisture.png", "temperatures.png", "psd.png"]
@@ -126,7 +132,8 @@ BAD_SCENES = {
     "misspelt setting value": ("settings: {classes: 10, d_min", "settings: {aggregation: sometimes, classes: 10, d_min",
                                ["units.bed.settings.aggregation", "'sometimes'", "glass_transition, constant, none"]),
     # mistyped
-    "list for a number": ("bed_mass: 15 kg", "bed_mass: [15]", ["units.bed.params.bed_mass", "expected a single value"]),
+    "list for a number": ("bed_mass: 15 kg", "bed_mass: [15]",
+                          ["units.bed.params.bed_mass", "expected a single value"]),
     "word for a number": ("bed_mass: 15 kg", "bed_mass: fifteen",
                           ["units.bed.params.bed_mass", "'fifteen'", "expected a number with an optional unit", "kg"]),
     "wrong unit": ("mdot: 90 g/min", "mdot: 90 degC", ["units.nozzle.params.mdot", "'degC'", "must be in kg/s"]),
@@ -284,7 +291,8 @@ def test_cli_sweep_two_points_end_to_end(tmp_path):
 
     df = pd.read_csv(out / "sweep.csv")
     assert list(df["point"]) == ["low", "high"]
-    assert list(df["spray_g_min"]) == pytest.approx([60.0, 120.0]) and list(df["T_in_degC"]) == pytest.approx([60.0, 60.0])
+    assert list(df["spray_g_min"]) == pytest.approx([60.0, 120.0]) and list(
+        df["T_in_degC"]) == pytest.approx([60.0, 60.0])
     assert (df["status"] == "ok").all()
     assert df["d50_um"].iloc[1] > df["d50_um"].iloc[0]
     assert {"wall_time_s", "message", "d50_um", "bed_moisture_wet", "T_gas_out_K"} <= set(df.columns)
@@ -340,7 +348,7 @@ def test_table1_files_differ_only_in_the_upper_temperature_level():
     assert [v.param for v in a.variables] == ["inlet.V_dot", "inlet.T", "nozzle.mdot"]
     assert a.variables[1].levels == [40, 60, 80] and b.variables[1].levels == [40, 60, 100]
     assert [v.levels for v in a.variables if v.name != "T_in_degC"] == [v.levels for v in b.variables
-                                                                      if v.name != "T_in_degC"]
+                                                                        if v.name != "T_in_degC"]
     for pa, pb in zip(a.points, b.points):
         assert pa["name"] == pb["name"] and pa["V_air_m3h"] == pb["V_air_m3h"]
         assert pb["T_in_degC"] == (100 if pa["T_in_degC"] == 80 else pa["T_in_degC"])
@@ -364,3 +372,17 @@ def test_linear_solver_choice_follows_the_jacobian_fill():
     chain = gf.load_text(bench.tank_chain_text(250), "chain")
     res = chain.simulate()
     assert res.stats["states"] > 1000 and res.stats["linear_solver"].startswith("sparse")
+
+
+def test_plots_say_when_the_size_grid_clips_a_curve(headline):
+    """In the headline scene a fifth of the mass ends in the top class (1000 µm): d90 is capped by the grid, d50
+    and d10 are not; the PSD plot and the series legend say so."""
+    from granuflow.plots.series import CLIP_FRACTION, clipped_top_um
+
+    top = headline.summary["top_class_fraction"]
+    assert 0.1 < top < 0.5
+    assert clipped_top_um(headline, "bed.d90", "m") == pytest.approx(1000.0, rel=1e-6)
+    assert clipped_top_um(headline, "bed.d50", "m") is None
+    assert clipped_top_um(headline, "bed.d10", "m") is None
+    assert clipped_top_um(headline, "gas.T", "K") is None
+    assert headline.psd(3600)["mass_fraction"].iloc[-1] > CLIP_FRACTION

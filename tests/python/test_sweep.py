@@ -127,16 +127,21 @@ t_end: 5 min
 
 
 @pytest.mark.parametrize("body,needle", [
-    ("variables: {T: {param: inlet.T, unit: degC}}\npoints: [{T: 40}]\nspeed: 3", "speed: unknown key (allowed: sweep,"),
+    ("variables: {T: {param: inlet.T, unit: degC}}\npoints: [{T: 40}]\nspeed: 3",
+     "speed: unknown key (allowed: sweep,"),
     ("points: [{T: 40}]", "variables: missing required key"),
     ("variables: {T: {param: inlet.T, unit: degC, step: 5}}\npoints: [{T: 40}]", "variables.T.step: unknown key"),
     ("variables: {T: {param: inlet.T, unit: kg}}\npoints: [{T: 40}]", "variables.T.unit: 'kg' does not fit inlet.T"),
-    ("variables: {T: {param: inlet.T, unit: degC}}\npoints: [{T: 40, X: 1}]", "points[0] (P1).X: unknown key (allowed: name, kind, T)"),
-    ("variables: {T: {param: inlet.T, unit: degC}}\npoints: [{T: 400}]", "points[0] (P1).T = 400: inlet.T = 673.15 K: violates"),
-    ("variables: {T: {param: inlet.T, unit: degC}}\npoints: [{T: 40}]\nset: {inlet.T: 50}", "set.inlet.T: is also a sweep variable"),
+    ("variables: {T: {param: inlet.T, unit: degC}}\npoints: [{T: 40, X: 1}]",
+     "points[0] (P1).X: unknown key (allowed: name, kind, T)"),
+    ("variables: {T: {param: inlet.T, unit: degC}}\npoints: [{T: 400}]",
+     "points[0] (P1).T = 400: inlet.T = 673.15 K: violates"),
+    ("variables: {T: {param: inlet.T, unit: degC}}\npoints: [{T: 40}]\nset: {inlet.T: 50}",
+     "set.inlet.T: is also a sweep variable"),
     ("variables: {T: {param: inlet.T, unit: degC}}\npoints: [{T: 40}]\nt_end: soon", "t_end = 'soon'"),
     ("variables: {T: {param: inlet.T, unit: degC}}\npoints: []", "points: expected a non-empty list"),
-    ("variables: {T: {param: inlet.T, unit: degC, levels: [a, b]}}\npoints: [{T: 40}]", "variables.T.levels: expected a list of numbers"),
+    ("variables: {T: {param: inlet.T, unit: degC, levels: [a, b]}}\npoints: [{T: 40}]",
+     "variables.T.levels: expected a list of numbers"),
 ])
 def test_sweep_file_errors_name_file_key_value_and_allowed(tmp_path, body, needle):
     p = tmp_path / "bad.yaml"

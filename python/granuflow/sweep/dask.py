@@ -24,28 +24,22 @@ import os
 import threading
 from typing import Any, Callable, Iterator, Sequence
 
-from . import _core
-from .flowsheet import Flowsheet
+from .. import _core
+from ..flowsheet import Flowsheet, load_text
 
 ConfigError = _core.ConfigError
 
 # the folder holding this granuflow package, so that workers on this machine can import it even when the
 # client found it through a runtime sys.path entry (a notebook) rather than PYTHONPATH
-_PKG_PARENT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+_PKG_PARENT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 _local = threading.local()
-
-
-def scene_text(flowsheet: Flowsheet) -> str:
-    """The scene text the flowsheet was built from (the core keeps it for clones)."""
-    return flowsheet._scene.text
 
 
 def remote_spec(flowsheet: Flowsheet) -> dict:
     """What a worker needs to rebuild ``flowsheet``: scene text and label, end time, every parameter (SI)."""
-    from .sweep import flowsheet_spec
-
-    text = scene_text(flowsheet)
-    spec = {**flowsheet_spec(flowsheet), "text": text, "label": flowsheet.path or flowsheet.name}
+    text = flowsheet.text
+    spec = {"scene": flowsheet.path, "t_end": flowsheet.t_end, "params": flowsheet.parameter_values(), "text": text,
+            "label": flowsheet.path or flowsheet.name}
     spec["key"] = hashlib.sha1(text.encode() + spec["label"].encode()).hexdigest()
     return spec
 
@@ -53,8 +47,6 @@ def remote_spec(flowsheet: Flowsheet) -> dict:
 def worker_flowsheet(spec: dict) -> Flowsheet:
     """The flowsheet of ``spec`` for the calling thread: built once per thread and scene, then reset to the spec's
     parameter values and end time (a flowsheet is never shared between threads)."""
-    from .flowsheet import load_text
-
     cache = getattr(_local, "flowsheets", None)
     if cache is None:
         cache = _local.flowsheets = {}

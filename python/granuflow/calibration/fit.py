@@ -1,0 +1,243 @@
+"""Staged calibration (Ceres in the C++ core), predictions and multi-start."""
+from __future__ import annotations
+
+import concurrent.futures as cf
+import math
+import os
+from typing import Any, Iterable, Mapping, Sequence
+
+import numpy as np
+
+from .. import _core
+from .. import progress as progress_bars
+from ..flowsheet import Flowsheet
+from .files import Experiment, Stage, StagePlan, all_free
+
+ConfigError = _core.ConfigError
+CalibrationError = _core.CalibrationError
+
+
+class CalibrationResult:
+    """The outcome of :func:`calibrate`: numpy arrays and dicts; DataFrames on request (pandas imported lazily).
+
+    Attributes: ``stages`` (list of dicts: estimates, covariance, correlation, history), ``parameters`` (final
+    values, SI), ``simulations``, ``sensitivity_solves``, ``wall_time_s``, ``status``, ``message``.
+    """
+
+    def __init__(self, raw: dict, *, label: str = ""):
+        self.raw = raw
+        self.label = label
+        self.stages = raw["stages"]
+        self.parameters = dict(raw["parameters"])
+        self.simulations = int(raw["simulations"])
+        self.sensitivity_solves = int(raw["sensitivity_solves"])
+        self.wall_time_s = float(raw["wall_time_s"])
+        self.status = raw["status"]
+        self.message = raw["message"]
+
+    def brief(self) -> str:
+        return self.raw["brief"]
+
+    def full_report(self) -> str:
+        return self.raw["full_report"]
+
+    def __repr__(self) -> str:
+        return f"<granuflow.CalibrationResult {self.brief()}>"
+
+    @property
+    def final(self) -> dict:
+        return self.stages[-1]
+
+    @property
+    def cost(self) -> float:
+        return float(self.final["cost"])
+
+    @property
+    def flagged(self) -> list[str]:
+        """Parameters of the last stage the data cannot identify (not reported as recovered)."""
+        return [e["name"] for e in self.final["estimates"] if not e["identifiable"]]
+
+    def estimate(self, name: str) -> dict:
+        for e in self.final["estimates"]:
+            if e["name"] == name:
+                return e
+        raise KeyError(name)
+
+    def estimates_frame(self, stage: int | str = -1):
+        import pandas as pd
+
+        st = self._stage(stage)
+        df = pd.DataFrame(st["estimates"]).set_index("name")
+        return df[["start", "value", "se", "rel_se", "transform", "lower", "upper", "at_bound", "identifiable", "flag"]]
+
+    @property
+    def estimates(self):
+        """Final estimates: start, value, standard error (SI), relative SE, bounds, identifiability flag."""
+        return self.estimates_frame(-1)
+
+    @property
+    def correlation(self):
+        import pandas as pd
+
+        st = self.final
+        names = [e["name"] for e in st["estimates"]]
+        return pd.DataFrame(np.asarray(st["correlation"]), index=names, columns=names)
+
+    @property
+    def history(self):
+        """Stage by stage: cost, iterations, reweighting passes, simulations, sensitivity solves, time, parameters."""
+        import pandas as pd
+
+        rows = []
+        for s in self.stages:
+            row = {"stage": s["name"], "observables": " ".join(s["observables"]) or "all",
+                   "initial_cost": s["initial_cost"], "cost": s["cost"], "chi2_reduced": s["chi2_reduced"],
+                   "residuals": s["residuals"], "iterations": s["iterations"], "passes": s["passes"],
+                   "simulations": s["simulations"], "sensitivity_solves": s["sensitivity_solves"],
+                   "wall_time_s": s["wall_time_s"], "jacobian": s["jacobian_method"], "termination": s["termination"]}
+            for e in s["estimates"]:
+                row[e["name"]] = e["value"]
+            rows.append(row)
+        return pd.DataFrame(rows).set_index("stage")
+
+    @property
+    def profiles(self) -> list[dict]:
+        return list(self.final["profiles"])
+
+    def _stage(self, stage: int | str) -> dict:
+        if isinstance(stage, str):
+            for s in self.stages:
+                if s["name"] == stage:
+                    return s
+            raise KeyError(stage)
+        return self.stages[stage]
+
+    def to_json(self) -> dict:
+        def clean(x):
+            if isinstance(x, dict):
+                return {k: clean(v) for k, v in x.items()}
+            if isinstance(x, (list, tuple)):
+                return [clean(v) for v in x]
+            if isinstance(x, np.ndarray):
+                return clean(x.tolist())
+            if isinstance(x, float) and not math.isfinite(x):
+                return None
+            return x
+
+        return clean({k: v for k, v in self.raw.items() if k != "full_report"})
+
+
+def _core_list(exps: Iterable[Experiment]) -> list[dict]:
+    return [e.to_core() for e in exps]
+
+
+def _options(options: Mapping[str, Any] | None) -> dict:
+    return {"num_threads": min(2, os.cpu_count() or 1), **dict(options or {})}
+
+
+def calibrate(flowsheet: Flowsheet, experiments: Sequence[Experiment], stages: Sequence[Stage] | StagePlan, *,
+              start: Mapping[str, float] | None = None, options: Mapping[str, Any] | None = None,
+              label: str = "") -> CalibrationResult:
+    """Run the stages in order (each from the previous estimates) on the C++ core; the GIL is released.
+
+    ``options``: CalibrationOptions fields (``num_threads`` default 2, ``sigma_basis``, ``jacobian``, ``rtol``,
+    ``profile``, ...). Unknown keys raise ConfigError; a failed stage raises CalibrationError.
+    """
+    if isinstance(stages, StagePlan):
+        start = {**stages.start, **dict(start or {})}
+        options = {**stages.options, **dict(options or {})}
+        stages = stages.stages
+    raw = flowsheet.calibrate_raw(_core_list(experiments), [s.to_core() for s in stages], _options(options),
+                                  {k: float(v) for k, v in dict(start or {}).items()})
+    return CalibrationResult(raw, label=label)
+
+
+def predict(flowsheet: Flowsheet, experiments: Sequence[Experiment], params: Mapping[str, float] | None = None, *,
+            options: Mapping[str, Any] | None = None) -> list[dict]:
+    """Model at the sampled times: list of {experiment, observable, t, data, model, sigma} (SI)."""
+    return flowsheet.predict_raw(_core_list(experiments), dict(params or {}), _options(options))
+
+
+def stage_bounds(stages: Sequence[Stage] | StagePlan, flowsheet: Flowsheet | None = None) -> dict[str, tuple]:
+    """Per free parameter (lower, upper) in SI that every stage freeing it accepts (the declared bounds of
+    `flowsheet` where a stage gives none; ±inf without a flowsheet)."""
+    if isinstance(stages, StagePlan):
+        stages = stages.stages
+    out: dict[str, tuple] = {}
+    for s in stages:
+        for f in s.free:
+            spec = flowsheet.spec(f.name) if flowsheet is not None else {"lower": -math.inf, "upper": math.inf}
+            lo = spec["lower"] if f.lower is None else f.lower
+            hi = spec["upper"] if f.upper is None else f.upper
+            plo, phi = out.get(f.name, (-math.inf, math.inf))
+            out[f.name] = (max(lo, plo), min(hi, phi))
+    return out
+
+
+def random_starts(stages: Sequence[Stage] | StagePlan, n: int, *, center: Mapping[str, float], spread: float = 1.0,
+                  seed: int | None = 0, flowsheet: Flowsheet | None = None) -> list[dict[str, float]]:
+    """`n` start points: each free parameter drawn uniformly within ±`spread` of `center` (in ln units for
+    log-transformed and logarithmic parameters, relative otherwise), clipped to the bounds of every stage that
+    frees it (and to the declared bounds of `flowsheet`, when given)."""
+    if isinstance(stages, StagePlan):
+        stages = stages.stages
+    bounds = stage_bounds(stages, flowsheet)
+    rng = np.random.default_rng(seed)
+    starts = []
+    for _ in range(n):
+        p = {}
+        for f in all_free(stages):
+            name = f.name
+            c = float(center[name])
+            u = rng.uniform(-spread, spread)
+            if f.transform == "log":
+                v = c * math.exp(u)
+            elif f.logarithmic or (f.logarithmic is None and name.split(".")[-1].startswith("ln_")):
+                v = c + u
+            else:
+                v = c * (1 + u)
+            lo, hi = bounds[name]
+            p[name] = min(max(v, lo), hi)
+        starts.append(p)
+    return starts
+
+
+def multi_start(flowsheet: Flowsheet, experiments: Sequence[Experiment], stages: Sequence[Stage] | StagePlan,
+                starts: Sequence[Mapping[str, float]], *, options: Mapping[str, Any] | None = None,
+                workers: int | None = None, progress: bool | None = None) -> list[CalibrationResult | Exception]:
+    """Calibrate from every start in parallel threads (each calibration single-threaded; the C++ side releases
+    the GIL), with a tqdm progress bar on stderr (default: when stderr is a terminal). Returns the results in
+    the order of `starts`; a start whose calibration failed gives its exception. Best: min by ``.cost``."""
+    plan_opts: dict = {}
+    plan_start: dict = {}
+    if isinstance(stages, StagePlan):
+        plan_opts, plan_start, stages = stages.options, stages.start, stages.stages
+    workers = workers or min(len(starts), os.cpu_count() or 1)
+    opts = {**plan_opts, **dict(options or {}), "num_threads": 1}
+    bar = progress_bars.bar(progress, len(starts), "calibration starts", unit="start")
+    results: list[CalibrationResult | Exception | None] = [None] * len(starts)
+
+    def one(i: int):
+        return calibrate(flowsheet, experiments, stages, start={**plan_start, **dict(starts[i])}, options=opts,
+                         label=f"start {i}")
+
+    with cf.ThreadPoolExecutor(max_workers=workers, thread_name_prefix="granuflow-calib") as pool:
+        futs = {pool.submit(one, i): i for i in range(len(starts))}
+        for fut in cf.as_completed(futs):
+            i = futs[fut]
+            try:
+                results[i] = fut.result()
+            except (CalibrationError, _core.SolverError, ConfigError) as e:
+                results[i] = e
+            if bar is not None:
+                bar.update(1)
+    if bar is not None:
+        bar.close()
+    return results  # type: ignore[return-value]
+
+
+def best(results: Sequence[CalibrationResult | Exception]) -> CalibrationResult:
+    ok = [r for r in results if isinstance(r, CalibrationResult)]
+    if not ok:
+        raise CalibrationError(f"every start failed; first: {results[0] if results else 'no starts'}")
+    return min(ok, key=lambda r: r.cost)

@@ -1,0 +1,140 @@
+"""Fit statistics and the calibration report (files and parity plots)."""
+from __future__ import annotations
+
+import csv
+import json
+import math
+import os
+from dataclasses import dataclass, field
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from ..flowsheet import Flowsheet
+from ..outputs import OBSERVABLE_GROUPS
+from .files import Experiment
+from .fit import CalibrationResult, predict
+
+
+def _group_of(name: str) -> str:
+    for g, members in OBSERVABLE_GROUPS.items():
+        if name in members:
+            return g
+    return name
+
+
+def fit_statistics(predictions: Sequence[dict], groups: bool = True) -> list[dict]:
+    """R² = 1 - SS_res/SS_tot and RMSE (SI) per observable, and per group (size = all d-values pooled)."""
+    pooled: dict[str, list[tuple[np.ndarray, np.ndarray]]] = {}
+    for p in predictions:
+        keys = [p["observable"]] + ([_group_of(p["observable"])] if groups else [])
+        for k in dict.fromkeys(keys):
+            pooled.setdefault(k, []).append((np.asarray(p["data"]), np.asarray(p["model"])))
+    out = []
+    for k, parts in pooled.items():
+        d = np.concatenate([a for a, _ in parts])
+        m = np.concatenate([b for _, b in parts])
+        ok = np.isfinite(d) & np.isfinite(m)
+        d, m = d[ok], m[ok]
+        ss_res = float(np.sum((d - m) ** 2))
+        ss_tot = float(np.sum((d - d.mean()) ** 2)) if len(d) else math.nan
+        out.append({"output": k, "n": int(len(d)), "r2": 1 - ss_res / ss_tot if ss_tot > 0 else math.nan,
+                    "rmse": math.sqrt(ss_res / len(d)) if len(d) else math.nan,
+                    "mean_abs_rel": float(np.mean(np.abs(m - d) / np.abs(d))) if len(d) else math.nan})
+    return out
+
+
+@dataclass
+class CalibrationReport:
+    """Estimates, correlation, history, flags and fit statistics (R², RMSE) on calibration and validation sets."""
+    result: CalibrationResult
+    predictions: dict[str, list[dict]]            # set name -> predictions
+    fit_rows: list[dict]
+    comparison: CalibrationResult | None = None   # e.g. the simultaneous fit from the same start
+    truth: dict[str, float] | None = None
+    units: dict[str, str] = field(default_factory=dict)  # SI unit of every observable
+
+    @property
+    def fit(self):
+        import pandas as pd
+
+        return pd.DataFrame(self.fit_rows).set_index(["set", "output"])
+
+    def recovery(self):
+        """Estimates against known true values (synthetic data): error in standard errors, verdict."""
+        import pandas as pd
+
+        if not self.truth:
+            raise ValueError("no true parameters given")
+        rows = []
+        for e in self.result.final["estimates"]:
+            if e["name"] not in self.truth:
+                continue
+            true = self.truth[e["name"]]
+            z = (e["value"] - true) / e["se"] if e["se"] and math.isfinite(e["se"]) else math.nan
+            verdict = ("flagged unidentifiable" if not e["identifiable"]
+                       else "recovered" if abs(z) <= 2 else "NOT recovered")
+            rows.append({"param": e["name"], "true": true, "estimate": e["value"], "se": e["se"],
+                         "error_in_se": z, "verdict": verdict, "flag": e["flag"]})
+        return pd.DataFrame(rows).set_index("param")
+
+    def parity_plots(self, out_dir: str) -> list[str]:
+        """One PNG per output group (size, moisture, outlet gas temperature): model against data."""
+        from ..plots.calibration import parity_plots
+
+        return parity_plots(self.predictions, self.fit_rows, out_dir, units=self.units)
+
+    def to_json(self) -> dict:
+        out = {"result": self.result.to_json(), "fit": self.fit_rows,
+               "comparison": None if self.comparison is None else self.comparison.to_json()}
+        if self.truth:
+            out["truth"] = dict(self.truth)
+        return json.loads(json.dumps(out, default=float).replace("NaN", "null").replace("Infinity", "null"))
+
+    def write(self, out_dir: str) -> list[str]:
+        """report.json, report.txt, estimates.csv, correlation.csv, history.csv, fit.csv, predictions.csv, PNGs."""
+        os.makedirs(out_dir, exist_ok=True)
+        files = []
+
+        def put(name, text):
+            with open(os.path.join(out_dir, name), "w") as f:
+                f.write(text)
+            files.append(name)
+
+        put("report.json", json.dumps(self.to_json(), indent=2))
+        txt = self.result.full_report()
+        if self.comparison is not None:
+            txt += "\n\nComparison (" + (self.comparison.label or "other route") + "):\n" + \
+                                    self.comparison.full_report()
+        put("report.txt", txt)
+        self.result.estimates.to_csv(os.path.join(out_dir, "estimates.csv"))
+        self.result.correlation.to_csv(os.path.join(out_dir, "correlation.csv"))
+        self.result.history.to_csv(os.path.join(out_dir, "history.csv"))
+        self.fit.to_csv(os.path.join(out_dir, "fit.csv"))
+        files += ["estimates.csv", "correlation.csv", "history.csv", "fit.csv"]
+        with open(os.path.join(out_dir, "predictions.csv"), "w", newline="") as f:
+            w = csv.writer(f)
+            w.writerow(["set", "experiment", "observable", "t_s", "data", "model", "sigma"])
+            for setname, preds in self.predictions.items():
+                for p in preds:
+                    for i in range(len(p["t"])):
+                        w.writerow([setname, p["experiment"], p["observable"], p["t"][i], p["data"][i], p["model"][i],
+                                    p["sigma"][i]])
+        files.append("predictions.csv")
+        files += [os.path.basename(x) for x in self.parity_plots(out_dir)]
+        return files
+
+
+def report(flowsheet: Flowsheet, result: CalibrationResult, calibration: Sequence[Experiment],
+           validation: Sequence[Experiment] = (), *, comparison: CalibrationResult | None = None,
+           truth: Mapping[str, float] | None = None, options: Mapping[str, Any] | None = None) -> CalibrationReport:
+    """Predictions at the final estimates on both sets, and R²/RMSE per output (and pooled per group)."""
+    preds = {"calibration": predict(flowsheet, calibration, result.parameters, options=options)}
+    if validation:
+        preds["validation"] = predict(flowsheet, validation, result.parameters, options=options)
+    rows = []
+    for setname, p in preds.items():
+        for r in fit_statistics(p):
+            rows.append({"set": setname, **r})
+    units = {p["observable"]: flowsheet.unit_of(p["observable"]) for ps in preds.values() for p in ps}
+    return CalibrationReport(result, preds, rows, comparison, dict(truth) if truth else None, units)

@@ -1,0 +1,128 @@
+"""Command line: ``granuflow run | sweep | contour | calibrate | describe | units | kernels | docs | bench``.
+
+Exit codes: 0 success, 2 bad input (scene, option, parameter), 3 solver failure. A failure prints one line
+on stderr naming what went wrong. Each command's module is imported only when it runs, so that ``granuflow run``
+pays for NumPy and the core alone (matplotlib only when it draws, pandas never).
+"""
+from __future__ import annotations
+
+import importlib
+import os
+import sys
+
+from .common import EXIT_BAD_INPUT, EXIT_SOLVER, Parser, one_line
+
+# What `bench --quick` reduces, per subcommand (cli/bench.py runs it).
+_QUICK = {"core": "tank chains of 100 and 1000 states (not 10000)", "pbm": "q 1, 2, 4; rtol 1e-4, 1e-6",
+          "scene": "10 classes only, SciPy once", "sweep": "a 9 x 9 map, one repeat, no Dask"}
+
+
+def _cmd(module: str, name: str):
+    """The handler ``name`` of ``granuflow.cli.<module>``, imported when the command runs."""
+    def run(args):
+        return getattr(importlib.import_module(f"{__name__}.{module}"), name)(args)
+    return run
+
+
+def _add_batch_options(p) -> None:
+    """Options shared by the commands that run many points (sweep, contour)."""
+    p.add_argument("--workers", type=int, help="parallel solves (default: number of cores)")
+    p.add_argument("--set", action="append", metavar="UNIT.PARAM=VALUE",
+                   help="override a scene parameter for every point (unit allowed)")
+    p.add_argument("--t-end", help="end time of every run in seconds (or with a unit, e.g. '60 min')")
+    p.add_argument("--executor", default="threads", choices=["threads", "serial"])
+    p.add_argument("--no-progress", action="store_true", help="no progress bar (default: only on a terminal)")
+    p.add_argument("--quiet", action="store_true", help="no output but errors (and no progress bar)")
+
+
+def _version() -> str:
+    from .. import __version__
+
+    return f"granuflow {__version__}"
+
+
+def main(argv=None) -> int:
+    p = Parser(prog="granuflow", description="spray fluidized-bed flowsheet simulation")
+    p.add_argument("--version", action="version", version=_version())
+    sub = p.add_subparsers(dest="cmd", required=True, parser_class=Parser)
+    r = sub.add_parser("run", help="simulate a scene and write summary.json, CSV and plots")
+    r.add_argument("scene")
+    r.add_argument("--out", required=True, help="output folder (created)")
+    r.add_argument("--set", action="append", metavar="UNIT.PARAM=VALUE", help="override a parameter (unit allowed)")
+    r.add_argument("--t-end", help="end time in seconds (or with a unit, e.g. '60 min')")
+    r.add_argument("--no-plots", action="store_true", help="write summary.json and timeseries.csv only (faster)")
+    r.add_argument("--quiet", action="store_true", help="no output but errors")
+    r.set_defaults(func=_cmd("run", "cmd_run"))
+    w = sub.add_parser("sweep", help="run a sweep file; write sweep.csv and sweep.json")
+    w.add_argument("sweepfile")
+    w.add_argument("--out", required=True, help="output folder (created)")
+    _add_batch_options(w)
+    w.add_argument("--fail-fast", action="store_true", help="stop at the first failed point (exit 3)")
+    w.set_defaults(func=_cmd("sweep", "cmd_sweep"))
+    k = sub.add_parser("contour", help="contour map of outputs over two parameters; feasible window; CSV and PNG")
+    k.add_argument("scene")
+    k.add_argument("--x", required=True, metavar="UNIT.PARAM:UNIT:LO:HI:N",
+                   help="e.g. inlet.T:degC:40:80:15 (N: 1 to 401 points)")
+    k.add_argument("--y", required=True, metavar="UNIT.PARAM:UNIT:LO:HI:N",
+                   help="e.g. nozzle.mdot:g/min:60:120:15 (N: 1 to 401 points)")
+    k.add_argument("--output", action="append", help="summary key or state/output name (repeatable; default d50_um)")
+    k.add_argument("--constraint", action="append", metavar="OUTPUT>=VALUE", help='e.g. "bed_moisture_wet<0.04"')
+    k.add_argument("--out", required=True, help="output folder (created)")
+    _add_batch_options(k)
+    k.add_argument("--dask", metavar="ADDRESS", help="run on the Dask scheduler at ADDRESS (tcp://host:8786)")
+    k.set_defaults(func=_cmd("contour", "cmd_contour"))
+    u = sub.add_parser("units", help="the built-in unit types; with NAME its ports, settings, parameters, outputs")
+    u.add_argument("name", nargs="?", help="a unit type (e.g. fluid_bed)")
+    u.set_defaults(func=_cmd("info", "cmd_units"))
+    kk = sub.add_parser("kernels", help="registered kernels and schemes; with FAMILY their parameters and settings")
+    kk.add_argument("family", nargs="?", help="e.g. aggregation, breakage_selection, growth_scheme")
+    kk.set_defaults(func=_cmd("info", "cmd_kernels"))
+    d = sub.add_parser("describe", help="a scene's parameters: value, SI unit, default, bounds, source, description")
+    d.add_argument("scene")
+    d.add_argument("--format", choices=["table", "csv", "json"], default="table",
+                   help="table (every column, never truncated), csv or json")
+    d.set_defaults(func=_cmd("info", "cmd_describe"))
+    g = sub.add_parser("docs", help="write the generated reference pages (units, kernels) into a docs folder")
+    g.add_argument("--write", dest="dir", metavar="DIR", default="docs", help="docs folder (default: docs)")
+    g.add_argument("--check", action="store_true", help="only check that the pages are up to date (exit 2 if not)")
+    g.add_argument("--quiet", action="store_true")
+    g.set_defaults(func=_cmd("info", "cmd_docs"))
+    b = sub.add_parser("bench", help="benchmarks: speed against error (never pass/fail on time)")
+    b.add_argument("what", choices=["core", "pbm", "scene", "sweep"])
+    b.add_argument("--json", action="store_true", help="print JSON records")
+    b.add_argument("--repeats", type=int, default=7)
+    b.add_argument("--quick", action="store_true",
+                   help="a reduced set: " + "; ".join(f"{k}: {v}" for k, v in _QUICK.items()))
+    b.add_argument("--no-scipy", action="store_true", help="scene: time granuflow only")
+    b.add_argument("--quiet", action="store_true", help="no progress lines")
+    b.set_defaults(func=_cmd("bench", "cmd_bench"))
+    c = sub.add_parser("calibrate", help="staged calibration against experiments; report, tables, parity plots")
+    c.add_argument("experiments", help="experiment file (YAML, see granuflow.calibration)")
+    c.add_argument("--stages", required=True, help="stage file (YAML): free parameters, bounds, observables")
+    c.add_argument("--out", required=True, help="output folder (created)")
+    c.add_argument("--workers", type=int, help="threads: experiments in parallel, or starts with --starts")
+    c.add_argument("--starts", type=int, default=1, help="multi-start: number of starts (the first is the file's)")
+    c.add_argument("--spread", type=float, default=1.0, help="multi-start: ± spread in ln units around the start")
+    c.add_argument("--seed", type=int, default=0, help="multi-start: random seed")
+    c.add_argument("--compare", action="store_true", help="also fit all parameters at once from the same start")
+    c.add_argument("--no-progress", action="store_true", help="no progress bar (default: only on a terminal)")
+    c.add_argument("--quiet", action="store_true", help="no output but errors (and no progress bar)")
+    c.set_defaults(func=_cmd("calibrate", "cmd_calibrate"))
+    args = p.parse_args(argv)
+
+    from .. import _core
+
+    try:
+        return args.func(args)
+    except (_core.ConfigError, FileNotFoundError) as e:
+        print(f"granuflow: bad input: {one_line(e)}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except (_core.SolverError, _core.CalibrationError) as e:
+        print(f"granuflow: solver failure: {one_line(e)}", file=sys.stderr)
+        return EXIT_SOLVER
+    except BrokenPipeError:
+        # the reader went away (`granuflow describe SCENE | head`): stop quietly, and keep Python from
+        # reporting the failed flush of stdout at exit
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 0

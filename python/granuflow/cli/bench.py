@@ -1,0 +1,31 @@
+"""granuflow bench core|pbm|scene|sweep: speed against error, never pass/fail on time. Every subcommand honours
+--quick (a reduced set, stated in its help) and --repeats; progress goes to stderr on a terminal only."""
+from __future__ import annotations
+
+import json
+
+from .. import progress as progress_bars
+from .common import check_at_least, progress_option
+
+
+def cmd_bench(args) -> int:
+    from .. import bench
+
+    check_at_least("--repeats", args.repeats, 1)
+    progress = progress_bars.wanted(progress_option(args)) and not args.json
+    if args.what == "sweep":  # design-space throughput
+        kw = {"n": 9, "repeats": 1, "dask": False} if args.quick else {"repeats": args.repeats}
+        records, summary = bench.bench_sweep(progress=progress, **kw), bench.sweep_summary
+    elif args.what == "scene":
+        records = bench.bench_scene(args.repeats, classes=(10,) if args.quick else (10, 20, 40),
+                                    scipy=not args.no_scipy,
+                                    scipy_repeats=1 if args.quick else max(1, min(3, args.repeats)), progress=progress)
+        summary = bench.scene_summary
+    elif args.what == "pbm":
+        records = bench.bench_pbm(quick=args.quick, repeats=args.repeats, progress=progress)
+        summary = bench.pbm_summary
+    else:
+        records, summary = bench.bench_core(args.repeats, quick=args.quick, progress=progress), bench.core_summary
+    for line in [json.dumps(r) for r in records] if args.json else summary(records):
+        print(line)
+    return 0

@@ -1,0 +1,73 @@
+"""What every command shares: exit codes, one-line errors, option checks, output that survives a closed pipe."""
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+
+from .. import _core
+from ..quantity import parse_time
+
+ConfigError = _core.ConfigError
+EXIT_BAD_INPUT = 2
+EXIT_SOLVER = 3
+
+
+class Parser(argparse.ArgumentParser):
+    def error(self, message):  # argparse exits 2 too, but with a usage block; keep it to one line
+        print(f"granuflow: {message}", file=sys.stderr)
+        sys.exit(EXIT_BAD_INPUT)
+
+
+def parse_seconds(text: str, option: str = "--t-end") -> float:
+    return parse_time(text, option)
+
+
+def parse_sets(items) -> dict:
+    """``--set unit.param=value`` options as {name: value text}; a malformed one is bad input."""
+    overrides = {}
+    for item in items or []:
+        if "=" not in item:
+            raise ConfigError(f"--set '{item}': expected unit.param=value")
+        name, value = item.split("=", 1)
+        overrides[name.strip()] = value.strip()
+    return overrides
+
+
+def check_at_least(option: str, value, lower) -> None:
+    if value is not None and not value >= lower:
+        raise ConfigError(f"{option} = {value}: expected a number >= {lower}")
+
+
+def check_workers(workers) -> None:
+    check_at_least("--workers", workers, 1)
+
+
+def check_out_dir(out: str, option: str = "--out") -> None:
+    """The output folder: an existing folder or a path that can be created (not an existing file)."""
+    if os.path.exists(out) and not os.path.isdir(out):
+        raise ConfigError(f"{option} = '{out}': an existing file, not a folder (give a folder to write to)")
+    parent = out
+    while parent and not os.path.exists(parent):
+        parent = os.path.dirname(parent.rstrip(os.sep))
+    if parent and not os.path.isdir(parent):
+        raise ConfigError(f"{option} = '{out}': '{parent}' is a file, not a folder (give a folder to write to)")
+
+
+def json_value(v):
+    """A value JSON can hold: NumPy scalars as Python numbers, NaN and inf as null."""
+    if hasattr(v, "item"):
+        v = v.item()
+    if isinstance(v, float) and not math.isfinite(v):
+        return None
+    return v
+
+
+def one_line(e: BaseException) -> str:
+    return " ".join(str(e).split())
+
+
+def progress_option(args) -> bool | None:
+    """The progress bar: off with --quiet or --no-progress, else only on a terminal (None)."""
+    return False if getattr(args, "quiet", False) or getattr(args, "no_progress", False) else None

@@ -1,0 +1,101 @@
+"""granuflow units [NAME] | kernels [FAMILY] | describe SCENE | docs: the reference, from the registries."""
+from __future__ import annotations
+
+import csv
+import json
+import os
+import sys
+
+from .common import ConfigError
+
+DESCRIBE_COLUMNS = ("param", "value", "unit", "default", "lower", "upper", "input", "source", "description")
+
+
+def cmd_units(args) -> int:
+    from .. import reference
+
+    if args.name:
+        if args.name not in reference.unit_types():
+            raise ConfigError(f"units {args.name}: unknown unit type (allowed: {', '.join(reference.unit_types())})")
+        sys.stdout.write(reference.unit_text(args.name))
+        return 0
+    for name, desc in reference.unit_types().items():
+        print(f"{name:24s} {desc}")
+    print("\n(granuflow units NAME: ports, settings, parameters and outputs of one unit type)")
+    return 0
+
+
+def cmd_kernels(args) -> int:
+    from .. import reference
+
+    ref = reference.kernel_reference()
+    if args.family:
+        if args.family not in ref:
+            raise ConfigError(f"kernels {args.family}: unknown family (allowed: {', '.join(ref)})")
+        sys.stdout.write(reference.kernel_markdown(args.family))
+        return 0
+    for family, entries in ref.items():
+        print(f"{family}:")
+        for e in entries:
+            print(f"  {e['name']:24s} {e['description']}")
+    print("\n(granuflow kernels FAMILY: parameters and settings of every kernel of one family)")
+    return 0
+
+
+def describe_rows(fs) -> list[dict]:
+    rows = []
+    for p in fs.params:
+        s = fs.spec(p)
+        rows.append({"param": p, "value": s["value"], "unit": s["unit"], "default": s["default"],
+                     "lower": s["lower"], "upper": s["upper"], "input": s.get("input", False),
+                     "source": s.get("source", ""), "description": s.get("description", "")})
+    return rows
+
+
+def cmd_describe(args) -> int:
+    """Every parameter with every column, never truncated: a text table whose width follows the content (not the
+    terminal), or CSV / JSON for a spreadsheet or a script."""
+    from ..flowsheet import load
+
+    rows = describe_rows(load(args.scene))
+    out = sys.stdout
+    if args.format == "json":
+        json.dump(rows, out, indent=1)
+        out.write("\n")
+    elif args.format == "csv":
+        w = csv.DictWriter(out, fieldnames=DESCRIBE_COLUMNS, lineterminator="\n")
+        w.writeheader()
+        w.writerows(rows)
+    else:
+        cells = [[str(r[c]) if not isinstance(r[c], float) else f"{r[c]:.6g}" for c in DESCRIBE_COLUMNS] for r in rows]
+        widths = [max(len(c), *(len(x[i]) for x in cells)) for i, c in enumerate(DESCRIBE_COLUMNS)]
+        fmt = "  ".join(f"{{:{'<' if c in ('param', 'unit', 'source', 'description') else '>'}{w}}}"
+                        for c, w in zip(DESCRIBE_COLUMNS, widths))
+        print(fmt.format(*DESCRIBE_COLUMNS).rstrip())
+        for x in cells:
+            print(fmt.format(*x).rstrip())
+    return 0
+
+
+def cmd_docs(args) -> int:
+    """Write (or, with --check, compare) the generated reference pages under a docs folder."""
+    from .. import reference
+
+    stale = []
+    for rel, text in reference.pages().items():
+        path = os.path.join(args.dir, rel)
+        old = open(path).read() if os.path.exists(path) else None
+        if old == text:
+            continue
+        stale.append(rel)
+        if not args.check:
+            os.makedirs(os.path.dirname(path), exist_ok=True)
+            with open(path, "w") as f:
+                f.write(text)
+    if args.check and stale:
+        raise ConfigError(f"{args.dir}: {len(stale)} generated pages are out of date ({', '.join(stale)}); "
+                          "run granuflow docs --write DIR")
+    if not args.quiet:
+        print(f"{'checked' if args.check else 'wrote'} {len(reference.pages())} pages in {args.dir}"
+              + (f" ({len(stale)} changed)" if stale and not args.check else ""))
+    return 0

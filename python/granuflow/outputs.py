@@ -1,0 +1,123 @@
+"""What output names mean: the one module of the package that interprets the names of states, reported outputs and
+summary keys.
+
+Reported outputs carry roles the Python side needs: balance terms (``balance_<quantity>_<in|out|hold>``), the size
+distribution (``psd_d_<i>``, ``psd_m_<i>``), regularization counts (``reg_<what>``) and characteristic diameters
+(``d10``, ``d50``, ...). Until the C++ core declares these roles, they are read from the names here and nowhere
+else, so that swapping this module for the declared roles changes nothing outside it.
+
+Display conventions (files and plots): sizes in µm (``um``), everything else in SI; summary keys carry their unit
+in the name (``d50_um``, ``T_gas_out_K``).
+"""
+from __future__ import annotations
+
+import re
+
+_BALANCE = re.compile(r"^(?:.*\.)?balance_(water|solids|energy)_(in|out|hold)$")
+_PSD = re.compile(r"^(.*)\.psd_(d|m)_(\d+)$")
+_SIZE = re.compile(r"^(?:.*\.)?(d\d+)(?:_3)?$")  # characteristic diameters: d10, d50, ... (d50_3: older pbm_batch)
+_REG = re.compile(r"^(?:.*\.)?reg_\w+$")
+
+BALANCE_QUANTITIES = ("water", "solids", "energy")
+# Summary keys every summary.json holds (null where the scene has no such quantity).
+STANDARD_SUMMARY_KEYS = ("d10_um", "d50_um", "d90_um", "bed_moisture", "T_gas_out_K")
+DEFAULT_SWEEP_OUTPUTS = ("d50_um", "bed_moisture", "bed_moisture_wet", "T_gas_out_K", "d10_um", "d90_um")
+
+# The characteristic diameters of the bed (mass-based) that calibration reads, and the observable groups of its
+# parity plots and pooled statistics.
+D_VALUES = ("bed.d5", "bed.d10", "bed.d16", "bed.d25", "bed.d50", "bed.d75", "bed.d84", "bed.d90", "bed.d95")
+OBSERVABLE_GROUPS = {"size": D_VALUES, "moisture": ("bed.moisture", "bed.moisture_wet"), "T_gas_out": ("gas.T",)}
+GROUP_TITLES = {"size": "characteristic diameters d5..d95", "moisture": "bed moisture",
+                "T_gas_out": "outlet gas temperature"}
+# Units of the observables in experiment files, calibration tables and parity plots (SI unit -> shown unit).
+OBSERVABLE_DISPLAY = {**{d: "um" for d in D_VALUES}, "bed.moisture": "wt%", "bed.moisture_wet": "wt%",
+                      "gas.T": "degC"}
+
+# Readable names of the local output/state names, for legends and labels.
+_WORDS = {
+    "T": "temperature", "Y": "gas humidity", "X": "moisture (dry basis)", "moisture": "moisture (dry basis)",
+    "moisture_wet": "moisture (wet basis)", "mdot": "mass flow", "V_dot": "volume flow", "number": "particle number",
+    "particles": "particle number", "mass": "mass", "relative_humidity": "relative humidity",
+    "top_class_fraction": "mass fraction in the top class", "fwet_mean": "mean wetted fraction",
+    "evaporated_fraction": "evaporated fraction", "mass_through_top": "mass through the top class",
+}
+# Summary keys in plots: (readable name, unit of the summary value, unit shown).
+_SUMMARY_DISPLAY = {
+    "d10_um": ("d10 (mass-based)", "um", "um"), "d50_um": ("d50 (mass-based)", "um", "um"),
+    "d90_um": ("d90 (mass-based)", "um", "um"),
+    "bed_moisture_wet": ("bed moisture (wet basis)", "kg/kg", "wt%"),
+    "bed_moisture": ("bed moisture (dry basis)", "kg/kg", "wt%"),
+    "T_gas_out_K": ("gas outlet temperature", "K", "degC"), "T_bed_K": ("bed temperature", "K", "degC"),
+    "T_out_K": ("outlet temperature", "K", "degC"),
+}
+
+
+# -- roles ----------------------------------------------------------------------------------------------------------
+def balance_terms(output_names) -> list[tuple[int, str, str]]:
+    """``(column, quantity, kind)`` of every balance output: quantity water|solids|energy, kind in|out|hold."""
+    return [(j, *m.groups()) for j, n in enumerate(output_names) if (m := _BALANCE.match(n))]
+
+
+def psd_units(output_names) -> list[str]:
+    """Units that report a size distribution."""
+    return sorted({m.group(1) for n in output_names if (m := _PSD.match(n))})
+
+
+def psd_columns(output_names, unit: str) -> tuple[list[int], list[int]]:
+    """Columns of the pivot diameters (m) and class masses (kg) of ``unit``, in class order."""
+    cols: dict[str, list] = {"d": [], "m": []}
+    for j, n in enumerate(output_names):
+        if (m := _PSD.match(n)) and m.group(1) == unit:
+            cols[m.group(2)].append((int(m.group(3)), j))
+    return [j for _, j in sorted(cols["d"])], [j for _, j in sorted(cols["m"])]
+
+
+def is_psd(name: str) -> bool:
+    return bool(_PSD.match(name))
+
+
+def regularization_columns(output_names) -> list[tuple[int, str]]:
+    """``(column, name)`` of the outputs counting where a closure left the paper's literal equations."""
+    return [(j, n) for j, n in enumerate(output_names) if _REG.match(n)]
+
+
+def is_size(name: str, si_unit: str = "m") -> bool:
+    """A characteristic diameter or a PSD pivot diameter (shown in µm)."""
+    return si_unit == "m" and (bool(_SIZE.match(name)) or (bool(_PSD.match(name)) and ".psd_d_" in name))
+
+
+def size_fraction(name: str) -> float | None:
+    """The mass fraction below a characteristic diameter: ``bed.d90`` -> 0.9; None for other names."""
+    m = _SIZE.match(name)
+    return int(m.group(1)[1:]) / 100.0 if m else None
+
+
+# -- display --------------------------------------------------------------------------------------------------------
+def display_unit(name: str, si_unit: str) -> str:
+    """The unit ``name`` is shown in (files, plots): µm for sizes, else its SI unit."""
+    return "um" if is_size(name, si_unit) else si_unit
+
+
+def summary_in_um(key: str) -> bool:
+    """Summary keys ending in ``_um`` hold a size in µm (the core reports m)."""
+    return key.endswith("_um")
+
+
+def summary_unit(key: str, si_unit: str) -> str:
+    """The unit of a summary value as written to summary.json."""
+    return "um" if summary_in_um(key) else si_unit
+
+
+def readable(name: str) -> str:
+    """A readable name for legends: ``bed.d10`` -> ``d10, mass-based (bed)``, ``gas.T`` -> ``temperature (gas)``."""
+    if name in _SUMMARY_DISPLAY:
+        return _SUMMARY_DISPLAY[name][0]
+    unit, _, local = name.rpartition(".")
+    m = _SIZE.match(local)
+    words = f"{m.group(1)}, mass-based" if m else _WORDS.get(local, local.replace("_", " "))
+    return f"{words} ({unit})" if unit else words
+
+
+def summary_display(key: str) -> tuple[str, str, str]:
+    """(readable name, unit of the value, unit shown) of a summary key for plots; unknown keys as they are."""
+    return _SUMMARY_DISPLAY.get(key, (key, "", ""))

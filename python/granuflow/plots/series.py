@@ -1,0 +1,97 @@
+"""Plots of one run as files (PNG): the time series of a scene's `plots:` entries, the size distribution at several
+times. Legends use readable names (not ``bed.d10``), axes carry units, and a curve the size grid clips says so."""
+from __future__ import annotations
+
+import numpy as np
+
+from .. import outputs
+from ..quantity import convert, from_si, pretty
+
+
+def figure(figsize=(6.4, 4.0)):
+    """A figure that only goes to a file: no pyplot (faster to import, never changes a notebook's backend)."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=figsize)
+    return fig, fig.add_subplot()
+
+
+def supported_formats() -> list[str]:
+    """File extensions matplotlib can write (png, pdf, svg, ...)."""
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    return sorted(FigureCanvasBase.get_supported_filetypes())
+
+
+def plot_series(result, spec: dict, path: str) -> str:
+    """One figure: the series named in ``spec["y"]`` over time in minutes, converted to ``spec["unit"]``."""
+    fig, ax = figure()
+    units = set()
+    for name in spec["y"]:
+        si = result.unit(name)
+        unit = spec.get("unit") or outputs.display_unit(name, si)
+        units.add(unit)
+        label = f"{outputs.readable(name)} [{pretty(unit)}]"
+        top = clipped_top_um(result, name, si)
+        if top is not None:
+            label += f", clipped by the size grid (top class {top:.0f} µm)"
+        ax.plot(result.t / 60.0, convert(result[name], unit, si), label=label)
+    unit = units.pop() if len(units) == 1 else ""
+    ylabel = spec.get("ylabel", "")
+    ax.set_xlabel("time / min")
+    ax.set_ylabel(f"{ylabel} / {pretty(unit)}" if unit and ylabel else ylabel or pretty(unit))
+    ax.set_title(spec.get("title", ""))
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    return path
+
+
+# Mass fraction in the top class above which a shown distribution counts as clipped by the grid.
+CLIP_FRACTION = 1e-3
+
+
+def clipped_top_um(result, name: str, si_unit: str):
+    """The top pivot (µm) when ``name`` is a characteristic diameter dX of a unit whose top size class holds more
+    than (100 - X) % of the mass at some output time (the grid then caps dX), else None."""
+    unit = name.rpartition(".")[0]
+    below = outputs.size_fraction(name)
+    if below is None or si_unit != "m" or unit not in result.psd_units():
+        return None
+    dcols, mcols = outputs.psd_columns(result.output_names, unit)
+    m = result.outputs[:, mcols]
+    total = m.sum(axis=1)
+    frac = np.divide(m[:, -1], total, out=np.zeros_like(total), where=total > 0)
+    return float(from_si(result.outputs[-1, dcols[-1]], "um", "m")) if frac.max() > 1.0 - below else None
+
+
+def plot_psd(result, path: str, times_s=None, unit: str | None = None) -> str:
+    """Mass density q3 over log-diameter at several times (PSD evolution). When mass sits in the top class at a shown
+    time, the grid clips the distribution: the title and the legend say so (widen ``d_max`` of the size grid)."""
+    if times_s is None:
+        times_s = np.linspace(result.t[0], result.t[-1], 5)
+    fig, ax = figure()
+    clipped = []
+    for t in times_s:
+        df = result.psd(t, unit)
+        d = df["d_um"].to_numpy()
+        # q3 over ln d from class mass fractions, with the geometric class widths of the pivots
+        edges = np.sqrt(d[1:] * d[:-1])
+        edges = np.concatenate([[d[0] ** 2 / edges[0]], edges, [d[-1] ** 2 / edges[-1]]])
+        q3 = df["mass_fraction"].to_numpy() / np.diff(np.log(edges))
+        top = float(df["mass_fraction"].iloc[-1])
+        note = ""
+        if top > CLIP_FRACTION:
+            clipped.append(t)
+            note = f", {100 * top:.1f} % in the top class: clipped"
+        ax.semilogx(d, q3, marker="o", ms=3, label=f"{t / 60:.0f} min{note}")
+    ax.set_xlabel("particle diameter / µm")
+    ax.set_ylabel("q3 (ln d) / -")
+    ax.set_title("Particle size distribution" + (" (clipped by the size grid: mass in the top class)"
+                                                 if clipped else ""), fontsize=10 if clipped else None)
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    return path

@@ -1,0 +1,140 @@
+"""The generic runner: simulate a flowsheet once per point and collect final values."""
+from __future__ import annotations
+
+import math
+import time
+from typing import Any, Callable, Mapping, Sequence
+
+from .. import _core, outputs as roles, progress as progress_bars
+from ..flowsheet import Flowsheet
+from ..quantity import si_or_nan
+from .executors import make_executor
+
+ConfigError = _core.ConfigError
+SolverError = _core.SolverError
+
+DEFAULT_OUTPUTS = roles.DEFAULT_SWEEP_OUTPUTS
+STATUS_OK = "ok"
+STATUS_FAILED = "failed"
+
+# ------------------------------------------------------------------------------------------------
+# the generic runner
+# ------------------------------------------------------------------------------------------------
+
+
+def check_outputs(flowsheet: Flowsheet, outputs: Sequence[str], where: str = "outputs") -> list[str]:
+    """``outputs`` if each is a summary key or a state/output name of the flowsheet; ConfigError naming ``where``."""
+    summary_keys = flowsheet.summary_keys()
+    names = set(flowsheet.state_names) | set(flowsheet.output_names)
+    out = []
+    for o in outputs:
+        if not isinstance(o, str) or (o not in summary_keys and o not in names):
+            raise ConfigError(f"{where}: '{o}' is neither a summary key of scene '{flowsheet.name}' "
+                              f"(allowed: {', '.join(summary_keys)}) nor a state or output name (e.g. bed.T)")
+        out.append(o)
+    return out
+
+
+def final_values(res, outputs: Sequence[str]) -> dict[str, float]:
+    """``outputs`` of a result at its final time: summary keys, else states and reported outputs; NaN where the
+    summary has no value (null in summary.json)."""
+    summary = res.summary
+    out = {}
+    for o in outputs:
+        v = summary[o] if o in summary and o not in ("units", "balance", "solver") else float(res[o][-1])
+        out[o] = math.nan if v is None else float(v)
+    return out
+
+
+def collect(exe, evaluate: Callable[[Flowsheet, Any], dict], flowsheet: Flowsheet, items: Sequence[Any],
+            progress: bool | None, desc: str) -> list[dict]:
+    """The rows of ``exe.map_unordered(evaluate, flowsheet, items)`` in the order of ``items``, with a progress bar
+    counting the failed ones. Items are ``(i, ...)`` and every row carries ``"_i": i`` and ``"status"``."""
+    bar = progress_bars.bar(progress, len(items), desc)
+    rows = []
+    n_failed = 0
+    try:
+        for row in exe.map_unordered(evaluate, flowsheet, items):
+            rows.append(row)
+            n_failed += row["status"] != STATUS_OK
+            if bar is not None:
+                bar.update(1)
+                if n_failed:
+                    bar.set_postfix(failed=n_failed)
+    finally:
+        if bar is not None:
+            bar.refresh()  # tqdm throttles redraws: show the final count before the bar goes
+            bar.close()
+    rows.sort(key=lambda r: r["_i"])
+    return rows
+
+
+def run_sweep(flowsheet: Flowsheet, points: Sequence[Mapping[str, float | str]],
+              outputs: Sequence[str] = DEFAULT_OUTPUTS, *, names: Sequence[str] | None = None,
+              workers: int | None = None, progress: bool | None = None, executor: str | Any = "threads",
+              t_end: float | None = None, raise_errors: bool = False, simulate: Mapping[str, Any] | None = None,
+              desc: str = "sweep"):
+    """Simulate ``flowsheet`` once per point and collect ``outputs``.
+
+    ``points``: one mapping per run, ``{"unit.param": value}`` with SI floats or strings with a unit; parameters
+    not named keep the flowsheet's value. ``outputs``: summary keys (``d50_um``, ...) or state/output names (final
+    value). Returns a pandas DataFrame, one row per point in the order given: ``point`` (``names[i]`` or ``i``),
+    one column per parameter (its SI value), the outputs, ``wall_time_s`` (this point, including setup),
+    ``solve_time_s`` (the integrator alone), ``status`` ("ok" or "failed") and ``message``.
+
+    A point whose solve fails (``SolverError``) or whose values are rejected (``ConfigError``) is recorded with
+    status "failed" and the message; with ``raise_errors=True`` the first failure is raised instead.
+    ``progress``: tqdm bar on stderr (default: only when stderr is a terminal). ``simulate``: keyword arguments
+    of ``Flowsheet.simulate`` (``rtol``, ``atol``, ...).
+    """
+    import numpy as np
+    import pandas as pd
+
+    points = [dict(p) for p in points]
+    if names is None:
+        names = list(range(len(points)))
+    if len(names) != len(points):
+        raise ConfigError(f"names: {len(names)} names for {len(points)} points")
+    outputs = check_outputs(flowsheet, list(outputs))
+    params = list(dict.fromkeys(k for p in points for k in p))
+    known = set(flowsheet.params)
+    for k in params:
+        if k not in known:
+            raise ConfigError(f"unknown parameter '{k}' (parameters: {', '.join(flowsheet.params)})")
+    sim_kwargs = dict(simulate or {})
+    if t_end is not None:
+        sim_kwargs["t_end"] = float(t_end)
+    base = {k: flowsheet.get(k) for k in params}
+
+    def evaluate(fs: Flowsheet, item) -> dict:
+        i, point = item
+        t0 = time.perf_counter()
+        row: dict[str, Any] = {"_i": i}
+        try:
+            fs.update(base)  # a worker's clone may carry the previous point's values
+            fs.update(point)
+            for k in params:
+                row[k] = fs.get(k)
+            res = fs.simulate(**sim_kwargs)
+            row.update(final_values(res, outputs))
+            row["solve_time_s"] = res.wall_time_s
+            row["status"], row["message"] = STATUS_OK, ""
+        except (SolverError, ConfigError) as e:
+            if raise_errors:
+                raise
+            row["status"], row["message"] = STATUS_FAILED, " ".join(str(e).split())
+        row["wall_time_s"] = time.perf_counter() - t0
+        return row
+
+    rows = collect(make_executor(executor, workers), evaluate, flowsheet, list(enumerate(points)), progress, desc)
+    cols = ["point"] + params + outputs + ["wall_time_s", "solve_time_s", "status", "message"]
+    data = []
+    for r in rows:
+        d = {c: r.get(c, np.nan) for c in cols}
+        d["point"] = names[r["_i"]]
+        if r["status"] != STATUS_OK:  # parameter values as requested, where they could be read
+            for k in params:
+                if isinstance(d[k], float) and math.isnan(d[k]):
+                    d[k] = si_or_nan(points[r["_i"]].get(k, base[k]), flowsheet.spec(k)["unit"], k)
+        data.append(d)
+    return pd.DataFrame(data, columns=cols)

@@ -1,0 +1,132 @@
+// Read-only views of the registries for the user reference (granuflow units NAME, docs/units, docs/kernels): what a
+// unit declares (ports, settings, parameters, states, outputs) and what a kernel declares, generated from the code
+// itself so the documents cannot drift from it. Also the SI unit of every state and output of a built scene.
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <map>
+#include <string>
+
+#include "granuflow/errors.hpp"
+#include "granuflow/flowsheet.hpp"
+#include "granuflow/quantity.hpp"
+#include "granuflow/scene.hpp"
+#include "kernels/registry.hpp"
+#include "units/registry.hpp"
+
+namespace py = pybind11;
+using namespace pybind11::literals;
+
+namespace granuflow::python {
+namespace {
+
+py::dict param_dict(const ParamSpec& p) {
+  return py::dict("name"_a = p.name, "unit"_a = p.unit, "default"_a = p.value, "lower"_a = p.lower, "upper"_a = p.upper,
+                  "description"_a = p.description, "source"_a = p.source);
+}
+
+py::list settings_list(const std::vector<SettingSpec>& settings) {
+  py::list out;
+  for (const auto& s : settings)
+    out.append(py::dict("name"_a = s.name, "type"_a = to_string(s.type), "default"_a = setting_to_string(s.value),
+                        "choices"_a = s.choices, "lower"_a = s.lower, "upper"_a = s.upper,
+                        "description"_a = s.description));
+  return out;
+}
+
+// Declares a fresh unit of `type` with the given settings (defaults for the rest) and reports what it declared.
+py::dict unit_reference(const std::string& type, const std::map<std::string, std::string>& given) {
+  const auto& reg = units::builtin();
+  auto unit = reg.create(type, "unit_reference");
+  UnitSpec spec;
+  Settings settings("unit_reference(" + type + ").settings", given);
+  unit->declare(spec, settings);
+  settings.check_all_used();
+  py::list ports, params, states, outputs;
+  for (const auto& p : spec.ports())
+    ports.append(py::dict("name"_a = p.name, "kind"_a = to_string(p.kind), "direction"_a = to_string(p.dir),
+                          "classes"_a = p.classes, "optional"_a = p.optional));
+  for (const auto& p : spec.params()) params.append(param_dict(p));
+  for (const auto& s : spec.states())
+    states.append(py::dict("name"_a = s.name,
+                           "kind"_a = s.kind == StateKind::Differential ? "differential" : "algebraic",
+                           "unit"_a = s.unit, "scale"_a = s.scale));
+  for (const auto& o : spec.outputs()) outputs.append(py::dict("name"_a = o.name, "unit"_a = o.unit));
+  return py::dict("type"_a = type, "description"_a = reg.description(type), "explicit"_a = spec.is_explicit(),
+                  "ports"_a = ports, "settings"_a = settings_list(settings.declared()), "params"_a = params,
+                  "states"_a = states, "outputs"_a = outputs);
+}
+
+py::dict needs_dict(const kernels::ClassNeeds& n) {
+  return py::dict("number"_a = n.number, "moisture"_a = n.moisture, "spot_moisture"_a = n.spot_moisture,
+                  "temperature"_a = n.temperature, "liquid_fraction"_a = n.liquid_fraction);
+}
+
+template <class Base>
+py::dict kernel_entry(const Registry<Base>& reg, const std::string& name) {
+  py::dict d("name"_a = name, "description"_a = reg.description(name));
+  if constexpr (std::is_base_of_v<kernels::KernelBase, Base>) {
+    auto k = reg.create(name);
+    Settings settings("kernel_reference(" + name + ").settings", {});
+    try {
+      k->declare(settings, "");
+    } catch (const ConfigError& e) {
+      // e.g. a kernel reading a data table that only a scene loads: its settings are listed as far as declared
+      d["note"] = std::string(e.what());
+    }
+    py::list params;
+    for (const auto& p : k->params()) params.append(param_dict(p));
+    d["params"] = params;
+    d["settings"] = settings_list(settings.declared());
+    d["needs"] = needs_dict(k->needs());
+    d["state_dependent"] = k->state_dependent();
+  } else {
+    d["params"] = py::list();
+    d["settings"] = py::list();
+  }
+  return d;
+}
+
+template <class Base>
+void add_family(py::dict& out, const char* family, const Registry<Base>& reg) {
+  py::list l;
+  for (const auto& n : reg.names()) l.append(kernel_entry(reg, n));
+  out[family] = l;
+}
+
+py::dict kernel_reference() {
+  const auto& r = kernels::registries();
+  py::dict out;
+  add_family(out, "aggregation", r.aggregation);
+  add_family(out, "breakage_selection", r.selection);
+  add_family(out, "breakage_fragments", r.fragments);
+  add_family(out, "growth", r.growth);
+  add_family(out, "aggregation_scheme", r.aggregation_schemes);
+  add_family(out, "breakage_scheme", r.breakage_schemes);
+  add_family(out, "growth_scheme", r.growth_schemes);
+  return out;
+}
+
+}  // namespace
+
+void register_reference(py::module_& m) {
+  m.def("unit_reference", &unit_reference, "type"_a, "settings"_a = std::map<std::string, std::string>{},
+        "What a unit of `type` declares with these settings (defaults for the rest): ports, settings, parameters, "
+        "states and outputs.");
+  m.def("kernel_reference", &kernel_reference,
+        "Every registered kernel and scheme by family: description, parameters, settings, per-class needs.");
+  m.def("known_si_units", &known_si_units, "The SI units parameters, states and outputs may declare.");
+  m.def(
+      "scene_units",
+      [](const Scene& s) {
+        py::dict d;
+        for (const auto& u : s.flowsheet->units()) {
+          for (const auto& x : u.spec.states()) d[py::str(u.name + "." + x.name)] = x.unit;
+          for (const auto& x : u.spec.outputs()) d[py::str(u.name + "." + x.name)] = x.unit;
+        }
+        return d;
+      },
+      "scene"_a, "SI unit of every state and reported output of a built scene.");
+}
+
+}  // namespace granuflow::python
