@@ -68,6 +68,15 @@ class Flowsheet:
         """SI unit of a state or reported output; ConfigError listing the valid names otherwise."""
         return _core.observable_unit(self._scene, name)
 
+    def value_unit(self, name: str) -> str:
+        """The unit of a summary key's value (``d50_um``: um) or of a state/output (SI)."""
+        smap = self._scene.summary_map
+        if name in smap:
+            return outputs.summary_unit(name, self.unit_of(smap[name]))
+        if name in outputs.STANDARD_SUMMARY_UNITS:
+            return outputs.STANDARD_SUMMARY_UNITS[name]
+        return self.unit_of(name)
+
     def units(self) -> dict[str, str]:
         """SI unit of every state and reported output."""
         return dict(_core.scene_units(self._scene))

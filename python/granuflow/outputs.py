@@ -21,6 +21,7 @@ _REG = re.compile(r"^(?:.*\.)?reg_\w+$")
 BALANCE_QUANTITIES = ("water", "solids", "energy")
 # Summary keys every summary.json holds (null where the scene has no such quantity).
 STANDARD_SUMMARY_KEYS = ("d10_um", "d50_um", "d90_um", "bed_moisture", "T_gas_out_K")
+STANDARD_SUMMARY_UNITS = {"d10_um": "um", "d50_um": "um", "d90_um": "um", "bed_moisture": "kg/kg", "T_gas_out_K": "K"}
 DEFAULT_SWEEP_OUTPUTS = ("d50_um", "bed_moisture", "bed_moisture_wet", "T_gas_out_K", "d10_um", "d90_um")
 
 # The characteristic diameters of the bed (mass-based) that calibration reads, and the observable groups of its
@@ -116,6 +117,19 @@ def readable(name: str) -> str:
     m = _SIZE.match(local)
     words = f"{m.group(1)}, mass-based" if m else _WORDS.get(local, local.replace("_", " "))
     return f"{words} ({unit})" if unit else words
+
+
+_UNIT_SUFFIX = {"um": "um", "K": "K", "s": "s", "kg": "kg", "ms": "ms", "m3h": "m3/h", "degC": "degC",
+                "g_min": "g/min", "W": "W", "Pa": "Pa"}
+
+
+def header(name: str, unit: str) -> str:
+    """A column header for files: the name with its unit (``bed_moisture [kg/kg]``), or the name alone when it
+    already ends in that unit (``d50_um``, ``T_gas_out_K``, ``wall_time_s``) or has none."""
+    for suffix, u in _UNIT_SUFFIX.items():
+        if name.endswith("_" + suffix) and u == unit:
+            return name
+    return f"{name} [{unit}]" if unit else name
 
 
 def summary_display(key: str) -> tuple[str, str, str]:

@@ -76,11 +76,28 @@ class Result:
         df.attrs["units"] = {"t_s": "s", **{n: self.unit(n) for n in names}}
         return df
 
+    def repeated_outputs(self) -> list[str]:
+        """Outputs that repeat a state of the same unit over the whole run (a balance term that is the unit's own
+        accumulator, a class mass reported again for the size distribution): files list such a quantity once."""
+        by_unit: dict[str, list[int]] = {}
+        for i, n in enumerate(self.state_names):
+            by_unit.setdefault(n.rpartition(".")[0], []).append(i)
+        out = []
+        for j, n in enumerate(self.output_names):
+            col = self.outputs[:, j]
+            if any(np.array_equal(col, self.y[:, i]) for i in by_unit.get(n.rpartition(".")[0], ())):
+                out.append(n)
+        return out
+
     def _display_columns(self):
-        """(header, values) of every state and output as files show them: sizes in µm, the rest SI."""
+        """(header, values) of every state and output as files show them: sizes in µm, the rest SI; outputs that
+        repeat a state are left out."""
         cols = []
+        skip = set(self.repeated_outputs())
         for names, block in ((self.state_names, self.y), (self.output_names, self.outputs)):
             for j, n in enumerate(names):
+                if n in skip:
+                    continue
                 si = self.unit(n)
                 shown = outputs.display_unit(n, si)
                 cols.append((label(n, shown), from_si(block[:, j], shown, si)))
@@ -88,7 +105,7 @@ class Result:
 
     def table(self):
         """The time series as people read them: headers with units (``bed.d50 [um]``), sizes in µm, time in s and
-        min; a DataFrame (what :meth:`to_csv` writes)."""
+        min, each quantity once (:meth:`repeated_outputs` are left out); a DataFrame (what :meth:`to_csv` writes)."""
         import pandas as pd
 
         cols = [("t [s]", self.t), ("t [min]", self.t / 60.0)] + self._display_columns()
@@ -175,8 +192,7 @@ class Result:
         s["solver"] = {"states": st["states"], "steps": st["steps"], "residuals": st["residuals"],
                        "jacobians": st["jacobians"], "linear_solver": st["linear_solver"],
                        "reinits": st["reinits"], "rtol": self.rtol}
-        s["units"] = {"t_end_s": "s", **{k: units.get(k, "um" if outputs.summary_in_um(k) else "")
-                                         for k in outputs.STANDARD_SUMMARY_KEYS}, **units,
+        s["units"] = {"t_end_s": "s", **outputs.STANDARD_SUMMARY_UNITS, **units,
                       "balance": "-", "regularizations": "classes or instances", "wall_time_s": "s"}
         return s
 

@@ -158,6 +158,15 @@ def test_shipped_experiment_file_and_cli(tmp_path, truth, staged):
     for f in ("report.json", "report.txt", "estimates.csv", "correlation.csv", "history.csv", "fit.csv",
               "predictions.csv", "parity_size.png", "parity_moisture.png", "parity_T_gas_out.png"):
         assert (out / f).exists(), f
+    import pandas as pd
+
+    # units in the tables: each estimate's SI unit, and the unit of each RMSE
+    est = pd.read_csv(out / "estimates.csv", index_col=0)
+    fs = gf.load(SCENE)
+    assert {n: est.loc[n, "unit"] for n in est.index} == {n: fs.spec(n)["unit"] for n in est.index}
+    fit = pd.read_csv(out / "fit.csv")
+    units = dict(zip(fit["output"], fit["unit"]))
+    assert units["gas.T"] == "K" and units["size"] == "m" and units["bed.moisture"] == "kg/kg"
     # the shipped file holds the seed-2024 synthetic data of the `synthetic` fixture: the command line reaches the
     # truth (the scene defaults) within two standard errors or flags the parameter, as the Python route does
     rep = strict_json(out / "report.json")["result"]

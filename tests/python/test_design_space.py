@@ -38,8 +38,9 @@ def test_contour_grid_equals_direct_simulations(fs, grid):
         assert grid["bed.T"][i, j] == ref["bed.T"][-1]
     assert fs.get("inlet.T") == 333.15 and fs.get("nozzle.mdot") == 0.0015  # the caller's flowsheet untouched
     df = grid.to_dataframe()
-    assert len(df) == 20 and list(df.columns[:4]) == ["inlet.T [degC]", "nozzle.mdot [g/min]", "inlet.T",
-                                                      "nozzle.mdot"]
+    assert len(df) == 20 and list(df.columns[:4]) == ["inlet.T [degC]", "nozzle.mdot [g/min]", "inlet.T [K]",
+                                                      "nozzle.mdot [kg/s]"]
+    assert df.attrs["units"]["d50_um"] == "um" and df.attrs["units"]["bed.T"] == "K"
     assert df["d50_um"].tolist() == grid["d50_um"].ravel().tolist()
     # paper 001 Fig. 17: d50 grows with the spray rate
     assert (np.diff(grid["d50_um"], axis=0) > 0).all()
@@ -187,7 +188,10 @@ def test_contour_cli(tmp_path, capsys):
     import pandas as pd
 
     df = pd.read_csv(out / "contour.csv")
-    direct = (df["d50_um"] >= 400) & (df["bed_moisture_wet"] < 0.04)
+    assert {"inlet.T [degC]", "inlet.T [K]", "nozzle.mdot [g/min]", "nozzle.mdot [kg/s]"} <= set(df.columns)
+    assert df["inlet.T [K]"].to_numpy() == pytest.approx(df["inlet.T [degC]"].to_numpy() + 273.15)
+    assert meta["units"] == {"d50_um": "um", "bed_moisture_wet": "kg/kg"}
+    direct = (df["d50_um"] >= 400) & (df["bed_moisture_wet [kg/kg]"] < 0.04)
     assert len(df) == 9 and df["feasible"].tolist() == direct.tolist()
     for bad in (["--x", "inlet.T:degC:50:80"], ["--x", "inlet.T:degC:50:80:3", "--constraint", "d50_um=>4"],
                 ["--x", "inlet.T:degC:50:900:3"]):

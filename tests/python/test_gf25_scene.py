@@ -100,6 +100,17 @@ def test_cli_run_writes_summary_csv_and_plots(tmp_path, headline):
         assert ts[f"bed.{d} [um]"].iloc[-1] == pytest.approx(s[f"{d}_um"], rel=1e-9)
         assert s["units"][f"{d}_um"] == "um"
     assert not any(c.startswith("bed.d50 [m]") for c in ts.columns)
+    # each quantity once: no output that repeats a state of its unit under another name
+    assert "bed.M_0 [kg]" in ts.columns and not any(c.startswith("bed.psd_m_") for c in ts.columns)
+    assert "bed.H [J]" in ts.columns and "bed.balance_energy_hold [J]" not in ts.columns
+    cols = ts.to_numpy().T
+    by_unit = {}
+    for c, v in zip(ts.columns, cols):
+        by_unit.setdefault(c.split(".")[0], []).append((c, v))
+    for unit, cs in by_unit.items():
+        for i, (a, va) in enumerate(cs):
+            for b, vb in cs[i + 1:]:
+                assert not (np.array_equal(va, vb) and np.ptp(va) > 0), (a, b)
     plots = yaml.safe_load(open(SCENE))["plots"]
     names = [spec["file"] for spec in plots]
     assert names == ["diameters.png", "moisture.png", "temperatures.png", "psd.png"]
@@ -292,11 +303,13 @@ def test_cli_sweep_two_points_end_to_end(tmp_path):
     df = pd.read_csv(out / "sweep.csv")
     assert list(df["point"]) == ["low", "high"]
     assert list(df["spray_g_min"]) == pytest.approx([60.0, 120.0]) and list(
-        df["T_in_degC"]) == pytest.approx([60.0, 60.0])
+        df["T_in_degC"]) == pytest.approx([60.0, 60.0])  # names that hold their unit keep it
     assert (df["status"] == "ok").all()
     assert df["d50_um"].iloc[1] > df["d50_um"].iloc[0]
-    assert {"wall_time_s", "message", "d50_um", "bed_moisture_wet", "T_gas_out_K"} <= set(df.columns)
+    # every number carries its unit: in the header, or in the name itself (d50_um, T_gas_out_K, wall_time_s)
+    assert {"wall_time_s", "message", "d50_um", "bed_moisture_wet [kg/kg]", "T_gas_out_K"} <= set(df.columns)
     js = strict_json(out / "sweep.json")
+    assert js["units"]["d50_um"] == "um" and js["units"]["bed_moisture_wet"] == "kg/kg"
     assert js["sweep"] == "two_points" and js["n_points"] == 2 and js["n_failed"] == 0
     assert js["t_end_s"] == 1800.0 and js["overrides"] == {"inlet.V_dot": "650 m3/h"}
     assert js["variables"]["spray_g_min"] == {"param": "nozzle.mdot", "unit": "g/min", "levels": []}

@@ -53,6 +53,7 @@ class CalibrationReport:
     comparison: CalibrationResult | None = None   # e.g. the simultaneous fit from the same start
     truth: dict[str, float] | None = None
     units: dict[str, str] = field(default_factory=dict)  # SI unit of every observable
+    param_units: dict[str, str] = field(default_factory=dict)  # SI unit of every free parameter
 
     @property
     def fit(self):
@@ -107,7 +108,9 @@ class CalibrationReport:
             txt += "\n\nComparison (" + (self.comparison.label or "other route") + "):\n" + \
                                     self.comparison.full_report()
         put("report.txt", txt)
-        self.result.estimates.to_csv(os.path.join(out_dir, "estimates.csv"))
+        est = self.result.estimates.copy()
+        est.insert(0, "unit", [self.param_units.get(n, "") for n in est.index])  # value, se, bounds in this unit
+        est.to_csv(os.path.join(out_dir, "estimates.csv"))
         self.result.correlation.to_csv(os.path.join(out_dir, "correlation.csv"))
         self.result.history.to_csv(os.path.join(out_dir, "history.csv"))
         self.fit.to_csv(os.path.join(out_dir, "fit.csv"))
@@ -137,4 +140,8 @@ def report(flowsheet: Flowsheet, result: CalibrationResult, calibration: Sequenc
         for r in fit_statistics(p):
             rows.append({"set": setname, **r})
     units = {p["observable"]: flowsheet.unit_of(p["observable"]) for ps in preds.values() for p in ps}
-    return CalibrationReport(result, preds, rows, comparison, dict(truth) if truth else None, units)
+    for r in rows:  # RMSE is in the SI unit of the observable (of the group's members for pooled rows)
+        members = OBSERVABLE_GROUPS.get(r["output"], (r["output"],))
+        r["unit"] = next((units[m] for m in members if m in units), "")
+    param_units = {e["name"]: flowsheet.spec(e["name"])["unit"] for e in result.final["estimates"]}
+    return CalibrationReport(result, preds, rows, comparison, dict(truth) if truth else None, units, param_units)

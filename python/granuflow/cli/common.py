@@ -64,6 +64,15 @@ def json_value(v):
     return v
 
 
+def with_unit_headers(df):
+    """A copy of ``df`` whose headers carry the units in ``df.attrs["units"]`` (``bed_moisture [kg/kg]``;
+    ``d50_um`` stays as it is), for CSV files."""
+    from ..outputs import header
+
+    units = df.attrs.get("units", {})
+    return df.rename(columns={c: header(c, units[c]) for c in df.columns if units.get(c)})
+
+
 def one_line(e: BaseException) -> str:
     return " ".join(str(e).split())
 

@@ -12,7 +12,8 @@ from .. import sweep
 from ..design_space import contour_map, feasible_window, make_axis, parse_constraints
 from ..flowsheet import load
 from ..plots.design_space import plot_contour, plot_feasible_window
-from .common import check_out_dir, check_workers, json_value, parse_sets, progress_option
+from .common import (check_out_dir, check_workers, json_value, parse_sets, progress_option,
+                     with_unit_headers)
 
 
 def cmd_contour(args) -> int:
@@ -55,7 +56,7 @@ def cmd_contour(args) -> int:
         win.outline_dataframe().to_csv(os.path.join(args.out, "feasible_window.csv"), index=False)
         plot_feasible_window(win, os.path.join(args.out, "feasible_window.png"), grid=grid, background=outputs[0])
         written += ["feasible_window.csv", "feasible_window.png"]
-    df.to_csv(os.path.join(args.out, "contour.csv"), index=False)
+    with_unit_headers(df).to_csv(os.path.join(args.out, "contour.csv"), index=False)
     for o in outputs:
         if np.isfinite(grid[o]).sum() >= 4:
             plot_contour(grid, o, os.path.join(args.out, f"contour_{o}.png"), window=win)
@@ -67,7 +68,7 @@ def cmd_contour(args) -> int:
             "outputs": outputs, "fixed": fixed, "t_end_s": grid.t_end_s, "n_points": grid.n_simulations,
             "n_failed": n_failed, "wall_time_s": grid.wall_time_s,
             "simulations_per_s": json_value(grid.simulations_per_s),
-            "constraints": [str(c) for c in cons]}
+            "constraints": [str(c) for c in cons], "units": dict(df.attrs.get("units", {}))}
     if win is not None:
         meta["feasible_fraction"] = win.fraction
         meta["feasible_ranges"] = win.ranges()

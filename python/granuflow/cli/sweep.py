@@ -5,7 +5,8 @@ import json
 import os
 import sys
 
-from .common import EXIT_SOLVER, check_out_dir, check_workers, json_value, parse_seconds, parse_sets, progress_option
+from .common import (EXIT_SOLVER, check_out_dir, check_workers, json_value, parse_seconds, parse_sets,
+                     progress_option, with_unit_headers)
 
 
 def cmd_sweep(args) -> int:
@@ -33,7 +34,7 @@ def cmd_sweep(args) -> int:
         except ValueError:
             effects = None
     os.makedirs(args.out, exist_ok=True)
-    df.to_csv(os.path.join(args.out, "sweep.csv"), index=False)
+    with_unit_headers(df).to_csv(os.path.join(args.out, "sweep.csv"), index=False)
     meta = dict(df.attrs)
     record = {**meta, "sweep_file": os.path.abspath(args.sweepfile), "t_end_s": fs.t_end,
               "overrides": overrides, "n_points": len(df), "n_failed": n_failed, "wall_time_s": wall,

@@ -32,6 +32,7 @@ class Axis:
     values: np.ndarray
     si: np.ndarray
     description: str = ""
+    si_unit: str = ""
 
     @property
     def column(self) -> str:
@@ -156,7 +157,7 @@ def make_axis(fs: Flowsheet, spec, where: str = "axis", *, with_n: bool = True, 
     if bad.any():
         raise ConfigError(f"{where}: {param} = {v[bad][0]:g} {unit}: outside the bounds "
                           f"{lower:g} <= {param} <= {upper:g} {param_si_unit(fs, param)}")
-    return Axis(param, unit, v, si, desc)
+    return Axis(param, unit, v, si, desc, param_si_unit(fs, param))
 
 
 def fixed_flowsheet(flowsheet: Flowsheet, fixed: Mapping[str, float | str] | None,

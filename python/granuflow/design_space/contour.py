@@ -10,6 +10,7 @@ import numpy as np
 
 from .. import _core, sweep
 from ..flowsheet import Flowsheet
+from ..quantity import label
 from .axes import Axis, map_axes, map_sim_kwargs, parse_constraints
 
 ConfigError = _core.ConfigError
@@ -32,6 +33,7 @@ class ContourGrid:
     t_end_s: float = math.nan
     wall_time_s: float = math.nan
     solve_time_s: float = math.nan
+    units: dict = field(default_factory=dict)  # unit of each output's values
 
     def __getitem__(self, output: str) -> np.ndarray:
         try:
@@ -61,14 +63,19 @@ class ContourGrid:
 
         X, Y = np.meshgrid(self.x.values, self.y.values)
         Xs, Ys = np.meshgrid(self.x.si, self.y.si)
-        data = {self.x.column: X.ravel(), self.y.column: Y.ravel(), self.x.param: Xs.ravel(),
-                self.y.param: Ys.ravel()}
+        xs, ys = label(self.x.param, self.x.si_unit), label(self.y.param, self.y.si_unit)
+        data = {self.x.column: X.ravel(), self.y.column: Y.ravel()}
+        if xs != self.x.column:  # the SI values too, where the axis is not in SI already
+            data[xs] = Xs.ravel()
+        if ys != self.y.column:
+            data[ys] = Ys.ravel()
         data.update({o: self.values[o].ravel() for o in self.outputs})
         data["status"] = self.status.ravel()
         data["message"] = self.message.ravel()
         df = pd.DataFrame(data)
         df.attrs.update({"scene": self.scene, "x": self.x.param, "y": self.y.param, "fixed": dict(self.fixed),
-                         "t_end_s": self.t_end_s, "outputs": list(self.outputs)})
+                         "t_end_s": self.t_end_s, "outputs": list(self.outputs),
+                         "units": {o: self.units.get(o, "") for o in self.outputs}})
         return df
 
 
@@ -115,7 +122,8 @@ def contour_map(flowsheet: Flowsheet, x, y, outputs: Sequence[str] = ("d50_um",)
         status=df["status"].to_numpy(dtype=object).reshape(shape),
         message=df["message"].to_numpy(dtype=object).reshape(shape),
         scene=fs.name, fixed=dict(fixed or {}), t_end_s=fs.t_end, wall_time_s=wall,
-        solve_time_s=float(np.nansum(df["solve_time_s"].to_numpy(dtype=float))))
+        solve_time_s=float(np.nansum(df["solve_time_s"].to_numpy(dtype=float))),
+        units={o: df.attrs["units"].get(o, "") for o in outputs})
 
 
 # ------------------------------------------------------------------------------------------------

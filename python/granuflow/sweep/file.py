@@ -86,6 +86,9 @@ class Sweep:
         for c in self.outputs + ["wall_time_s", "solve_time_s", "status", "message"]:
             df[c] = raw[c].to_numpy()
         df.attrs.update(self.metadata())
+        df.attrs["units"] = {**{v.name: v.unit or fs.spec(v.param)["unit"] for v in self.variables},
+                             **{o: raw.attrs["units"].get(o, "") for o in self.outputs},
+                             "wall_time_s": "s", "solve_time_s": "s"}
         return df
 
     def metadata(self) -> dict:

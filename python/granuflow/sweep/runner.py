@@ -137,4 +137,7 @@ def run_sweep(flowsheet: Flowsheet, points: Sequence[Mapping[str, float | str]],
                 if isinstance(d[k], float) and math.isnan(d[k]):
                     d[k] = si_or_nan(points[r["_i"]].get(k, base[k]), flowsheet.spec(k)["unit"], k)
         data.append(d)
-    return pd.DataFrame(data, columns=cols)
+    df = pd.DataFrame(data, columns=cols)
+    df.attrs["units"] = {**{k: flowsheet.spec(k)["unit"] for k in params},
+                         **{o: flowsheet.value_unit(o) for o in outputs}, "wall_time_s": "s", "solve_time_s": "s"}
+    return df
