@@ -123,13 +123,9 @@ class Result:
     def psd_units(self) -> list[str]:
         return outputs.psd_units(self.output_names)
 
-    def psd(self, t: float, unit: str | None = None):
-        """Mass-based size distribution at the output time nearest to ``t``.
-
-        Returns a DataFrame with pivot diameter (µm), class mass (kg), mass fraction and cumulative Q3.
-        """
-        import pandas as pd
-
+    def psd_arrays(self, t: float, unit: str | None = None) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
+        """(output time in s, pivot diameters in µm, class masses in kg, mass fractions) at the output time nearest
+        to ``t``, as NumPy arrays (what :meth:`psd` tabulates)."""
         units = self.psd_units()
         if not units:
             raise ValueError("this result has no particle size distribution (no unit reports psd_d_i / psd_m_i)")
@@ -138,13 +134,21 @@ class Result:
             raise ValueError(f"psd: unit '{unit}' reports no size distribution (units with one: {', '.join(units)})")
         k = int(np.argmin(np.abs(self.t - t)))
         dcols, mcols = outputs.psd_columns(self.output_names, unit)
-        d = self.outputs[k, dcols]
         w = self.outputs[k, mcols]
         frac = w / w.sum() if w.sum() > 0 else w
-        df = pd.DataFrame({"d_um": from_si(d, "um", "m"), "mass_kg": w, "mass_fraction": frac,
-                           "Q3": np.cumsum(frac)}).rename_axis("class")
+        return float(self.t[k]), from_si(self.outputs[k, dcols], "um", "m"), w, frac
+
+    def psd(self, t: float, unit: str | None = None):
+        """Mass-based size distribution at the output time nearest to ``t``.
+
+        Returns a DataFrame with pivot diameter (µm), class mass (kg), mass fraction and cumulative Q3.
+        """
+        import pandas as pd
+
+        t_k, d, w, frac = self.psd_arrays(t, unit)
+        df = pd.DataFrame({"d_um": d, "mass_kg": w, "mass_fraction": frac, "Q3": np.cumsum(frac)}).rename_axis("class")
         df.attrs["units"] = {"d_um": "um", "mass_kg": "kg", "mass_fraction": "-", "Q3": "-"}
-        df.attrs["t_s"] = float(self.t[k])
+        df.attrs["t_s"] = t_k
         return df
 
     # -- summary --------------------------------------------------------------------------------

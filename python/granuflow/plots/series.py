@@ -16,6 +16,12 @@ def figure(figsize=(6.4, 4.0)):
     return fig, fig.add_subplot()
 
 
+def _margins(fig) -> None:
+    """Fixed margins instead of tight_layout(), which draws every text twice: a third of the time of
+    `granuflow run` with plots. Legends sit inside the axes, so fixed margins fit every series plot."""
+    fig.subplots_adjust(left=0.12, right=0.97, bottom=0.12, top=0.91)
+
+
 def supported_formats() -> list[str]:
     """File extensions matplotlib can write (png, pdf, svg, ...)."""
     from matplotlib.backend_bases import FigureCanvasBase
@@ -43,7 +49,7 @@ def plot_series(result, spec: dict, path: str) -> str:
     ax.set_title(spec.get("title", ""))
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
-    fig.tight_layout()
+    _margins(fig)
     fig.savefig(path, dpi=110)
     return path
 
@@ -74,13 +80,12 @@ def plot_psd(result, path: str, times_s=None, unit: str | None = None) -> str:
     fig, ax = figure()
     clipped = []
     for t in times_s:
-        df = result.psd(t, unit)
-        d = df["d_um"].to_numpy()
+        _, d, _, frac = result.psd_arrays(t, unit)  # NumPy only: pandas would double the time of `granuflow run`
         # q3 over ln d from class mass fractions, with the geometric class widths of the pivots
         edges = np.sqrt(d[1:] * d[:-1])
         edges = np.concatenate([[d[0] ** 2 / edges[0]], edges, [d[-1] ** 2 / edges[-1]]])
-        q3 = df["mass_fraction"].to_numpy() / np.diff(np.log(edges))
-        top = float(df["mass_fraction"].iloc[-1])
+        q3 = frac / np.diff(np.log(edges))
+        top = float(frac[-1])
         note = ""
         if top > CLIP_FRACTION:
             clipped.append(t)
@@ -92,6 +97,6 @@ def plot_psd(result, path: str, times_s=None, unit: str | None = None) -> str:
                                                  if clipped else ""), fontsize=10 if clipped else None)
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8)
-    fig.tight_layout()
+    _margins(fig)
     fig.savefig(path, dpi=110)
     return path
