@@ -29,13 +29,23 @@ def unit_types() -> dict[str, str]:
     return dict(_core.unit_types())
 
 
-def unit_reference(name: str, settings: Mapping[str, object] | None = None) -> dict:
+class UnitReference(dict):
+    """What a unit type declares (a dict); printed, or shown in a notebook, it is the reference page."""
+
+    def __str__(self) -> str:
+        return unit_markdown(self["type"], self)
+
+    def _repr_markdown_(self) -> str:
+        return str(self)
+
+
+def unit_reference(name: str, settings: Mapping[str, object] | None = None) -> UnitReference:
     """What a unit of type ``name`` declares: ``ports`` (stream kind, direction, optional), ``settings`` (type,
     allowed values, default), ``params`` (SI unit, bounds, default, source), ``states`` and ``outputs`` (SI units).
     ``settings`` choose another structure than the defaults (e.g. ``{"classes": 20}``). ConfigError for an unknown
     type or setting."""
     given = {str(k): (str(v).lower() if isinstance(v, bool) else str(v)) for k, v in (settings or {}).items()}
-    return _core.unit_reference(str(name), given)
+    return UnitReference(_core.unit_reference(str(name), given))
 
 
 def kernel_reference() -> dict[str, list[dict]]:
@@ -83,9 +93,9 @@ def param_rows(params: list[dict], prefix: str = "") -> list[list[str]]:
              p["description"], p["source"]] for p in params]
 
 
-def unit_markdown(name: str) -> str:
-    """The reference page of a unit type (Markdown), as in docs/units/NAME.md."""
-    r = unit_reference(name)
+def unit_markdown(name: str, ref: Mapping | None = None) -> str:
+    """The reference page of a unit type (Markdown), as in docs/units/NAME.md (``ref``: one with other settings)."""
+    r = ref if ref is not None else unit_reference(name)
     lines = [f"# Unit `{name}`", "", r["description"], "",
              "Generated from the unit registry by `granuflow docs --write docs` (do not edit by hand; "
              "`tests/python/test_reference_docs.py` checks it is up to date). Values are SI; a scene may give any "

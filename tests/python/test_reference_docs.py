@@ -42,6 +42,7 @@ def test_unit_reference_is_what_a_scene_builds():
     # settings shape the structure: 20 classes give 20 mass states
     n = sum(s["name"].startswith("M_") for s in gf.unit_reference("fluid_bed", {"classes": 20})["states"])
     assert n == 20
+    assert str(ref) == (DOCS / "units" / "fluid_bed.md").read_text()  # printed, it is the reference page
     with pytest.raises(gf.ConfigError, match="classes"):
         gf.unit_reference("fluid_bed", {"classes": 1})
     with pytest.raises(gf.ConfigError, match="unknown"):
