@@ -21,6 +21,12 @@ class Settings;
 
 namespace granuflow::kernels {
 
+// The per-class fields a kernel may read besides the sizes; the owning unit supplies them (from its states, its
+// ports or, in a batch unit, as parameters).
+enum class Field { kMoisture, kSpotMoisture, kTemperature, kLiquidFraction, kWettedFraction };
+inline constexpr int kFields = 5;
+const char* field_name(Field f);  // "moisture", ...
+
 // Which per-class state a kernel reads besides the sizes.
 struct ClassNeeds {
   bool number = false;           // particle numbers N_i (makes the kernel depend on the solution itself)
@@ -28,7 +34,18 @@ struct ClassNeeds {
   bool spot_moisture = false;    // moisture of the wet spot, kg/kg dry solid (paper 001, Eq. (55))
   bool temperature = false;      // K
   bool liquid_fraction = false;  // liquid volume / particle volume, - (paper 002, Eq. (13))
-  bool any() const { return number || moisture || spot_moisture || temperature || liquid_fraction; }
+  bool wetted_fraction = false;  // wetted fraction of the particle surface, - (paper 001, Eq. (41))
+  bool field(Field f) const {
+    const bool v[kFields] = {moisture, spot_moisture, temperature, liquid_fraction, wetted_fraction};
+    return v[static_cast<int>(f)];
+  }
+  bool any_field() const { return moisture || spot_moisture || temperature || liquid_fraction || wetted_fraction; }
+  bool any() const { return number || any_field(); }
+  ClassNeeds& operator|=(const ClassNeeds& o) {
+    number |= o.number, moisture |= o.moisture, spot_moisture |= o.spot_moisture, temperature |= o.temperature;
+    liquid_fraction |= o.liquid_fraction, wetted_fraction |= o.wetted_fraction;
+    return *this;
+  }
 };
 
 // Per-class state handed to kernels. Sizes are the grid's pivots (constants); the other arrays are null unless
@@ -39,10 +56,14 @@ struct ClassState {
   const double* volume = nullptr;    // m^3, pivot volumes
   const double* diameter = nullptr;  // m, volume-equivalent sphere diameters of the pivots
   const T* number = nullptr;
-  const T* moisture = nullptr;
-  const T* spot_moisture = nullptr;
-  const T* temperature = nullptr;
-  const T* liquid_fraction = nullptr;
+  const T* fields[kFields] = {nullptr, nullptr, nullptr, nullptr, nullptr};  // by Field
+  const T* field(Field f) const { return fields[static_cast<int>(f)]; }
+  // Per-field accessors, as the kernels read them.
+  const T* moisture() const { return field(Field::kMoisture); }
+  const T* spot_moisture() const { return field(Field::kSpotMoisture); }
+  const T* temperature() const { return field(Field::kTemperature); }
+  const T* liquid_fraction() const { return field(Field::kLiquidFraction); }
+  const T* wetted_fraction() const { return field(Field::kWettedFraction); }
 };
 
 // The reference volume of the power-law kernels (sum, product, Kapur; power-law and linear selection). It only

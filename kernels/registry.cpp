@@ -28,6 +28,8 @@ void register_schemes(KernelRegistries& r) {
                          [] { return std::make_unique<FixedPivotBreakage>(); });
   r.breakage_schemes.add("cell_average", "fragments per cell split on the side of their mean (Kumar et al. 2008)",
                          [] { return std::make_unique<CellAverageBreakage>(); });
+  r.breakage_schemes.add("cell_mass", "fragment mass per cell on the cell's pivot (number not kept; paper 001 reading)",
+                         [] { return std::make_unique<CellMassBreakage>(); });
   r.growth_schemes.add("fv_koren", "finite volumes in diameter, Koren limiter (second/third order, positive)",
                        [] { return std::make_unique<FvGrowth>(Limiter::kKoren); });
   r.growth_schemes.add("fv_upwind", "finite volumes in diameter, first-order upwind",

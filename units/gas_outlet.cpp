@@ -5,39 +5,41 @@
 namespace granuflow::units {
 namespace {
 
-enum S { kGasOut, kWaterOut, kEnergyOut };
-
+// A sink: what leaves is integrated as quadratures, so it adds no unknowns.
 class GasOutlet : public UnitBase<GasOutlet> {
  public:
   std::string type() const override { return "gas_outlet"; }
   void declare(UnitSpec& s, Settings&) override {
-    s.add_state("dry_gas_out", StateKind::Differential, "kg", 100.0);
-    s.add_state("water_out", StateKind::Differential, "kg", 10.0);
-    s.add_state("energy_out", StateKind::Differential, "J", 1e7);
-    s.add_port("in", StreamKind::Gas, PortDir::In);
-    s.add_output("T", "K");
-    s.add_output("Y", "kg/kg");
-    s.add_output("balance_water_out", "kg");
-    s.add_output("balance_energy_out", "J");
+    in_ = s.add_port("in", streams::gas(), PortDir::In);
+    o_t_ = s.add_output("T", "K");
+    o_y_ = s.add_output("Y", "kg/kg");
+    q_gas_ = s.add_quadrature("dry_gas_out", "kg", 100.0);
+    q_water_ = s.add_quadrature("balance_water_out", "kg", 10.0, OutputRole::kBalanceOut, "water");
+    q_energy_ = s.add_quadrature("balance_energy_out", "J", 1e7, OutputRole::kBalanceOut, "energy");
   }
   template <class T>
-  Status eval(const Ctx<T>& c) const {
-    const T& m = c.port(0, gas::kMdot);
-    c.res(kGasOut) = c.xd(kGasOut) - m;
-    c.res(kWaterOut) = c.xd(kWaterOut) - m * c.port(0, gas::kY);
-    c.res(kEnergyOut) = c.xd(kEnergyOut) - m * props::humid_air_enthalpy(c.port(0, gas::kT), c.port(0, gas::kY));
+  Status eval(const Ctx<T>&) const {
     return Status::kOk;
   }
   template <class T>
-  void init(InitCtx<T>& c) const {
-    for (int k = 0; k < 3; ++k) c.x0[k] = T(0.0);
+  void quad(const Ctx<T>& c) const {
+    const T& m = c.port(in_, gas::kMdot);
+    c.r[q_gas_.i] = m;
+    c.r[q_water_.i] = m * c.port(in_, gas::kY);
+    c.r[q_energy_.i] = m * props::humid_air_enthalpy(c.port(in_, gas::kT), c.port(in_, gas::kY));
   }
-  void report(const Ctx<double>& c, double* out) const override {
-    out[0] = c.port(0, gas::kT);
-    out[1] = c.port(0, gas::kY);
-    out[2] = c.x_(kWaterOut);
-    out[3] = c.x_(kEnergyOut);
+  template <class T>
+  void init(InitCtx<T>&) const {}
+  template <class T>
+  void outputs(const Ctx<T>& c) const {
+    c.out(o_t_) = c.port(in_, gas::kT);
+    c.out(o_y_) = c.port(in_, gas::kY);
   }
+
+ private:
+  PortId in_;
+  OutputId o_t_, o_y_;
+  QuadId q_gas_, q_water_, q_energy_;
 };
 
 }  // namespace

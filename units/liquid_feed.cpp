@@ -6,43 +6,50 @@
 namespace granuflow::units {
 namespace {
 
+// Explicit source; the amounts fed are quadratures.
 class LiquidFeed : public UnitBase<LiquidFeed> {
  public:
   std::string type() const override { return "liquid_feed"; }
   void declare(UnitSpec& s, Settings&) override {
-    s.add_param({"mdot", "kg/s", 0.1, 0.0, 1e3, "liquid mass flow", "operating input"});
-    s.add_param({"T", "K", 293.15, 200.0, 700.0, "liquid temperature", "operating input"});
-    s.add_param({"w", "kg/kg", 0.0, 0.0, 1.0, "dissolved-solids mass fraction", "operating input"});
-    s.add_state("mdot", StateKind::Algebraic, "kg/s", 0.1);
-    s.add_state("T", StateKind::Algebraic, "K", 300.0);
-    s.add_state("w", StateKind::Algebraic, "kg/kg", 1.0);
-    s.provide_all(s.add_port("out", StreamKind::Liquid, PortDir::Out), 0);
-    s.add_param({"cp", "J/(kg K)", kernels::paper001::defaults::kLiquidCp, 1.0, 1e5,
-                 "heat capacity for the enthalpy account (above 0 degC)", "water, paper 001, Table 6"});
-    // Cumulative amounts fed, so balances close from states rather than from quadrature of outputs.
-    s.add_state("mass_in", StateKind::Differential, "kg", 100.0);
-    s.add_state("solute_in", StateKind::Differential, "kg", 1.0);
-    s.add_state("enthalpy_in", StateKind::Differential, "J", 1e8);
-    s.add_output("balance_water_in", "kg");
-    s.add_output("balance_solids_in", "kg");
-    s.add_output("balance_energy_in", "J");
+    p_m_ = s.add_param({"mdot", "kg/s", 0.1, 0.0, 1e3, "liquid mass flow", "operating input"});
+    p_t_ = s.add_param({"T", "K", 293.15, 200.0, 700.0, "liquid temperature", "operating input"});
+    p_w_ = s.add_param({"w", "kg/kg", 0.0, 0.0, 1.0, "dissolved-solids mass fraction", "operating input"});
+    p_cp_ = s.add_param({"cp", "J/(kg K)", kernels::paper001::defaults::kLiquidCp, 1.0, 1e5,
+                         "heat capacity for the enthalpy account (above 0 degC)", "water, paper 001, Table 6"});
+    sM_ = s.add_state("mdot", StateKind::Algebraic, "kg/s", 0.1);
+    sT_ = s.add_state("T", StateKind::Algebraic, "K", 300.0);
+    sW_ = s.add_state("w", StateKind::Algebraic, "kg/kg", 1.0);
+    s.set_explicit();
+    s.provide_all(s.add_port("out", streams::liquid(), PortDir::Out), sM_);
+    q_water_ = s.add_quadrature("balance_water_in", "kg", 100.0, OutputRole::kBalanceIn, "water");
+    q_solids_ = s.add_quadrature("balance_solids_in", "kg", 1.0, OutputRole::kBalanceIn, "solids");
+    q_energy_ = s.add_quadrature("balance_energy_in", "J", 1e8, OutputRole::kBalanceIn, "energy");
   }
   template <class T>
   Status eval(const Ctx<T>& c) const {
-    for (int k = 0; k < 3; ++k) c.res(k) = c.x_(k) - c.par(k);
-    c.res(3) = c.xd(3) - c.x_(0);
-    c.res(4) = c.xd(4) - c.x_(0) * c.x_(2);
-    c.res(5) = c.xd(5) - c.x_(0) * props::liquid_water_enthalpy(c.x_(1), c.par(3));
+    c.res(sM_) = c.x(sM_) - c.par(p_m_);
+    c.res(sT_) = c.x(sT_) - c.par(p_t_);
+    c.res(sW_) = c.x(sW_) - c.par(p_w_);
     return Status::kOk;
+  }
+  // The water balance counts the whole liquid (solvent and solute), as the tank's hold-up does.
+  template <class T>
+  void quad(const Ctx<T>& c) const {
+    c.r[q_water_.i] = c.x(sM_);
+    c.r[q_solids_.i] = c.x(sM_) * c.x(sW_);
+    c.r[q_energy_.i] = c.x(sM_) * props::liquid_water_enthalpy(c.x(sT_), c.par(p_cp_));
   }
   template <class T>
   void init(InitCtx<T>& c) const {
-    for (int k = 0; k < 3; ++k) c.x0[k] = c.p[k];
-    for (int k = 3; k < 6; ++k) c.x0[k] = T(0.0);
+    c.x(sM_) = c.par(p_m_);
+    c.x(sT_) = c.par(p_t_);
+    c.x(sW_) = c.par(p_w_);
   }
-  void report(const Ctx<double>& c, double* out) const override {
-    for (int k = 0; k < 3; ++k) out[k] = c.x_(3 + k);
-  }
+
+ private:
+  ParamId p_m_, p_t_, p_w_, p_cp_;
+  StateId sM_, sT_, sW_;
+  QuadId q_water_, q_solids_, q_energy_;
 };
 
 }  // namespace

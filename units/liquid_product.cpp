@@ -6,35 +6,36 @@
 namespace granuflow::units {
 namespace {
 
+// A sink: what arrives is integrated as quadratures, so it adds no unknowns.
 class LiquidProduct : public UnitBase<LiquidProduct> {
  public:
   std::string type() const override { return "liquid_product"; }
   void declare(UnitSpec& s, Settings&) override {
-    s.add_param({"cp", "J/(kg K)", kernels::paper001::defaults::kLiquidCp, 1.0, 1e5,
-                 "heat capacity used for the enthalpy account", "water, paper 001, Table 6"});
-    s.add_state("mass", StateKind::Differential, "kg", 100.0);
-    s.add_state("solute", StateKind::Differential, "kg", 1.0);
-    s.add_state("enthalpy", StateKind::Differential, "J", 1e8);
-    s.add_port("in", StreamKind::Liquid, PortDir::In);
-    s.add_output("balance_water_out", "kg");
-    s.add_output("balance_solids_out", "kg");
-    s.add_output("balance_energy_out", "J");
+    p_cp_ = s.add_param({"cp", "J/(kg K)", kernels::paper001::defaults::kLiquidCp, 1.0, 1e5,
+                         "heat capacity used for the enthalpy account", "water, paper 001, Table 6"});
+    in_ = s.add_port("in", streams::liquid(), PortDir::In);
+    q_mass_ = s.add_quadrature("balance_water_out", "kg", 100.0, OutputRole::kBalanceOut, "water");
+    q_solute_ = s.add_quadrature("balance_solids_out", "kg", 1.0, OutputRole::kBalanceOut, "solids");
+    q_energy_ = s.add_quadrature("balance_energy_out", "J", 1e8, OutputRole::kBalanceOut, "energy");
   }
   template <class T>
-  Status eval(const Ctx<T>& c) const {
-    const T& m = c.port(0, liquid::kMdot);
-    c.res(0) = c.xd(0) - m;
-    c.res(1) = c.xd(1) - m * c.port(0, liquid::kW);
-    c.res(2) = c.xd(2) - m * props::liquid_water_enthalpy(c.port(0, liquid::kT), c.par(0));
+  Status eval(const Ctx<T>&) const {
     return Status::kOk;
   }
   template <class T>
-  void init(InitCtx<T>& c) const {
-    for (int k = 0; k < 3; ++k) c.x0[k] = T(0.0);
+  void quad(const Ctx<T>& c) const {
+    const T& m = c.port(in_, liquid::kMdot);
+    c.r[q_mass_.i] = m;
+    c.r[q_solute_.i] = m * c.port(in_, liquid::kW);
+    c.r[q_energy_.i] = m * props::liquid_water_enthalpy(c.port(in_, liquid::kT), c.par(p_cp_));
   }
-  void report(const Ctx<double>& c, double* out) const override {
-    for (int k = 0; k < 3; ++k) out[k] = c.x_(k);
-  }
+  template <class T>
+  void init(InitCtx<T>&) const {}
+
+ private:
+  ParamId p_cp_;
+  PortId in_;
+  QuadId q_mass_, q_solute_, q_energy_;
 };
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include "liquid_mixer.hpp"
 #include "liquid_product.hpp"
 #include "liquid_splitter.hpp"
+#include "particles.hpp"
 #include "pbm_batch.hpp"
 #include "spray_nozzle.hpp"
 #include "spray_zone.hpp"
@@ -18,6 +19,7 @@
 namespace granuflow::units {
 
 void register_all(Registry<Unit>& r) {
+  register_particles(r);
   register_liquid_feed(r);
   register_liquid_mixer(r);
   register_liquid_splitter(r);

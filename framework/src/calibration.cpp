@@ -309,9 +309,7 @@ class ExperimentModel {
     if (dm) {
       dm->assign(size_t(rows()) * n, 0.0);
       if (any_output_) {
-        OutputSensitivityOptions so;
-        so.rel_step = opt_.output_rel_step;
-        dz = output_sensitivities(*scene_.flowsheet, r, so);
+        dz = output_sensitivities(*scene_.flowsheet, r);
       }
     }
     int row = 0;

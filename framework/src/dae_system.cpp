@@ -10,9 +10,102 @@
 
 namespace granuflow {
 
-DaeSystem::DaeSystem(Flowsheet& fs, bool inline_explicit) : fs_(fs) {
-  if (!fs_.finalized()) fs_.finalize();
+// How the AD sweeps of one unit seed their directions. A direction is a class block (one column per class, all
+// classes at once: class rows may only read their own class, so the columns never mix), a single shared column, or
+// a reduction (the sum's derivative is cut and the reduction seeded as an independent variable; its own derivative
+// is collected term by term and re-enters as an outer product).
+struct DaeSystem::AdPlan {
+  enum Kind { kClass, kCol, kReduction };
+  struct Dir {
+    Kind kind;
+    int index;  // class block, position in local_cols_, or reduction
+  };
+  std::vector<Dir> dirs;
+  std::vector<std::vector<int>> class_cols;  // [block][class] global column, -1 (open optional port)
+  std::vector<std::vector<int>> class_pos;   // [block][class] position in local_cols_
+  std::vector<char> class_seeded;            // explicit units' own blocks are rows only (identity columns)
+  std::vector<int> row_class;                // per own state: its class, or -1 (scalar row)
+  int reductions = 0;
+  bool recorded = false;  // the unit needs a recorder (reductions, or an analytic part to skip)
+};
+
+// Collects the reductions' derivatives during the AD sweeps of one unit.
+class DaeSystem::Recorder : public ReductionRecorder {
+ public:
+  Recorder(const AdPlan& plan, const std::string& unit, size_t n_cols, int n_rows)
+      : plan_(plan),
+        unit_(unit),
+        w_(plan.reductions, std::vector<double>(n_cols, 0.0)),
+        dz_(plan.reductions, std::vector<double>(plan.reductions, 0.0)),
+        u_(plan.reductions, std::vector<double>(n_rows, 0.0)) {}
+  void sweep(size_t d0, size_t d1) {
+    d0_ = d0, d1_ = d1;
+    next_ = 0;
+  }
+  void term(ReductionId r, int cls, const Jet& v) override {
+    if (r.i < next_) order_error(r);
+    next_ = r.i;
+    for (size_t d = d0_; d < d1_; ++d) {
+      const double val = v.v[d - d0_];
+      if (val == 0.0) continue;
+      const AdPlan::Dir& dir = plan_.dirs[d];
+      if (dir.kind == AdPlan::kClass) {
+        if (cls >= static_cast<int>(plan_.class_pos[dir.index].size()))
+          throw std::logic_error("unit '" + unit_ + "': a reduction term reads a class beyond the class layout");
+        if (plan_.class_cols[dir.index][cls] >= 0) w_[r.i][plan_.class_pos[dir.index][cls]] += val;
+      } else if (dir.kind == AdPlan::kCol) {
+        w_[r.i][dir.index] += val;
+      } else if (dir.index < r.i) {
+        dz_[r.i][dir.index] += val;
+      } else {
+        throw std::logic_error("unit '" + unit_ + "': reduction " + std::to_string(r.i) + " reads reduction " +
+                               std::to_string(dir.index) + ", declared after it");
+      }
+    }
+  }
+  Jet result(ReductionId r, double value) override {
+    if (r.i < next_) order_error(r);
+    next_ = r.i + 1;
+    Jet j(value);
+    for (size_t d = d0_; d < d1_; ++d)
+      if (plan_.dirs[d].kind == AdPlan::kReduction && plan_.dirs[d].index == r.i) j.v[d - d0_] = 1.0;
+    return j;
+  }
+  double& u(int r, int row) { return u_[r][row]; }
+  // The reductions' total derivatives (through earlier reductions too), added as outer products u w^T.
+  void finish(const std::vector<int>& cols, JacobianSink& sink) {
+    std::vector<int> c;
+    std::vector<double> w;
+    for (int r = 0; r < plan_.reductions; ++r) {
+      for (int r2 = 0; r2 < r; ++r2)
+        if (dz_[r][r2] != 0.0)
+          for (size_t k = 0; k < cols.size(); ++k) w_[r][k] += dz_[r][r2] * w_[r2][k];
+      c.clear(), w.clear();
+      for (size_t k = 0; k < cols.size(); ++k)
+        if (w_[r][k] != 0.0) c.push_back(cols[k]), w.push_back(w_[r][k]);
+      if (!c.empty())
+        sink.add_outer(static_cast<int>(u_[r].size()), u_[r].data(), static_cast<int>(c.size()), c.data(), w.data());
+    }
+  }
+
+ private:
+  [[noreturn]] void order_error(ReductionId r) const {
+    throw std::logic_error("unit '" + unit_ + "': reduction " + std::to_string(r.i) +
+                           " evaluated out of declaration order (or twice) in one residual");
+  }
+  const AdPlan& plan_;
+  const std::string& unit_;
+  std::vector<std::vector<double>> w_, dz_, u_;
+  size_t d0_ = 0, d1_ = 0;
+  int next_ = 0;
+};
+
+DaeSystem::~DaeSystem() = default;
+
+DaeSystem::DaeSystem(const Flowsheet& fs, bool inline_explicit) : fs_(fs) {
+  if (!fs_.finalized()) throw std::logic_error("DaeSystem: finalize the flowsheet first");
   n_ext_ = fs_.n_states();
+  n_quad_ = fs_.n_quadratures();
   inline_ = inline_explicit && fs_.n_explicit_states() > 0;
   n_ = inline_ ? n_ext_ - fs_.n_explicit_states() : n_ext_;
   const auto& units = fs_.units();
@@ -43,6 +136,7 @@ DaeSystem::DaeSystem(Flowsheet& fs, bool inline_explicit) : fs_(fs) {
   }
   const int n_all = n_ext_;
   pvals_.resize(units.size());
+  pconst_.resize(units.size());
   local_cols_.resize(units.size());
   // Columns each unit's rows can depend on: own states and every field its ports read.
   for (size_t u = 0; u < units.size(); ++u) {
@@ -81,18 +175,14 @@ DaeSystem::DaeSystem(Flowsheet& fs, bool inline_explicit) : fs_(fs) {
     schur_col_pos_.assign(n_, -1);
     for (size_t j = 0; j < schur_cols_.size(); ++j) schur_col_pos_[schur_cols_[j]] = static_cast<int>(j);
   }
-  // Columns differentiated by AD: all local columns, except an explicit unit's own (the identity).
-  ad_pos_.resize(units.size());
-  for (size_t u = 0; u < units.size(); ++u) {
-    const int off = units[u].offset, ns = static_cast<int>(units[u].spec.states().size());
-    for (size_t j = 0; j < local_cols_[u].size(); ++j) {
-      const int c = local_cols_[u][j];
-      if (!(units[u].spec.is_explicit() && c >= off && c < off + ns)) ad_pos_[u].push_back(j);
-    }
-  }
+  plans_.resize(units.size());
+  for (size_t u = 0; u < units.size(); ++u) build_ad_plan(static_cast<int>(u));
+  ws_.resize(units.size());
+  for (size_t u = 0; u < units.size(); ++u) ws_[u] = units[u].unit->workspace();
   pj_.resize(units.size());
   xj_.resize(n_all);
   xdj_.resize(n_all);
+  qj_.resize(n_quad_);
   rbuf_.resize(n_all);
   y_ext_.resize(n_all);
   yp_ext_.resize(n_all);
@@ -102,6 +192,8 @@ DaeSystem::DaeSystem(Flowsheet& fs, bool inline_explicit) : fs_(fs) {
     std::vector<double> yp0(n_ext_, 0.0), r0(n_ext_), r1(n_ext_);
     for (size_t u = 0; u < units.size(); ++u) {
       InitCtx<double> c{pvals_[u].data(), y_ext_.data() + units[u].offset};
+      if (units[u].shared >= 0) c.shared = pvals_[units[u].shared].data();
+      c.work = ws_[u].get();
       units[u].unit->initial(c);
     }
     for (int u : explicit_order_) {
@@ -109,9 +201,7 @@ DaeSystem::DaeSystem(Flowsheet& fs, bool inline_explicit) : fs_(fs) {
       for (double shift : {0.0, 1.0}) {
         auto y = y_ext_;
         for (int k = 0; k < ns; ++k) y[off + k] = shift;
-        Ctx<double> c{
-            0.0, y.data(), yp0.data(), pvals_[u].data(), (shift > 0 ? r1 : r0).data(), off, &units[u].port_index, 0.0};
-        units[u].unit->residual(c);
+        units[u].unit->residual(ctx<double>(u, 0.0, y.data(), yp0.data(), pvals_, (shift > 0 ? r1 : r0).data()));
       }
       for (int k = 0; k < ns; ++k)
         if (std::abs(r1[k] - r0[k] - 1.0) > 1e-9)
@@ -121,8 +211,93 @@ DaeSystem::DaeSystem(Flowsheet& fs, bool inline_explicit) : fs_(fs) {
   }
 }
 
-// The sparsity pattern and where each unit's entries go in its values: only sparse Jacobians need them, and
-// they cost a sort per column and a binary search per entry of every unit's block, so they are built on first use.
+void DaeSystem::build_ad_plan(int u) {
+  const UnitInstance& inst = fs_.units()[u];
+  const UnitSpec& spec = inst.spec;
+  auto plan = std::make_unique<AdPlan>();
+  const auto& cols = local_cols_[u];
+  const int ns = static_cast<int>(spec.states().size()), off = inst.offset;
+  const bool expl = spec.is_explicit();
+  auto pos_of = [&](int col) {
+    return static_cast<int>(std::lower_bound(cols.begin(), cols.end(), col) - cols.begin());
+  };
+  std::vector<char> in_class(cols.size(), 0);
+  plan->row_class.assign(ns, -1);
+  const ClassLayout& cl = spec.classes();
+  auto add_block = [&](std::vector<int> global, bool seeded) {
+    std::vector<int> pos(global.size(), -1);
+    for (size_t i = 0; i < global.size(); ++i)
+      if (global[i] >= 0) pos[i] = pos_of(global[i]), in_class[pos[i]] = 1;
+    plan->class_cols.push_back(std::move(global));
+    plan->class_pos.push_back(std::move(pos));
+    plan->class_seeded.push_back(seeded);
+  };
+  for (StateId b : cl.state_blocks) {
+    std::vector<int> g(cl.n);
+    for (int i = 0; i < cl.n; ++i) g[i] = off + b.i + i, plan->row_class[b.i + i] = i;
+    add_block(std::move(g), !expl);
+  }
+  for (auto [port, first] : cl.field_blocks) {
+    std::vector<int> g(cl.n);
+    for (int i = 0; i < cl.n; ++i) g[i] = inst.port_index[port.i][first + i];
+    add_block(std::move(g), true);
+  }
+  for (size_t b = 0; b < plan->class_cols.size(); ++b)
+    if (plan->class_seeded[b]) plan->dirs.push_back({AdPlan::kClass, static_cast<int>(b)});
+  for (size_t j = 0; j < cols.size(); ++j) {
+    if (in_class[j]) continue;
+    if (expl && cols[j] >= off && cols[j] < off + ns) continue;  // x - f: the identity, no AD needed
+    plan->dirs.push_back({AdPlan::kCol, static_cast<int>(j)});
+  }
+  plan->reductions = static_cast<int>(spec.reductions().size());
+  for (int r = 0; r < plan->reductions; ++r) plan->dirs.push_back({AdPlan::kReduction, r});
+  plan->recorded = plan->reductions > 0 || spec.has_analytic_part() || cl.n > 0;
+  plans_[u] = std::move(plan);
+}
+
+template <class T>
+Ctx<T> DaeSystem::ctx(int u, double t, const T* y, const T* yp, const std::vector<std::vector<T>>& params, T* r) const {
+  const UnitInstance& inst = fs_.units()[u];
+  Ctx<T> c{t, y, yp, params[u].data(), r, inst.offset, &inst.port_index, segment_start_};
+  c.work = ws_[u].get();
+  if (inst.shared >= 0) c.shared = params[inst.shared].data();
+  return c;
+}
+
+void DaeSystem::reconfigure() {
+  const auto& units = fs_.units();
+  for (size_t u = 0; u < units.size(); ++u) pconst_[u] = fs_.run_params(static_cast<int>(u));
+  for (size_t u = 0; u < units.size(); ++u) {
+    try {
+      units[u].unit->check(units[u].spec, pconst_[u].data());
+      units[u].unit->configure(units[u].spec, pconst_[u].data(),
+                               units[u].shared >= 0 ? pconst_[units[u].shared].data() : nullptr, *ws_[u]);
+    } catch (const ConfigError& e) {
+      throw ConfigError(fs_.qualify_unit_message(static_cast<int>(u), e.what()));
+    }
+  }
+  pvals_ = pconst_;
+  fill_params(0.0);
+}
+
+void DaeSystem::fill_params(double t) {
+  const auto& units = fs_.units();
+  for (size_t u = 0; u < units.size(); ++u)
+    for (size_t k = 0; k < units[u].inputs.size(); ++k) {
+      const auto& in = units[u].inputs[k];
+      if (!in) continue;
+      const bool step = in->interp() == PiecewiseLinear::Interp::kStep;
+      pvals_[u][k] = (*in)(step ? segment_start_ : t);
+    }
+}
+
+void DaeSystem::params_as_jets() {
+  for (size_t u = 0; u < pvals_.size(); ++u) {
+    pj_[u].resize(pvals_[u].size());
+    for (size_t k = 0; k < pvals_[u].size(); ++k) pj_[u][k] = Jet(pvals_[u][k]);
+  }
+}
+
 void DaeSystem::build_sparse_maps() const {
   const auto& units = fs_.units();
   const int n_all = n_ext_;
@@ -168,8 +343,7 @@ void DaeSystem::evaluate_explicit(double t, T* x, T* xd, const std::vector<std::
     const int ns = static_cast<int>(units[u].spec.states().size()), off = units[u].offset;
     for (int k = 0; k < ns; ++k) x[off + k] = T(0.0), xd[off + k] = T(0.0);
     scratch.resize(ns);
-    Ctx<T> c{t, x, xd, params[u].data(), scratch.data(), off, &units[u].port_index, segment_start_};
-    units[u].unit->residual(c);
+    units[u].unit->residual(ctx<T>(u, t, x, xd, params, scratch.data()));
     for (int k = 0; k < ns; ++k) x[off + k] = -scratch[k];
   }
 }
@@ -180,30 +354,6 @@ void DaeSystem::extend(double t, const double* y, const double* yp, double* y_fu
   if (!inline_) return;
   fill_params(t);
   evaluate_explicit(t, y_full, yp_full, pvals_, scratch_);
-}
-
-void DaeSystem::reconfigure() {
-  fs_.configure_units();
-  auto& units = fs_.units();
-  for (size_t u = 0; u < units.size(); ++u) pvals_[u] = units[u].params;
-  fill_params(0.0);
-}
-
-void DaeSystem::fill_params(double t) {
-  const auto& units = fs_.units();
-  for (size_t u = 0; u < units.size(); ++u)
-    for (size_t k = 0; k < units[u].inputs.size(); ++k) {
-      const auto& in = units[u].inputs[k];
-      if (!in) continue;
-      const bool step = in->interp() == PiecewiseLinear::Interp::kStep;
-      pvals_[u][k] = (*in)(step ? segment_start_ : t);
-    }
-}
-
-template <class T>
-void DaeSystem::params_as(int unit, std::vector<T>& out) const {
-  out.resize(pvals_[unit].size());
-  for (size_t k = 0; k < out.size(); ++k) out[k] = T(pvals_[unit][k]);
 }
 
 Status DaeSystem::residual(double t, const double* y, const double* yp, double* r) {
@@ -219,9 +369,7 @@ Status DaeSystem::residual(double t, const double* y, const double* yp, double* 
   }
   for (size_t u = 0; u < units.size(); ++u) {
     if (inline_ && units[u].spec.is_explicit()) continue;
-    Ctx<double> c{
-        t, y, yp, pvals_[u].data(), r + units[u].offset, units[u].offset, &units[u].port_index, segment_start_};
-    const Status s = units[u].unit->residual(c);
+    const Status s = units[u].unit->residual(ctx<double>(static_cast<int>(u), t, y, yp, pvals_, r + units[u].offset));
     if (s != Status::kOk) return s;
   }
   for (int i = 0; i < n_; ++i)
@@ -359,59 +507,100 @@ void DaeSystem::assemble(double t, const double* y, const double* yp, double cj,
     xj_[i] = Jet(y[i]);
     xdj_[i] = Jet(yp[i]);
   }
+  params_as_jets();
   for (size_t u = 0; u < units.size(); ++u) {
     const int ns = static_cast<int>(units[u].spec.states().size());
     if (ns == 0) continue;
-    const auto& cols = local_cols_[u];
-    // Analytic Jacobian when the unit supplies one.
-    Ctx<double> cd{t, y, yp, pvals_[u].data(), rbuf_.data(), units[u].offset, &units[u].port_index, segment_start_};
+    auto run = [&](JacobianSink& sink) {
+      if (units[u].spec.has_analytic_part())
+        units[u].unit->analytic_jacobian(ctx<double>(static_cast<int>(u), t, y, yp, pvals_, rbuf_.data()), cj, sink);
+      if (!units[u].spec.analytic_complete()) ad_unit(static_cast<int>(u), t, y, yp, cj, sink);
+    };
     if (dense && factor_outer && units[u].spec.is_explicit()) {
       FactoringSink sink(*this, static_cast<int>(u), dense, dim, units[u].offset);
-      if (units[u].unit->jacobian(cd, cj, sink)) continue;
+      run(sink);
     } else if (dense) {
       DenseSink sink(dense, dim, units[u].offset);
-      if (units[u].unit->jacobian(cd, cj, sink)) continue;
+      run(sink);
     } else {
-      SparseSink sink(sparse, block_pos_[u], col_map_[u], static_cast<int>(cols.size()), units[u].name);
-      if (units[u].unit->jacobian(cd, cj, sink)) continue;
-    }
-    std::vector<Jet>& pj = pj_[u];
-    params_as(static_cast<int>(u), pj);
-    rj_.assign(ns, Jet(0.0));
-    // An explicit unit's residual is x - f: its own columns are the identity, no AD needed.
-    const std::vector<size_t>& ad = ad_pos_[u];
-    if (units[u].spec.is_explicit())
-      for (int k = 0; k < ns; ++k) {
-        const int col = units[u].offset + k;
-        if (dense)
-          dense[size_t(col) * dim + col] += 1.0;
-        else
-          sparse[block_pos_[u][size_t(k) * cols.size() + col_map_[u].at(col)]] += 1.0;
-      }
-    for (size_t a0 = 0; a0 < ad.size(); a0 += kAdChunk) {
-      const size_t a1 = std::min(ad.size(), a0 + kAdChunk);
-      // Seed column j as direction: d/de F(y + e_j, y' + cj e_j) is column j of dF/dy + cj dF/dy'.
-      for (size_t a = a0; a < a1; ++a) {
-        xj_[cols[ad[a]]].v[a - a0] = 1.0;
-        xdj_[cols[ad[a]]].v[a - a0] = cj;
-      }
-      Ctx<Jet> c{t,          xj_.data(),      xdj_.data(),          pj.data(),
-                 rj_.data(), units[u].offset, &units[u].port_index, segment_start_};
-      units[u].unit->residual(c);
-      for (size_t a = a0; a < a1; ++a) {
-        const size_t j = ad[a];
-        xj_[cols[j]].v[a - a0] = 0.0;
-        xdj_[cols[j]].v[a - a0] = 0.0;
-        for (int k = 0; k < ns; ++k) {
-          const double d = rj_[k].v[a - a0];
-          if (dense)
-            dense[size_t(cols[j]) * dim + units[u].offset + k] += d;
-          else
-            sparse[block_pos_[u][size_t(k) * cols.size() + j]] += d;
-        }
-      }
+      SparseSink sink(sparse, block_pos_[u], col_map_[u], static_cast<int>(local_cols_[u].size()), units[u].name);
+      run(sink);
     }
   }
+}
+
+// Forward AD of one unit's residual: its directions (AdPlan) kAdChunk at a time, the entries distributed to their
+// columns, reductions added as outer products at the end.
+void DaeSystem::reference_jacobian(double t, const double* y, const double* yp, double cj, double* dense) {
+  if (inline_) throw std::logic_error("reference_jacobian: build the DaeSystem without inlining");
+  fill_params(t);
+  const auto& units = fs_.units();
+  std::fill(dense, dense + size_t(n_) * n_, 0.0);
+  for (int i = 0; i < n_; ++i) xj_[i] = Jet(y[i]), xdj_[i] = Jet(yp[i]);
+  params_as_jets();
+  for (size_t u = 0; u < units.size(); ++u) {
+    if (units[u].spec.states().empty()) continue;
+    AdPlan plain;
+    const bool expl = units[u].spec.is_explicit();
+    const int off = units[u].offset, ns = static_cast<int>(units[u].spec.states().size());
+    for (size_t j = 0; j < local_cols_[u].size(); ++j)
+      if (!(expl && local_cols_[u][j] >= off && local_cols_[u][j] < off + ns))
+        plain.dirs.push_back({AdPlan::kCol, static_cast<int>(j)});
+    plain.row_class.assign(ns, -1);
+    DenseSink sink(dense, n_, off);
+    ad_unit(static_cast<int>(u), t, y, yp, cj, sink, &plain);
+  }
+}
+
+void DaeSystem::ad_unit(int u, double t, const double* y, const double* yp, double cj, JacobianSink& sink,
+                        const AdPlan* given) {
+  const UnitInstance& inst = fs_.units()[u];
+  const AdPlan& plan = given ? *given : *plans_[u];
+  const auto& cols = local_cols_[u];
+  const int ns = static_cast<int>(inst.spec.states().size()), off = inst.offset;
+  (void)y, (void)yp;
+  // An explicit unit's residual is x - f: its own columns are the identity.
+  if (inst.spec.is_explicit())
+    for (int k = 0; k < ns; ++k) sink.add(k, off + k, 1.0);
+  std::unique_ptr<Recorder> rec;
+  if (plan.recorded) rec = std::make_unique<Recorder>(plan, inst.name, cols.size(), ns);
+  auto seed_dir = [&](const AdPlan::Dir& dir, size_t slot, double v, double vd) {
+    if (dir.kind == AdPlan::kClass) {
+      for (int c : plan.class_cols[dir.index])
+        if (c >= 0) xj_[c].v[slot] = v, xdj_[c].v[slot] = vd;
+    } else if (dir.kind == AdPlan::kCol) {
+      xj_[cols[dir.index]].v[slot] = v, xdj_[cols[dir.index]].v[slot] = vd;
+    }
+  };
+  for (size_t d0 = 0; d0 < plan.dirs.size(); d0 += kAdChunk) {
+    const size_t d1 = std::min(plan.dirs.size(), d0 + kAdChunk);
+    // Seed: d/de F(y + e_j, y' + cj e_j) is column j of dF/dy + cj dF/dy'.
+    for (size_t d = d0; d < d1; ++d) seed_dir(plan.dirs[d], d - d0, 1.0, cj);
+    if (rec) rec->sweep(d0, d1);
+    rj_.assign(ns, Jet(0.0));
+    Ctx<Jet> c = ctx<Jet>(u, t, xj_.data(), xdj_.data(), pj_, rj_.data());
+    c.recorder = rec.get();
+    inst.unit->residual(c);
+    for (size_t d = d0; d < d1; ++d) seed_dir(plan.dirs[d], d - d0, 0.0, 0.0);
+    for (int k = 0; k < ns; ++k)
+      for (size_t d = d0; d < d1; ++d) {
+        const double v = rj_[k].v[d - d0];
+        if (v == 0.0) continue;
+        const AdPlan::Dir& dir = plan.dirs[d];
+        if (dir.kind == AdPlan::kCol) {
+          sink.add(k, cols[dir.index], v);
+        } else if (dir.kind == AdPlan::kReduction) {
+          rec->u(dir.index, k) += v;
+        } else {
+          const int i = plan.row_class[k];
+          if (i < 0)
+            throw std::logic_error("unit '" + inst.name + "': the equation of state '" + inst.spec.states()[k].name +
+                                   "' reads per-class variables of every class directly; sum them with a reduction");
+          if (plan.class_cols[dir.index][i] >= 0) sink.add(k, plan.class_cols[dir.index][i], v);
+        }
+      }
+  }
+  if (rec) rec->finish(cols, sink);
 }
 
 // Seeds direction `slot` for parameter `id` and the parameters linked to it, where they belong to unit `u`.
@@ -424,11 +613,11 @@ void DaeSystem::seed(int id, int u, size_t slot, std::vector<Jet>& pj) const {
   }
 }
 
-// Loads directions [d0, d1) into the Jets: the unknowns' values and sensitivities (y' ones zero without `ypS`),
-// and every unit's parameters seeded with the directions of the parameters they are or follow.
+// Loads directions [d0, d1) into the Jets: the first n_loaded states' values and sensitivities (y' ones zero
+// without `ypS`), and every unit's parameters seeded with the directions of the parameters they are or follow.
 void DaeSystem::load_directions(const double* y, const double* yp, const std::vector<int>& params, size_t d0, size_t d1,
-                                const double* const* yS, const double* const* ypS) {
-  for (int i = 0; i < n_; ++i) {
+                                const double* const* yS, const double* const* ypS, int n_loaded) {
+  for (int i = 0; i < n_loaded; ++i) {
     xj_[i] = Jet(y[i]);
     xdj_[i] = Jet(yp[i]);
     for (size_t d = d0; d < d1; ++d) {
@@ -436,10 +625,9 @@ void DaeSystem::load_directions(const double* y, const double* yp, const std::ve
       if (ypS) xdj_[i].v[d - d0] = ypS[d][i];
     }
   }
-  for (size_t u = 0; u < pj_.size(); ++u) {
-    params_as(static_cast<int>(u), pj_[u]);
+  params_as_jets();
+  for (size_t u = 0; u < pj_.size(); ++u)
     for (size_t d = d0; d < d1; ++d) seed(params[d], static_cast<int>(u), d - d0, pj_[u]);
-  }
 }
 
 Status DaeSystem::sens_residual(double t, const double* y, const double* yp, const std::vector<int>& params,
@@ -449,25 +637,58 @@ Status DaeSystem::sens_residual(double t, const double* y, const double* yp, con
   rj_.assign(n_ext_, Jet(0.0));
   for (size_t d0 = 0; d0 < params.size(); d0 += kAdChunk) {
     const size_t d1 = std::min(params.size(), d0 + kAdChunk);
-    load_directions(y, yp, params, d0, d1, yS, ypS);
+    load_directions(y, yp, params, d0, d1, yS, ypS, n_);
     if (inline_) evaluate_explicit(t, xj_.data(), xdj_.data(), pj_, jet_scratch_);
     for (size_t u = 0; u < units.size(); ++u) {
       if (inline_ && units[u].spec.is_explicit()) continue;
-      Ctx<Jet> c{t,
-                 xj_.data(),
-                 xdj_.data(),
-                 pj_[u].data(),
-                 rj_.data() + units[u].offset,
-                 units[u].offset,
-                 &units[u].port_index,
-                 segment_start_};
-      const Status s = units[u].unit->residual(c);
+      const Status s = units[u].unit->residual(
+          ctx<Jet>(static_cast<int>(u), t, xj_.data(), xdj_.data(), pj_, rj_.data() + units[u].offset));
       if (s != Status::kOk) return s;
     }
     for (size_t d = d0; d < d1; ++d)
       for (int i = 0; i < n_; ++i) {
         rS[d][i] = rj_[i].v[d - d0];
         if (!std::isfinite(rS[d][i])) return Status::kRecoverable;
+      }
+  }
+  return Status::kOk;
+}
+
+Status DaeSystem::quadrature(double t, const double* y, const double* yp, double* qdot) {
+  fill_params(t);
+  const auto& units = fs_.units();
+  if (inline_) {
+    std::copy(y, y + n_, y_ext_.begin());
+    std::copy(yp, yp + n_, yp_ext_.begin());
+    evaluate_explicit(t, y_ext_.data(), yp_ext_.data(), pvals_, scratch_);
+    y = y_ext_.data();
+    yp = yp_ext_.data();
+  }
+  for (size_t u = 0; u < units.size(); ++u)
+    if (!units[u].spec.quadratures().empty())
+      units[u].unit->quadrature(ctx<double>(static_cast<int>(u), t, y, yp, pvals_, qdot + units[u].quad_offset));
+  for (int i = 0; i < n_quad_; ++i)
+    if (!std::isfinite(qdot[i])) return Status::kRecoverable;
+  return Status::kOk;
+}
+
+Status DaeSystem::quadrature_sens(double t, const double* y, const double* yp, const std::vector<int>& params,
+                                  const double* const* yS, double* const* qdotS) {
+  fill_params(t);
+  const auto& units = fs_.units();
+  for (size_t d0 = 0; d0 < params.size(); d0 += kAdChunk) {
+    const size_t d1 = std::min(params.size(), d0 + kAdChunk);
+    load_directions(y, yp, params, d0, d1, yS, nullptr, n_);
+    if (inline_) evaluate_explicit(t, xj_.data(), xdj_.data(), pj_, jet_scratch_);
+    qj_.assign(n_quad_, Jet(0.0));
+    for (size_t u = 0; u < units.size(); ++u)
+      if (!units[u].spec.quadratures().empty())
+        units[u].unit->quadrature(
+            ctx<Jet>(static_cast<int>(u), t, xj_.data(), xdj_.data(), pj_, qj_.data() + units[u].quad_offset));
+    for (size_t d = d0; d < d1; ++d)
+      for (int i = 0; i < n_quad_; ++i) {
+        qdotS[d][i] = qj_[i].v[d - d0];
+        if (!std::isfinite(qdotS[d][i])) return Status::kRecoverable;
       }
   }
   return Status::kOk;
@@ -480,7 +701,7 @@ void DaeSystem::extend_sensitivities(double t, const double* y, const double* yp
   fill_params(t);
   for (size_t d0 = 0; d0 < params.size(); d0 += kAdChunk) {
     const size_t d1 = std::min(params.size(), d0 + kAdChunk);
-    load_directions(y, yp, params, d0, d1, yS, nullptr);
+    load_directions(y, yp, params, d0, d1, yS, nullptr, n_);
     evaluate_explicit(t, xj_.data(), xdj_.data(), pj_, jet_scratch_);
     for (size_t d = d0; d < d1; ++d)
       for (int i = n_; i < n_ext_; ++i) yS_full[d][i] = xj_[i].v[d - d0];
@@ -492,6 +713,8 @@ void DaeSystem::initial_values(std::vector<double>& y0) const {
   const auto& units = fs_.units();
   for (size_t u = 0; u < units.size(); ++u) {
     InitCtx<double> c{pvals_[u].data(), y0.data() + units[u].offset};
+    if (units[u].shared >= 0) c.shared = pvals_[units[u].shared].data();
+    c.work = ws_[u].get();
     units[u].unit->initial(c);
   }
   y0.resize(n_);  // explicit states, if inlined, are computed, not integrated
@@ -500,13 +723,19 @@ void DaeSystem::initial_values(std::vector<double>& y0) const {
 void DaeSystem::initial_sensitivities(const std::vector<int>& params, std::vector<std::vector<double>>& yS0) const {
   yS0.assign(params.size(), std::vector<double>(n_, 0.0));
   const auto& units = fs_.units();
-  std::vector<Jet> pj, x0(n_ext_);
+  std::vector<std::vector<Jet>> pj(units.size());
+  std::vector<Jet> x0(n_ext_);
   for (size_t d0 = 0; d0 < params.size(); d0 += kAdChunk) {
     const size_t d1 = std::min(params.size(), d0 + kAdChunk);
     for (size_t u = 0; u < units.size(); ++u) {
-      params_as(static_cast<int>(u), pj);
-      for (size_t d = d0; d < d1; ++d) seed(params[d], static_cast<int>(u), d - d0, pj);
-      InitCtx<Jet> c{pj.data(), x0.data() + units[u].offset};
+      pj[u].resize(pvals_[u].size());
+      for (size_t k = 0; k < pvals_[u].size(); ++k) pj[u][k] = Jet(pvals_[u][k]);
+      for (size_t d = d0; d < d1; ++d) seed(params[d], static_cast<int>(u), d - d0, pj[u]);
+    }
+    for (size_t u = 0; u < units.size(); ++u) {
+      InitCtx<Jet> c{pj[u].data(), x0.data() + units[u].offset};
+      if (units[u].shared >= 0) c.shared = pj[units[u].shared].data();
+      c.work = ws_[u].get();
       units[u].unit->initial(c);
     }
     for (size_t d = d0; d < d1; ++d)
@@ -526,16 +755,57 @@ std::vector<double> DaeSystem::scales() const {
   return s;
 }
 
-void DaeSystem::report(double t, const double* y, const double* yp, double* out) {
+std::vector<double> DaeSystem::quadrature_scales() const {
+  std::vector<double> s;
+  for (const auto& u : fs_.units())
+    for (const auto& q : u.spec.quadratures()) s.push_back(q.scale);
+  return s;
+}
+
+void DaeSystem::report(double t, const double* y, const double* yp, const double* q, double* out) {
   fill_params(t);
   const auto& units = fs_.units();
   int k = 0;
   for (size_t u = 0; u < units.size(); ++u) {
     const int no = static_cast<int>(units[u].spec.outputs().size());
     if (no == 0) continue;
-    Ctx<double> c{t, y, yp, pvals_[u].data(), rbuf_.data(), units[u].offset, &units[u].port_index, segment_start_};
-    units[u].unit->report(c, out + k);
+    Ctx<double> c = ctx<double>(static_cast<int>(u), t, y, yp, pvals_, out + k);
+    c.quad = q + units[u].quad_offset;
+    units[u].unit->report(c);
+    const auto& quads = units[u].spec.quadratures();
+    for (size_t j = 0; j < quads.size(); ++j) out[k + quads[j].output.i] = q[units[u].quad_offset + j];
     k += no;
+  }
+}
+
+void DaeSystem::report_sensitivities(double t, const double* y, const double* yp, const double* q,
+                                     const std::vector<int>& params, const double* const* yS, const double* const* qS,
+                                     double* const* dout) {
+  fill_params(t);
+  const auto& units = fs_.units();
+  const int no = fs_.n_outputs();
+  std::vector<Jet> out(no);
+  for (size_t d0 = 0; d0 < params.size(); d0 += kAdChunk) {
+    const size_t d1 = std::min(params.size(), d0 + kAdChunk);
+    load_directions(y, yp, params, d0, d1, yS, nullptr, n_ext_);
+    for (int i = 0; i < n_quad_; ++i) {
+      qj_[i] = Jet(q[i]);
+      for (size_t d = d0; d < d1; ++d) qj_[i].v[d - d0] = qS ? qS[d][i] : 0.0;
+    }
+    std::fill(out.begin(), out.end(), Jet(0.0));
+    int k = 0;
+    for (size_t u = 0; u < units.size(); ++u) {
+      const int nu = static_cast<int>(units[u].spec.outputs().size());
+      if (nu == 0) continue;
+      Ctx<Jet> c = ctx<Jet>(static_cast<int>(u), t, xj_.data(), xdj_.data(), pj_, out.data() + k);
+      c.quad = qj_.data() + units[u].quad_offset;
+      units[u].unit->report(c);
+      const auto& quads = units[u].spec.quadratures();
+      for (size_t j = 0; j < quads.size(); ++j) out[k + quads[j].output.i] = qj_[units[u].quad_offset + j];
+      k += nu;
+    }
+    for (size_t d = d0; d < d1; ++d)
+      for (int j = 0; j < no; ++j) dout[d][j] = out[j].v[d - d0];
   }
 }
 

@@ -64,13 +64,20 @@ std::string Settings::get_choice(const std::string& name, const std::string& def
   declared_.push_back({name, SettingType::String, def, choices, 0, 0, description});
   const std::string* s = given(name);
   if (!s) return def;
-  if (std::find(choices.begin(), choices.end(), *s) == choices.end()) {
+  if (!choices.empty() && std::find(choices.begin(), choices.end(), *s) == choices.end()) {
     std::string allowed;
     for (const auto& c : choices) allowed += (allowed.empty() ? "" : ", ") + c;
     throw ConfigError(where_ + "." + name + " = '" + *s + "': not one of the allowed values (" + allowed + ")");
   }
   declared_.back().value = *s;
   return *s;
+}
+
+const UnitInstance* Settings::unit(const std::string& name) const {
+  if (!fs_) return nullptr;
+  for (const auto& u : fs_->units())
+    if (u.name == name) return &u;
+  return nullptr;
 }
 
 void Settings::check_all_used() const {
@@ -92,7 +99,14 @@ void Flowsheet::add_unit(const std::string& name, std::unique_ptr<Unit> unit, Se
   UnitInstance inst;
   inst.name = name;
   inst.unit = std::move(unit);
+  settings.attach(this);
   inst.unit->declare(inst.spec, settings);
+  settings.attach(nullptr);
+  if (!inst.spec.shared_params().empty()) {
+    for (size_t k = 0; k < units_.size(); ++k)
+      if (units_[k].name == inst.spec.shared_params()) inst.shared = static_cast<int>(k);
+    if (inst.shared < 0) throw std::logic_error("unit '" + name + "' reads the parameters of an absent unit");
+  }
   settings.check_all_used();
   inst.settings = settings.declared();
   for (const auto& p : inst.spec.params()) inst.params.push_back(p.value);
@@ -149,8 +163,9 @@ void Flowsheet::connect(const std::string& from, const std::string& to) {
   if (pa.dir == PortDir::Out && units_[a.first].peers[a.second].first >= 0)
     throw ConfigError("port " + from + " is connected twice (only a probe port may feed several inlets)");
   if (pa.dir == PortDir::Probe) {
-    for (int f : pa.provided)
-      if (f < 0) throw std::logic_error("probe port " + from + " must provide every field");
+    for (size_t f = 0; f < pa.provided.size(); ++f)
+      if (pa.provided[f] < 0 && pa.forwarded[f].first < 0)
+        throw std::logic_error("probe port " + from + " must provide every field");
   }
   units_[a.first].peers[a.second] = b;
   units_[b.first].peers[b.second] = a;
@@ -175,38 +190,57 @@ void Flowsheet::finalize() {
     }
   for (size_t u = 0; u < units_.size(); ++u)
     for (size_t k = 0; k < units_[u].params.size(); ++k) param_table_.push_back({int(u), int(k)});
+  n_quads_ = 0;
   for (auto& inst : units_) {
+    inst.quad_offset = n_quads_;
+    n_quads_ += static_cast<int>(inst.spec.quadratures().size());
+  }
+  // Every port field resolves to the global index of the state behind it: provided by this side, by the peer, or
+  // forwarded from one of the unit's inlets (followed through any chain of pass-throughs).
+  for (size_t u = 0; u < units_.size(); ++u) {
+    auto& inst = units_[u];
     const auto& ports = inst.spec.ports();
     inst.port_index.assign(ports.size(), {});
     for (size_t p = 0; p < ports.size(); ++p) {
       const std::string where = "port " + inst.name + "." + ports[p].name;
-      if (ports[p].dir == PortDir::Probe) {  // provides everything, read by zero or more units
-        for (int f : ports[p].provided) inst.port_index[p].push_back(inst.offset + f);
-        continue;
-      }
-      if (inst.peers[p].first < 0 && ports[p].optional) {
-        for (int f : ports[p].provided) inst.port_index[p].push_back(f >= 0 ? inst.offset + f : -1);
-        continue;
-      }
-      if (inst.peers[p].first < 0)
+      const bool open = inst.peers[p].first < 0;
+      if (open && ports[p].dir != PortDir::Probe && !ports[p].optional)
         throw ConfigError(where + " (" + to_string(ports[p].kind) + ", " + to_string(ports[p].dir) +
                           ") is not connected");
-      const UnitInstance& peer = units_[inst.peers[p].first];
-      const PortSpec& pp = peer.spec.ports()[inst.peers[p].second];
       const auto fields = stream_fields(ports[p].kind, ports[p].classes);
       for (size_t f = 0; f < fields.size(); ++f) {
-        const int mine = ports[p].provided[f], theirs = pp.provided[f];
-        if (mine >= 0 && theirs >= 0)
-          throw ConfigError(where + ": field '" + fields[f].name + "' is provided by both " + inst.name + " and " +
-                            peer.name);
-        if (mine < 0 && theirs < 0)
-          throw ConfigError(where + ": field '" + fields[f].name + "' is provided by neither " + inst.name + " nor " +
-                            peer.name);
-        inst.port_index[p].push_back(mine >= 0 ? inst.offset + mine : peer.offset + theirs);
+        if (!open && ports[p].dir != PortDir::Probe) {
+          const PortSpec& pp = units_[inst.peers[p].first].spec.ports()[inst.peers[p].second];
+          const bool mine = ports[p].provided[f] >= 0 || ports[p].forwarded[f].first >= 0;
+          const bool theirs = pp.provided[f] >= 0 || pp.forwarded[f].first >= 0;
+          const std::string& peer = units_[inst.peers[p].first].name;
+          if (mine && theirs)
+            throw ConfigError(where + ": field '" + fields[f].name + "' is provided by both " + inst.name + " and " +
+                              peer);
+          if (!mine && !theirs)
+            throw ConfigError(where + ": field '" + fields[f].name + "' is provided by neither " + inst.name + " nor " +
+                              peer);
+        }
+        inst.port_index[p].push_back(resolve_field(static_cast<int>(u), static_cast<int>(p), static_cast<int>(f), 0));
       }
     }
   }
   finalized_ = true;
+}
+
+// Global state index behind field f of port p of unit u, or -1 (an optional port left open reads zero).
+int Flowsheet::resolve_field(int u, int p, int f, int depth) const {
+  if (depth > static_cast<int>(units_.size()) + 1)
+    throw ConfigError("port " + units_[u].name + "." + units_[u].spec.ports()[p].name +
+                      ": a stream field cannot be resolved (forwarded fields form a loop, or no unit provides it)");
+  const UnitInstance& inst = units_[u];
+  const PortSpec& port = inst.spec.ports()[p];
+  if (port.provided[f] >= 0) return inst.offset + port.provided[f];
+  if (port.forwarded[f].first >= 0)
+    return resolve_field(u, port.forwarded[f].first, port.forwarded[f].second, depth + 1);
+  const auto [pu, pp] = inst.peers[p];
+  if (pu < 0 || port.dir == PortDir::Probe) return -1;
+  return resolve_field(pu, pp, f, depth + 1);
 }
 
 std::vector<std::string> Flowsheet::param_names() const {
@@ -350,43 +384,40 @@ void Flowsheet::link(const std::string& target, const std::string& source) {
   links_.push_back({t, s});
 }
 
-void Flowsheet::apply_links() {
+std::vector<double> Flowsheet::run_params(int u) const {
+  std::vector<double> p = units_.at(u).params;
   for (const auto& [t, s] : links_) {
-    try {
-      store_param(t, linked_value(s));
-    } catch (const ConfigError& e) {
-      throw ConfigError(std::string(e.what()) + " (" + qualified_name(t) + " follows " + qualified_name(s) +
-                        " by a link)");
+    auto [tu, tk] = param_location(t);
+    if (tu != u) continue;
+    const double v = linked_value(s);
+    const ParamSpec& spec = units_[tu].spec.params()[tk];
+    if (!(v >= spec.lower && v <= spec.upper)) {
+      std::ostringstream rule;
+      rule.precision(10);
+      rule << spec.lower << " <= " << spec.name << " <= " << spec.upper;
+      throw ConfigError(violation(qualified_name(t), v, spec.unit, rule.str()) + " (" + qualified_name(t) +
+                        " follows " + qualified_name(s) + " by a link)");
     }
+    p[tk] = v;
   }
+  return p;
 }
 
-void Flowsheet::configure_units() {
-  apply_links();
-  for (auto& inst : units_) {
+void Flowsheet::check_units() const {
+  for (size_t u = 0; u < units_.size(); ++u) {
+    const std::vector<double> p = run_params(static_cast<int>(u));
     try {
-      inst.unit->check(inst.spec, inst.params.data());
-      inst.unit->configure(inst.spec, inst.params.data());
+      units_[u].unit->check(units_[u].spec, p.data());
     } catch (const ConfigError& e) {
-      throw ConfigError(qualify_unit_message(inst, e.what()));
-    }
-  }
-}
-
-void Flowsheet::check_units() {
-  apply_links();
-  for (auto& inst : units_) {
-    try {
-      inst.unit->check(inst.spec, inst.params.data());
-    } catch (const ConfigError& e) {
-      throw ConfigError(qualify_unit_message(inst, e.what()));
+      throw ConfigError(qualify_unit_message(static_cast<int>(u), e.what()));
     }
   }
 }
 
 // configure() throws messages relative to its unit ("t_off = 600 s: violates t_off >= t_on (1800 s)"):
 // name the unit instance, as the parameter bounds do ("nozzle.t_off = ...").
-std::string Flowsheet::qualify_unit_message(const UnitInstance& inst, const std::string& m) {
+std::string Flowsheet::qualify_unit_message(int u, const std::string& m) const {
+  const UnitInstance& inst = units_.at(u);
   for (const auto& p : inst.spec.params())
     if (m.rfind(p.name + " = ", 0) == 0 || m.rfind(p.name + ": ", 0) == 0) return inst.name + "." + m;
   const std::string type_prefix = "unit " + inst.unit->type();

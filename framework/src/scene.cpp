@@ -36,8 +36,8 @@ class Loader {
   Scene load(const YAML::Node& root) {
     if (!root.IsMap()) fail("", "the file must be a mapping of scene keys, got " + kind_name(root));
     check_keys(root, "",
-               {"scene", "description", "t_end", "output", "solver", "units", "connections", "inputs", "summary",
-                "plots", "sweep", "notes", "links"});
+               {"scene", "description", "t_end", "output", "solver", "particles", "units", "connections", "inputs",
+                "summary", "plots", "sweep", "notes", "links"});
     Scene s;
     s.path = label_;
     s.name = scalar(required(root, "scene", ""), "scene");
@@ -50,13 +50,17 @@ class Loader {
     check_unique(units, "units");
     std::vector<std::pair<std::string, YAML::Node>> params;
     std::map<std::string, std::string> given;  // unit.param -> scene key that set it (params or inputs)
-    for (const auto& kv : units) {
-      const std::string name = kv.first.as<std::string>();
-      const std::string at = "units." + name;
-      const YAML::Node u = kv.second;
-      if (!u.IsMap()) fail(at, "expected a mapping with 'type', got " + kind_name(u));
-      check_keys(u, at, {"type", "settings", "params"});
-      const std::string type = scalar(required(u, "type", at), at + ".type");
+    // One unit per entry; the `particles` section is the unit "particles" of type particles (the size grid and
+    // product shared by every particle unit), declared first so that the others find it.
+    auto add = [&](const std::string& name, const std::string& at, const YAML::Node& u, const std::string& implied) {
+      if (!u.IsMap())
+        fail(at, std::string("expected a mapping with ") + (implied.empty() ? "'type'" : "'settings' and 'params'") +
+                     ", got " + kind_name(u));
+      if (implied.empty())
+        check_keys(u, at, {"type", "settings", "params"});
+      else
+        check_keys(u, at, {"settings", "params"});
+      const std::string type = implied.empty() ? scalar(required(u, "type", at), at + ".type") : implied;
       std::map<std::string, std::string> settings;
       if (u["settings"]) {
         if (!u["settings"].IsMap()) fail(at + ".settings", "expected a mapping, got " + kind_name(u["settings"]));
@@ -71,6 +75,14 @@ class Loader {
         rethrow(e);
       }
       if (u["params"]) params.emplace_back(name, u["params"]);
+    };
+    if (root["particles"]) {
+      if (units["particles"]) fail("units.particles", "'particles' is the name of the scene's particle system");
+      add("particles", "particles", root["particles"], "particles");
+    }
+    for (const auto& kv : units) {
+      const std::string name = kv.first.as<std::string>();
+      add(name, "units." + name, kv.second, "");
     }
 
     if (root["connections"]) {
@@ -95,7 +107,7 @@ class Loader {
     }
 
     for (const auto& [unit, node] : params) {
-      const std::string at = "units." + unit + ".params";
+      const std::string at = (unit == "particles" && root["particles"] ? "" : "units.") + unit + ".params";
       if (!node.IsMap()) fail(at, "expected a mapping of parameter -> value, got " + kind_name(node));
       check_unique(node, at);
       for (const auto& p : node) {

@@ -126,7 +126,7 @@ struct IdaUser {
   std::vector<int> sens_params;
   std::string last_error;
   std::vector<const double*> yS, ypS;
-  std::vector<double*> rS;
+  std::vector<double*> rS, qS;
   void* mem = nullptr;  // the IDA integrator, when Jacobians may be reused (simulate, dense)
   JacobianCache cache;
 };
@@ -223,11 +223,67 @@ int ida_sens_res(int ns, realtype t, N_Vector y, N_Vector yp, N_Vector, N_Vector
   }
 }
 
+int ida_quad(realtype t, N_Vector y, N_Vector yp, N_Vector q, void* ud) {
+  auto* u = static_cast<IdaUser*>(ud);
+  try {
+    return static_cast<int>(
+        u->sys->quadrature(t, N_VGetArrayPointer(y), N_VGetArrayPointer(yp), N_VGetArrayPointer(q)));
+  } catch (const std::exception& e) {
+    u->last_error = e.what();
+    return -1;
+  }
+}
+
+int ida_quad_sens(int ns, realtype t, N_Vector y, N_Vector yp, N_Vector* yS, N_Vector*, N_Vector, N_Vector* qS,
+                  void* ud, N_Vector, N_Vector, N_Vector) {
+  auto* u = static_cast<IdaUser*>(ud);
+  u->yS.resize(ns);
+  u->qS.resize(ns);
+  for (int k = 0; k < ns; ++k) {
+    u->yS[k] = N_VGetArrayPointer(yS[k]);
+    u->qS[k] = N_VGetArrayPointer(qS[k]);
+  }
+  try {
+    return static_cast<int>(u->sys->quadrature_sens(t, N_VGetArrayPointer(y), N_VGetArrayPointer(yp), u->sens_params,
+                                                    u->yS.data(), u->qS.data()));
+  } catch (const std::exception& e) {
+    u->last_error = e.what();
+    return -1;
+  }
+}
+
 void ida_err(int code, const char* module, const char* function, char* msg, void* ud) {
   if (code >= 0) return;  // warnings are not errors
   auto* u = static_cast<IdaUser*>(ud);
   u->last_error = std::string(module) + "." + function + ": " + msg;
 }
+
+// One IDA integrator over a DaeSystem, set up the same way for simulation and for the consistent starting point
+// of a steady-state solve: residual, tolerances, differential/algebraic ids, the linear solver and exact Jacobian.
+struct Ida {
+  void* mem = nullptr;
+  Mat A;
+  LinSol LS;
+  Ida(SUNContext ctx, IdaUser& user, double t0, const NVec& y, const NVec& yp, double rtol, const NVec& atol) {
+    DaeSystem& sys = *user.sys;
+    const int n = sys.size();
+    mem = IDACreate(ctx);
+    check(IDAInit(mem, ida_res, t0, y.v, yp.v), "IDAInit");
+    check(IDASVtolerances(mem, rtol, atol.v), "IDASVtolerances");
+    check(IDASetUserData(mem, &user), "IDASetUserData");
+    check(IDASetErrHandlerFn(mem, ida_err, &user), "IDASetErrHandlerFn");
+    NVec id(n, ctx);
+    const auto ids = sys.differential_id();
+    std::copy(ids.begin(), ids.end(), id.data());
+    check(IDASetId(mem, id.v), "IDASetId");
+    make_linear_solver(user.dense, sys, y.v, ctx, A, LS);
+    check(IDASetLinearSolver(mem, LS.s, A.m), "IDASetLinearSolver");
+    check(IDASetJacFn(mem, ida_jac), "IDASetJacFn");
+  }
+  ~Ida() { IDAFree(&mem); }
+  Ida(const Ida&) = delete;
+  Ida& operator=(const Ida&) = delete;
+};
 
 // Dense Jacobians (explicit units inlined) up to `dense_limit` unknowns, and beyond that while the Jacobian is
 // mostly full anyway (aggregation couples every size class with every other): at 200 classes the headline
@@ -252,7 +308,7 @@ SimResult simulate(Flowsheet& fs, const SimOptions& opt) {
   // Explicit units are inlined whenever the system is solved densely.
   const bool dense = use_dense(fs, opt.linear_solver, opt.dense_limit);
   DaeSystem sys(fs, dense);
-  const int n = sys.size(), n_full = sys.full_size();
+  const int n = sys.size(), n_full = sys.full_size(), nq = sys.n_quadratures();
   if (n == 0) throw ConfigError("flowsheet '" + fs.name() + "' has no states to integrate");
 
   std::vector<int> sens_ids;
@@ -268,42 +324,37 @@ SimResult simulate(Flowsheet& fs, const SimOptions& opt) {
     for (int i = 0; i < opt.n_out; ++i) t_out.push_back(opt.t_end * i / (opt.n_out - 1));
 
   Context C;
-  NVec y(n, C.ctx), yp(n, C.ctx), atol(n, C.ctx), id(n, C.ctx);
+  NVec y(n, C.ctx), yp(n, C.ctx), atol(n, C.ctx);
   std::vector<double> y0;
   sys.initial_values(y0);
   std::copy(y0.begin(), y0.end(), y.data());
   const auto scales = sys.scales();
-  const auto ids = sys.differential_id();
-  for (int i = 0; i < n; ++i) {
-    atol.data()[i] = opt.atol * scales[i];
-    id.data()[i] = ids[i];
-  }
+  for (int i = 0; i < n; ++i) atol.data()[i] = opt.atol * scales[i];
 
   IdaUser user(&sys, dense, sens_ids);
-
-  void* mem = IDACreate(C.ctx);
+  Ida ida(C.ctx, user, 0.0, y, yp, opt.rtol, atol);
+  void* mem = ida.mem;
   if (dense) user.mem = mem;
-  std::unique_ptr<void, void (*)(void*)> mem_guard(mem, [](void* m) { IDAFree(&m); });
-  check(IDAInit(mem, ida_res, 0.0, y.v, yp.v), "IDAInit");
-  check(IDASVtolerances(mem, opt.rtol, atol.v), "IDASVtolerances");
-  check(IDASetUserData(mem, &user), "IDASetUserData");
-  check(IDASetErrHandlerFn(mem, ida_err, &user), "IDASetErrHandlerFn");
-  check(IDASetId(mem, id.v), "IDASetId");
   // Algebraic states (and their sensitivities) follow the differential ones exactly; testing their local
   // error only makes the integrator stall at kinks of closures (floors, caps, the drying curve's knee).
   check(IDASetSuppressAlg(mem, SUNTRUE), "IDASetSuppressAlg");
   check(IDASetMaxNumSteps(mem, opt.max_steps), "IDASetMaxNumSteps");
   if (opt.max_step > 0) check(IDASetMaxStep(mem, opt.max_step), "IDASetMaxStep");
 
-  Mat A;
-  LinSol LS;
-  make_linear_solver(user.dense, sys, y.v, C.ctx, A, LS);
-  check(IDASetLinearSolver(mem, LS.s, A.m), "IDASetLinearSolver");
-  check(IDASetJacFn(mem, ida_jac), "IDASetJacFn");
+  // Quadratures (integrals of flows): outside the Newton system, inside the error test.
+  NVec q(std::max(nq, 1), C.ctx), qatol(std::max(nq, 1), C.ctx);
+  if (nq > 0) {
+    const auto qs = sys.quadrature_scales();
+    for (int i = 0; i < nq; ++i) qatol.data()[i] = opt.atol * qs[i];
+    check(IDAQuadInit(mem, ida_quad, q.v), "IDAQuadInit");
+    check(IDAQuadSVtolerances(mem, opt.rtol, qatol.v), "IDAQuadSVtolerances");
+    check(IDASetQuadErrCon(mem, SUNTRUE), "IDASetQuadErrCon");
+  }
 
   const int ns = static_cast<int>(sens_ids.size());
   N_Vector* yS = nullptr;
   N_Vector* ypS = nullptr;
+  N_Vector* qS = nullptr;
   if (ns > 0) {
     yS = N_VCloneVectorArray(ns, y.v);
     ypS = N_VCloneVectorArray(ns, y.v);
@@ -316,6 +367,13 @@ SimResult simulate(Flowsheet& fs, const SimOptions& opt) {
     check(IDASensInit(mem, ns, IDA_STAGGERED, ida_sens_res, yS, ypS), "IDASensInit");
     check(IDASensEEtolerances(mem), "IDASensEEtolerances");
     check(IDASetSensErrCon(mem, opt.sens_error_control ? SUNTRUE : SUNFALSE), "IDASetSensErrCon");
+    if (nq > 0) {
+      qS = N_VCloneVectorArray(ns, q.v);
+      for (int k = 0; k < ns; ++k) N_VConst(0.0, qS[k]);
+      check(IDAQuadSensInit(mem, ida_quad_sens, qS), "IDAQuadSensInit");
+      check(IDAQuadSensEEtolerances(mem), "IDAQuadSensEEtolerances");
+      check(IDASetQuadSensErrCon(mem, opt.sens_error_control ? SUNTRUE : SUNFALSE), "IDASetQuadSensErrCon");
+    }
   }
   // Consistent initial sensitivities come from one linear solve (consistent_sensitivities.hpp), not from
   // IDACalcIC's sensitivity Newton: sensitivities are off during IDACalcIC and re-initialized after it.
@@ -324,20 +382,28 @@ SimResult simulate(Flowsheet& fs, const SimOptions& opt) {
     for (int k = 0; k < ns; ++k) s[k] = N_VGetArrayPointer(yS[k]), sp[k] = N_VGetArrayPointer(ypS[k]);
     detail::consistent_sensitivities(sys, user.dense, t, y.data(), yp.data(), sens_ids, s.data(), sp.data());
     check(IDAReInit(mem, t, y.v, yp.v), "IDAReInit");
+    if (nq > 0) check(IDAQuadReInit(mem, q.v), "IDAQuadReInit");
     check(IDASensReInit(mem, IDA_STAGGERED, yS, ypS), "IDASensReInit");
     check(IDASensEEtolerances(mem), "IDASensEEtolerances");
     // IDACalcIC's setup ran with sensitivities off and cleared their error-control flag: set it again.
     check(IDASetSensErrCon(mem, opt.sens_error_control ? SUNTRUE : SUNFALSE), "IDASetSensErrCon");
+    if (nq > 0) {
+      check(IDAQuadSensReInit(mem, qS), "IDAQuadSensReInit");
+      check(IDAQuadSensEEtolerances(mem), "IDAQuadSensEEtolerances");
+      check(IDASetQuadSensErrCon(mem, opt.sens_error_control ? SUNTRUE : SUNFALSE), "IDASetQuadSensErrCon");
+    }
   };
   struct SensGuard {
     N_Vector* a;
     N_Vector* b;
+    N_Vector* c;
     int n;
     ~SensGuard() {
       if (a) N_VDestroyVectorArray(a, n);
       if (b) N_VDestroyVectorArray(b, n);
+      if (c) N_VDestroyVectorArray(c, n);
     }
-  } sens_guard{yS, ypS, ns};
+  } sens_guard{yS, ypS, qS, ns};
 
   SimResult res;
   res.state_names = fs.state_names();
@@ -346,6 +412,7 @@ SimResult simulate(Flowsheet& fs, const SimOptions& opt) {
   const int no = static_cast<int>(res.output_names.size());
   res.stats.states = n;
   res.stats.explicit_states = n_full - n;
+  res.stats.quadratures = nq;
   res.stats.linear_solver = user.dense ? "dense (Eigen LU)" : "sparse (KLU)";
 
   auto fail = [&](int flag, const char* what) {
@@ -382,26 +449,39 @@ SimResult simulate(Flowsheet& fs, const SimOptions& opt) {
     IDAGetNumNonlinSolvConvFails(mem, &v), res.stats.nonlinear_failures += v;
   };
 
-  std::vector<double> y_full(n_full), yp_full(n_full);
-  std::vector<std::vector<double>> s_full(ns, std::vector<double>(n_full));
+  std::vector<double> y_full(n_full), yp_full(n_full), out(no);
+  std::vector<std::vector<double>> s_full(ns, std::vector<double>(n_full)), qs_now(ns, std::vector<double>(nq)),
+      dout(ns, std::vector<double>(no));
   auto record = [&](double t) {
+    realtype tret = t;
+    if (nq > 0 && t > 0) IDAGetQuad(mem, &tret, q.v);
     sys.extend(t, y.data(), yp.data(), y_full.data(), yp_full.data());
     res.t.push_back(t);
     res.y.insert(res.y.end(), y_full.begin(), y_full.end());
     res.yp.insert(res.yp.end(), yp_full.begin(), yp_full.end());
-    std::vector<double> out(no);
-    if (no > 0) sys.report(t, y_full.data(), yp_full.data(), out.data());
+    if (no > 0) sys.report(t, y_full.data(), yp_full.data(), q.data(), out.data());
     for (double& v : out)
       if (!std::isfinite(v)) v = std::nan("");
     res.outputs.insert(res.outputs.end(), out.begin(), out.end());
     if (ns > 0) {
-      realtype tret;
       if (t > 0) IDAGetSens(mem, &tret, yS);
-      std::vector<const double*> src(ns);
-      std::vector<double*> dst(ns);
-      for (int k = 0; k < ns; ++k) src[k] = N_VGetArrayPointer(yS[k]), dst[k] = s_full[k].data();
+      if (t > 0 && nq > 0) IDAGetQuadSens(mem, &tret, qS);
+      std::vector<const double*> src(ns), qsrc(ns);
+      std::vector<double*> dst(ns), dsto(ns);
+      for (int k = 0; k < ns; ++k) {
+        src[k] = N_VGetArrayPointer(yS[k]), dst[k] = s_full[k].data(), dsto[k] = dout[k].data();
+        for (int i = 0; i < nq; ++i) qs_now[k][i] = t > 0 ? N_VGetArrayPointer(qS[k])[i] : 0.0;
+        qsrc[k] = qs_now[k].data();
+      }
       sys.extend_sensitivities(t, y.data(), yp.data(), sens_ids, src.data(), dst.data());
       for (int k = 0; k < ns; ++k) res.sens.insert(res.sens.end(), s_full[k].begin(), s_full[k].end());
+      if (no > 0) {
+        std::vector<const double*> sf(ns);
+        for (int k = 0; k < ns; ++k) sf[k] = s_full[k].data();
+        sys.report_sensitivities(t, y_full.data(), yp_full.data(), q.data(), sens_ids, sf.data(), qsrc.data(),
+                                 dsto.data());
+        for (int k = 0; k < ns; ++k) res.output_sens.insert(res.output_sens.end(), dout[k].begin(), dout[k].end());
+      }
     }
   };
 
@@ -416,6 +496,11 @@ SimResult simulate(Flowsheet& fs, const SimOptions& opt) {
     if (seg > 0) {
       add_stats();
       check(IDAReInit(mem, t0, y.v, yp.v), "IDAReInit");
+      if (nq > 0) {
+        realtype tq = t0;
+        IDAGetQuad(mem, &tq, q.v);
+        check(IDAQuadReInit(mem, q.v), "IDAQuadReInit");
+      }
       ++res.stats.reinits;
     }
     if (ns > 0) check(IDASensToggleOff(mem), "IDASensToggleOff");
@@ -454,6 +539,11 @@ SimResult simulate(Flowsheet& fs, const SimOptions& opt) {
       realtype tret;
       IDAGetSens(mem, &tret, yS);
       IDAGetSensDky(mem, t1, 1, ypS);
+      if (nq > 0) IDAGetQuadSens(mem, &tret, qS);
+    }
+    if (nq > 0) {
+      realtype tret;
+      IDAGetQuad(mem, &tret, q.v);
     }
     t0 = t1;
   }
@@ -528,25 +618,13 @@ void kin_err(int code, const char* module, const char* function, char* msg, void
 void consistent_initial_values(DaeSystem& sys, bool dense, double t, std::vector<double>& y0) {
   const int n = sys.size();
   Context C;
-  NVec y(n, C.ctx), yp(n, C.ctx), id(n, C.ctx);
+  NVec y(n, C.ctx), yp(n, C.ctx), atol(n, C.ctx);
   std::copy(y0.begin(), y0.end(), y.data());
-  const auto ids = sys.differential_id();
-  std::copy(ids.begin(), ids.end(), id.data());
+  N_VConst(1e-10, atol.v);
   IdaUser user(&sys, dense);
-  void* mem = IDACreate(C.ctx);
-  std::unique_ptr<void, void (*)(void*)> guard(mem, [](void* m) { IDAFree(&m); });
-  check(IDAInit(mem, ida_res, t, y.v, yp.v), "IDAInit");
-  check(IDASStolerances(mem, 1e-8, 1e-10), "IDASStolerances");
-  check(IDASetUserData(mem, &user), "IDASetUserData");
-  check(IDASetErrHandlerFn(mem, ida_err, &user), "IDASetErrHandlerFn");
-  check(IDASetId(mem, id.v), "IDASetId");
-  Mat A;
-  LinSol LS;
-  make_linear_solver(user.dense, sys, y.v, C.ctx, A, LS);
-  check(IDASetLinearSolver(mem, LS.s, A.m), "IDASetLinearSolver");
-  check(IDASetJacFn(mem, ida_jac), "IDASetJacFn");
+  Ida ida(C.ctx, user, t, y, yp, 1e-8, atol);
   // Failure here is not fatal: Newton then starts from the unit guesses.
-  if (IDACalcIC(mem, IDA_YA_YDP_INIT, t + 1.0) >= 0 && IDAGetConsistentIC(mem, y.v, yp.v) >= 0)
+  if (IDACalcIC(ida.mem, IDA_YA_YDP_INIT, t + 1.0) >= 0 && IDAGetConsistentIC(ida.mem, y.v, yp.v) >= 0)
     y0.assign(y.data(), y.data() + n);
 }
 }  // namespace
@@ -563,10 +641,10 @@ SteadyResult solve_steady_state(Flowsheet& fs, const SteadyOptions& opt, const s
   std::vector<double> y0;
   sys.initial_values(y0);
   if (guess) {
-    if (static_cast<int>(guess->size()) != n)
+    if (static_cast<int>(guess->size()) != n && static_cast<int>(guess->size()) != sys.full_size())
       throw ConfigError("steady-state guess has " + std::to_string(guess->size()) + " values, the flowsheet " +
-                        std::to_string(n) + " states");
-    y0 = *guess;
+                        std::to_string(sys.full_size()) + " states");
+    y0.assign(guess->begin(), guess->begin() + n);  // explicit states (last) follow from the others
   } else {
     consistent_initial_values(sys, dense, opt.t, y0);
   }
@@ -635,7 +713,9 @@ SteadyResult solve_steady_state(Flowsheet& fs, const SteadyOptions& opt, const s
     }
     throw SolverError(msg + " at " + sys.describe_row(iw), opt.t, fs.units()[fs.state_unit(iw)].name, std::abs(rr[iw]));
   }
-  r.y.assign(u.data(), u.data() + n);
+  std::vector<double> yp_full(sys.full_size());
+  r.y.resize(sys.full_size());
+  sys.extend(opt.t, u.data(), user.zeros.data(), r.y.data(), yp_full.data());
   return r;
 }
 

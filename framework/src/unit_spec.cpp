@@ -6,55 +6,105 @@
 
 namespace granuflow {
 
-int UnitSpec::add_state(std::string name, StateKind kind, std::string unit, double scale) {
+StateId UnitSpec::add_state(std::string name, StateKind kind, std::string unit, double scale) {
   if (state_index(name) >= 0) throw std::logic_error("state '" + name + "' declared twice");
   if (!is_known_si_unit(unit)) throw std::logic_error("state '" + name + "' has unknown SI unit '" + unit + "'");
   if (!(scale > 0) || !std::isfinite(scale)) throw std::logic_error("state '" + name + "' needs a positive scale");
   states_.push_back({std::move(name), kind, std::move(unit), scale});
-  return static_cast<int>(states_.size()) - 1;
+  return {static_cast<int>(states_.size()) - 1};
 }
 
-int UnitSpec::add_param(ParamSpec spec) {
+StateId UnitSpec::add_states(const std::string& name, int n, StateKind kind, const std::string& unit, double scale) {
+  const StateId first{static_cast<int>(states_.size())};
+  for (int i = 0; i < n; ++i) add_state(name + "_" + std::to_string(i), kind, unit, scale);
+  return first;
+}
+
+ParamId UnitSpec::add_param(ParamSpec spec) {
   if (param_index(spec.name) >= 0) throw std::logic_error("parameter '" + spec.name + "' declared twice");
   if (!is_known_si_unit(spec.unit))
     throw std::logic_error("parameter '" + spec.name + "' has unknown SI unit '" + spec.unit + "'");
   if (!(spec.lower <= spec.value && spec.value <= spec.upper))
     throw std::logic_error("parameter '" + spec.name + "' default outside its bounds");
   params_.push_back(std::move(spec));
-  return static_cast<int>(params_.size()) - 1;
+  return {static_cast<int>(params_.size()) - 1};
 }
 
-int UnitSpec::add_port(std::string name, StreamKind kind, PortDir dir, int classes, bool optional) {
+PortId UnitSpec::add_port(std::string name, StreamKind kind, PortDir dir, int classes, bool optional) {
   for (const auto& p : ports_)
     if (p.name == name) throw std::logic_error("port '" + name + "' declared twice");
-  PortSpec p{std::move(name), kind, dir, classes, optional, {}, {}};
-  p.provided.assign(stream_fields(kind, classes).size(), -1);
+  if (!kind) throw std::logic_error("port '" + name + "' has no stream kind");
+  PortSpec p{std::move(name), kind, dir, classes, optional, {}, {}, {}};
+  const size_t nf = stream_fields(kind, classes).size();
+  p.provided.assign(nf, -1);
+  p.forwarded.assign(nf, {-1, -1});
   ports_.push_back(std::move(p));
-  return static_cast<int>(ports_.size()) - 1;
+  return {static_cast<int>(ports_.size()) - 1};
 }
 
-void UnitSpec::set_port_grid(int port, std::vector<double> diameters) {
-  if (static_cast<int>(diameters.size()) != ports_.at(port).classes)
-    throw std::logic_error("port '" + ports_.at(port).name + "': grid size differs from its class count");
-  ports_.at(port).grid = std::move(diameters);
+void UnitSpec::set_port_grid(PortId port, std::vector<double> diameters) {
+  if (static_cast<int>(diameters.size()) != ports_.at(port.i).classes)
+    throw std::logic_error("port '" + ports_.at(port.i).name + "': grid size differs from its class count");
+  ports_.at(port.i).grid = std::move(diameters);
 }
 
-void UnitSpec::provide(int port, int field, int state) {
-  auto& p = ports_.at(port);
-  if (field < 0 || field >= static_cast<int>(p.provided.size()) || state < 0 ||
-      state >= static_cast<int>(states_.size()))
+void UnitSpec::provide(PortId port, int field, StateId state) {
+  auto& p = ports_.at(port.i);
+  if (field < 0 || field >= static_cast<int>(p.provided.size()) || state.i < 0 ||
+      state.i >= static_cast<int>(states_.size()))
     throw std::logic_error("port '" + p.name + "': provide() out of range");
-  p.provided[field] = state;
+  p.provided[field] = state.i;
 }
 
-void UnitSpec::provide_all(int port, int first_state) {
-  const int n = static_cast<int>(ports_.at(port).provided.size());
+void UnitSpec::provide_all(PortId port, StateId first_state) {
+  const int n = static_cast<int>(ports_.at(port.i).provided.size());
   for (int f = 0; f < n; ++f) provide(port, f, first_state + f);
 }
 
-int UnitSpec::add_output(std::string name, std::string unit) {
-  outputs_.push_back({std::move(name), std::move(unit)});
-  return static_cast<int>(outputs_.size()) - 1;
+void UnitSpec::forward(PortId port, int field, PortId in_port, int in_field) {
+  auto& p = ports_.at(port.i);
+  const auto& in = ports_.at(in_port.i);
+  if (p.dir == PortDir::In || in.dir != PortDir::In)
+    throw std::logic_error("port '" + p.name + "': forward() passes an inlet's field on to an outlet");
+  if (field < 0 || field >= static_cast<int>(p.forwarded.size()) || in_field < 0 ||
+      in_field >= static_cast<int>(in.provided.size()))
+    throw std::logic_error("port '" + p.name + "': forward() out of range");
+  p.forwarded[field] = {in_port.i, in_field};
+}
+
+OutputId UnitSpec::add_output(std::string name, std::string unit, OutputRole role, std::string quantity, int cls) {
+  for (const auto& o : outputs_)
+    if (o.name == name) throw std::logic_error("output '" + name + "' declared twice");
+  if (!is_known_si_unit(unit)) throw std::logic_error("output '" + name + "' has unknown SI unit '" + unit + "'");
+  const bool balance =
+      role == OutputRole::kBalanceIn || role == OutputRole::kBalanceOut || role == OutputRole::kBalanceHold;
+  if (balance && quantity != "water" && quantity != "solids" && quantity != "energy")
+    throw std::logic_error("balance output '" + name + "' needs quantity water, solids or energy");
+  outputs_.push_back({std::move(name), std::move(unit), role, std::move(quantity), cls, ""});
+  return {static_cast<int>(outputs_.size()) - 1};
+}
+
+QuadId UnitSpec::add_quadrature(std::string name, std::string unit, double scale, OutputRole role,
+                                std::string quantity) {
+  if (!(scale > 0) || !std::isfinite(scale)) throw std::logic_error("quadrature '" + name + "' needs a positive scale");
+  const OutputId o = add_output(name, unit, role, std::move(quantity));
+  quads_.push_back({std::move(name), std::move(unit), scale, o});
+  return {static_cast<int>(quads_.size()) - 1};
+}
+
+ReductionId UnitSpec::add_reduction(std::string name) {
+  reductions_.push_back(std::move(name));
+  return {static_cast<int>(reductions_.size()) - 1};
+}
+
+void UnitSpec::set_classes(ClassLayout layout) {
+  for (StateId b : layout.state_blocks)
+    if (b.i < 0 || b.i + layout.n > static_cast<int>(states_.size()))
+      throw std::logic_error("class layout: a state block lies outside the declared states");
+  for (auto [port, first] : layout.field_blocks)
+    if (port.i < 0 || first < 0 || first + layout.n > static_cast<int>(ports_.at(port.i).provided.size()))
+      throw std::logic_error("class layout: a field block lies outside its port");
+  classes_ = std::move(layout);
 }
 
 int UnitSpec::state_index(const std::string& name) const {
@@ -69,71 +119,49 @@ int UnitSpec::param_index(const std::string& name) const {
   return -1;
 }
 
-std::string to_string(StreamKind k) {
-  switch (k) {
-    case StreamKind::Gas:
-      return "gas";
-    case StreamKind::Liquid:
-      return "liquid";
-    case StreamKind::Solids:
-      return "solids";
-    case StreamKind::Heat:
-      return "heat";
-    case StreamKind::Vapour:
-      return "vapour";
-    case StreamKind::Holdup:
-      return "holdup";
-    case StreamKind::Wetting:
-      return "wetting";
-  }
-  return "?";
-}
-
-StreamKind stream_kind_from_string(const std::string& s) {
-  for (auto k : {StreamKind::Gas, StreamKind::Liquid, StreamKind::Solids, StreamKind::Heat, StreamKind::Vapour,
-                 StreamKind::Holdup, StreamKind::Wetting})
-    if (to_string(k) == s) return k;
-  throw ConfigError("unknown stream kind '" + s + "' (allowed: gas, liquid, solids, heat, vapour, holdup, wetting)");
-}
-
 std::string to_string(PortDir d) { return d == PortDir::In ? "in" : d == PortDir::Out ? "out" : "probe"; }
 
-std::vector<FieldSpec> stream_fields(StreamKind kind, int classes) {
-  switch (kind) {
-    case StreamKind::Gas:
-      return {{"mdot", "kg/s"}, {"Y", "kg/kg"}, {"T", "K"}, {"p", "Pa"}};
-    case StreamKind::Liquid:
-      return {{"mdot", "kg/s"}, {"T", "K"}, {"w", "kg/kg"}};
-    case StreamKind::Heat:
-      return {{"Q", "W"}, {"T", "K"}};
-    case StreamKind::Vapour:
-      return {{"mdot", "kg/s"}, {"T", "K"}};
-    case StreamKind::Holdup: {
-      std::vector<FieldSpec> f;
-      for (int i = 0; i < classes; ++i) f.push_back({"mass_" + std::to_string(i), "kg"});
-      for (int i = 0; i < classes; ++i) f.push_back({"water_" + std::to_string(i), "kg"});
-      f.push_back({"T", "K"});
-      f.push_back({"u0", "m/s"});
-      return f;
-    }
-    case StreamKind::Wetting: {
-      std::vector<FieldSpec> f;
-      for (int i = 0; i < classes; ++i) f.push_back({"mdot_" + std::to_string(i), "kg/s"});
-      for (int i = 0; i < classes; ++i) f.push_back({"fwet_" + std::to_string(i), "-"});
-      for (int i = 0; i < classes; ++i) f.push_back({"Xwet_" + std::to_string(i), "kg/kg"});
-      f.push_back({"T", "K"});
-      return f;
-    }
-    case StreamKind::Solids: {
-      std::vector<FieldSpec> f;
-      for (int i = 0; i < classes; ++i) f.push_back({"mdot_" + std::to_string(i), "kg/s"});
-      for (int i = 0; i < classes; ++i) f.push_back({"X_" + std::to_string(i), "kg/kg"});
-      f.push_back({"T", "K"});
-      return f;
-    }
-  }
-  return {};
+void append_class_fields(std::vector<FieldSpec>& f, const std::string& name, int classes, const std::string& unit) {
+  for (int i = 0; i < classes; ++i) f.push_back({name + "_" + std::to_string(i), unit});
 }
+
+namespace streams {
+StreamKind gas() {
+  static const StreamType t{"gas", "dry-gas mass flow, humidity, temperature, pressure", [](int) {
+                              return std::vector<FieldSpec>{{"mdot", "kg/s"}, {"Y", "kg/kg"}, {"T", "K"}, {"p", "Pa"}};
+                            }};
+  return &t;
+}
+StreamKind liquid() {
+  static const StreamType t{"liquid", "mass flow, temperature, dissolved-solids mass fraction", [](int) {
+                              return std::vector<FieldSpec>{{"mdot", "kg/s"}, {"T", "K"}, {"w", "kg/kg"}};
+                            }};
+  return &t;
+}
+StreamKind heat() {
+  static const StreamType t{"heat", "heat flow from the out side to the in side, temperature of the providing side",
+                            [](int) {
+                              return std::vector<FieldSpec>{{"Q", "W"}, {"T", "K"}};
+                            }};
+  return &t;
+}
+StreamKind vapour() {
+  static const StreamType t{"vapour", "water-vapour mass flow and its temperature", [](int) {
+                              return std::vector<FieldSpec>{{"mdot", "kg/s"}, {"T", "K"}};
+                            }};
+  return &t;
+}
+StreamKind solids() {
+  static const StreamType t{"solids", "per class dry-solid and water mass flows, temperature", [](int n) {
+                              std::vector<FieldSpec> f;
+                              append_class_fields(f, "mdot", n, "kg/s");
+                              append_class_fields(f, "water", n, "kg/s");
+                              f.push_back({"T", "K"});
+                              return f;
+                            }};
+  return &t;
+}
+}  // namespace streams
 
 std::string to_string(SettingType t) {
   switch (t) {

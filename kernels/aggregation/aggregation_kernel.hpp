@@ -1,36 +1,104 @@
 // Aggregation kernels beta(u, v): the rate coefficient of one pair of particles, in 1/s per pair for absolute
 // particle numbers (the birth of class k is 1/2 sum_{i,j} beta_ij N_i N_j over pairs landing in k, paper 001
-// Eqs. (21), (24)). The numerical scheme that turns beta into rates lives in kernels/discretization/.
+// Eqs. (21), (24)). The numerical scheme that turns beta into rates lives in the population engine
+// (kernels/population/population.hpp).
 //
-// A pairwise kernel derives from PairKernel<Derived> and writes once
-//     template <class T> T pair(const ClassState<T>& s, int i, int j, const T* p) const;
-// evaluated for i <= j and mirrored, so beta is symmetric by construction.
+// Every kernel has the form
+//     beta_ij = K_ij * E(phi_i, phi_j)
+// with K from the sizes and parameters only (evaluated once per run, and again only when a parameter value
+// changes) and an efficiency E of small per-class feature vectors phi_i computed from the class's fields
+// (moisture, temperature, wetted fraction ...). This is what keeps state-dependent kernels cheap: phi costs O(n)
+// per residual, E is a few products per pair, and the exact Jacobian needs one small forward-AD evaluation per
+// class (dphi/dfields) and per pair (dE/dphi), never a hand derivation.
+//
+// A kernel derives from PairKernel<Derived> and writes once, as templates on the scalar type,
+//     template <class T> T factor(const ClassState<T>& s, int i, int j, const T* p) const;           // K_ij, i <= j
+// and, if it reads fields (kFeatures > 0),
+//     static constexpr int kFeatures = m;                                                              // m <= 4
+//     template <class T> void features(const ClassState<T>& s, int i, const T* p, T* phi) const;      // phi_i
+//     template <class T> T efficiency(const T* phi_i, const T* phi_j, const T* p) const;              // symmetric
 #pragma once
 #include <memory>
+#include <vector>
 
 #include "kernel_base.hpp"
 
 namespace granuflow::kernels {
 
+inline constexpr int kMaxFeatures = kAdChunk / 2;  // E's derivative takes one Jet per pair: 2 m directions
+
 class AggregationKernel : public KernelBase {
  public:
-  // beta[i * n + j] for all classes (row-major, symmetric), 1/s.
-  virtual void evaluate(const ClassState<double>& s, const double* p, double* beta) const = 0;
-  virtual void evaluate(const ClassState<Jet>& s, const Jet* p, Jet* beta) const = 0;
+  // K[i * n + j] for all classes (row-major, symmetric), 1/s.
+  virtual void factor(const ClassState<double>& s, const double* p, double* K) const = 0;
+  virtual void factor(const ClassState<Jet>& s, const Jet* p, Jet* K) const = 0;
+  // Number of features per class; 0: beta = K.
+  virtual int n_features() const { return 0; }
+  // phi[i * m + k] for every class.
+  virtual void features(const ClassState<double>& /*s*/, const double* /*p*/, double* /*phi*/) const {}
+  virtual void features(const ClassState<Jet>& /*s*/, const Jet* /*p*/, Jet* /*phi*/) const {}
+  virtual double efficiency(const double* /*phi_i*/, const double* /*phi_j*/, const double* /*p*/) const { return 1.0; }
+  virtual Jet efficiency(const Jet* /*phi_i*/, const Jet* /*phi_j*/, const Jet* /*p*/) const { return Jet(1.0); }
+  // beta = K E for all pairs, row-major n x n (for tests and tools; the engine uses the parts).
+  void beta(const ClassState<double>& s, const double* p, double* out) const {
+    factor(s, p, out);
+    const int m = n_features();
+    if (m == 0) return;
+    std::vector<double> phi(size_t(s.n) * m);
+    features(s, p, phi.data());
+    for (int i = 0; i < s.n; ++i)
+      for (int j = 0; j < s.n; ++j) out[size_t(i) * s.n + j] *= efficiency(&phi[size_t(i) * m], &phi[size_t(j) * m], p);
+  }
 };
+
+namespace detail {
+template <class D, class = void>
+struct FeatureCount {
+  static constexpr int value = 0;
+};
+template <class D>
+struct FeatureCount<D, std::void_t<decltype(D::kFeatures)>> {
+  static constexpr int value = D::kFeatures;
+};
+}  // namespace detail
 
 template <class Derived>
 class PairKernel : public AggregationKernel {
  public:
-  void evaluate(const ClassState<double>& s, const double* p, double* beta) const override { fill(s, p, beta); }
-  void evaluate(const ClassState<Jet>& s, const Jet* p, Jet* beta) const override { fill(s, p, beta); }
+  void factor(const ClassState<double>& s, const double* p, double* K) const override { fill(s, p, K); }
+  void factor(const ClassState<Jet>& s, const Jet* p, Jet* K) const override { fill(s, p, K); }
+  // Derived is complete only inside member functions (CRTP), so its feature count is read there.
+  int n_features() const override { return features_of<Derived>(); }
+  void features(const ClassState<double>& s, const double* p, double* phi) const override { feat(s, p, phi); }
+  void features(const ClassState<Jet>& s, const Jet* p, Jet* phi) const override { feat(s, p, phi); }
+  double efficiency(const double* a, const double* b, const double* p) const override { return eff(a, b, p); }
+  Jet efficiency(const Jet* a, const Jet* b, const Jet* p) const override { return eff(a, b, p); }
 
  private:
+  const Derived& self() const { return static_cast<const Derived&>(*this); }
   template <class T>
-  void fill(const ClassState<T>& s, const T* p, T* beta) const {
-    const auto& self = static_cast<const Derived&>(*this);
+  void fill(const ClassState<T>& s, const T* p, T* K) const {
     for (int i = 0; i < s.n; ++i)
-      for (int j = i; j < s.n; ++j) beta[size_t(i) * s.n + j] = beta[size_t(j) * s.n + i] = self.pair(s, i, j, p);
+      for (int j = i; j < s.n; ++j) K[size_t(i) * s.n + j] = K[size_t(j) * s.n + i] = self().factor(s, i, j, p);
+  }
+  template <class D>
+  static constexpr int features_of() {
+    constexpr int m = detail::FeatureCount<D>::value;
+    static_assert(m <= kMaxFeatures, "an aggregation kernel has at most kMaxFeatures features per class");
+    return m;
+  }
+  template <class T>
+  void feat(const ClassState<T>& s, const T* p, T* phi) const {
+    constexpr int m = features_of<Derived>();
+    if constexpr (m > 0)
+      for (int i = 0; i < s.n; ++i) self().features(s, i, p, phi + size_t(i) * m);
+  }
+  template <class T>
+  T eff(const T* a, const T* b, const T* p) const {
+    if constexpr (features_of<Derived>() > 0)
+      return self().efficiency(a, b, p);
+    else
+      return T(1.0);
   }
 };
 

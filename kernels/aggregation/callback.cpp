@@ -2,7 +2,7 @@
 
 namespace granuflow::kernels {
 
-void CallbackKernel::evaluate(const ClassState<Jet>& s, const Jet* p, Jet* beta) const {
+void CallbackKernel::factor(const ClassState<Jet>& s, const Jet* p, Jet* beta) const {
   const int n = s.n;
   std::vector<double> pv(specs_.size()), bv(size_t(n) * n);
   for (size_t k = 0; k < pv.size(); ++k) pv[k] = p[k].a;
@@ -13,15 +13,10 @@ void CallbackKernel::evaluate(const ClassState<Jet>& s, const Jet* p, Jet* beta)
     for (int i = 0; i < n; ++i) fields.back()[i] = a[i].a;
     return fields.back().data();
   };
-  fields.reserve(5);
-  ClassState<double> sd{n,
-                        s.volume,
-                        s.diameter,
-                        values(s.number),
-                        values(s.moisture),
-                        values(s.spot_moisture),
-                        values(s.temperature),
-                        values(s.liquid_fraction)};
+  fields.reserve(kFields + 1);
+  ClassState<double> sd;
+  sd.n = n, sd.volume = s.volume, sd.diameter = s.diameter, sd.number = values(s.number);
+  for (int f = 0; f < kFields; ++f) sd.fields[f] = values(s.fields[f]);
   fn_(sd, pv.data(), bv.data());
   for (size_t k = 0; k < bv.size(); ++k) beta[k] = Jet(bv[k]);
 }

@@ -20,8 +20,8 @@ class CallbackKernel : public AggregationKernel {
       : specs_(std::move(specs)), needs_(needs), fn_(std::move(fn)) {}
   std::vector<ParamSpec> params() const override { return specs_; }
   ClassNeeds needs() const override { return needs_; }
-  void evaluate(const ClassState<double>& s, const double* p, double* beta) const override { fn_(s, p, beta); }
-  void evaluate(const ClassState<Jet>& s, const Jet* p, Jet* beta) const override;
+  void factor(const ClassState<double>& s, const double* p, double* beta) const override { fn_(s, p, beta); }
+  void factor(const ClassState<Jet>& s, const Jet* p, Jet* beta) const override;
 
  private:
   std::vector<ParamSpec> specs_;

@@ -11,7 +11,7 @@ class ConstantKernel : public PairKernel<ConstantKernel> {
     return {{"beta0", "1/s", 1.0, 0.0, 1e6, "rate coefficient per pair of particles", "Smoluchowski 1917"}};
   }
   template <class T>
-  T pair(const ClassState<T>&, int, int, const T* p) const {
+  T factor(const ClassState<T>&, int, int, const T* p) const {
     return p[0];
   }
 };

@@ -28,11 +28,18 @@ class DemCollisionKernel : public PairKernel<DemCollisionKernel> {
   void declare(Settings& s, const std::string& prefix) override;
   void check(const ClassState<double>& s, const double* p, const std::string& where) const override;
   template <class T>
-  T pair(const ClassState<T>& s, int i, int j, const T* p) const {
-    const bool wi = !(s.liquid_fraction[i] < p[1]), wj = !(s.liquid_fraction[j] < p[1]);
-    const bool wet = rule_ == WetRule::kEither ? (wi || wj) : (wi && wj);
-    if (!wet) return T(0.0);             // Eq. (13), paper 002
-    return frequency_->at(i, j) * p[0];  // Eq. (11), paper 002
+  T factor(const ClassState<T>&, int i, int j, const T* p) const {
+    return frequency_->at(i, j) * p[0];  // Eq. (11), paper 002: C_ij psi0
+  }
+  static constexpr int kFeatures = 1;  // the liquid content
+  template <class T>
+  void features(const ClassState<T>& s, int i, const T*, T* phi) const {
+    phi[0] = s.liquid_fraction()[i];
+  }
+  template <class T>
+  T efficiency(const T* a, const T* b, const T* p) const {
+    const bool wi = !(a[0] < p[1]), wj = !(b[0] < p[1]);
+    return (rule_ == WetRule::kEither ? (wi || wj) : (wi && wj)) ? T(1.0) : T(0.0);  // Eq. (13), paper 002
   }
 
  private:

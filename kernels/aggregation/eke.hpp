@@ -18,7 +18,7 @@ class EkeKernel : public PairKernel<EkeKernel> {
              "fraction of particles residing in the spray zone", "paper 001, Table 9"}};
   }
   template <class T>
-  T pair(const ClassState<T>& s, int i, int j, const T* p) const {
+  T factor(const ClassState<T>& s, int i, int j, const T* p) const {
     return paper001::collision_frequency(T(s.diameter[i]), T(s.diameter[j]), p[0], p[1]);  // Eq. (37), paper 001
   }
 };

@@ -1,21 +1,31 @@
 #include "aggregation/glass_transition.hpp"
 
+#include "granuflow/flowsheet.hpp"
+
 namespace granuflow::kernels {
 
 std::vector<ParamSpec> GlassTransitionKernel::params() const {
   namespace d = paper001::defaults;
-  return {{"ln_beta0", "-", d::kLnBeta0, -60.0, 10.0, "ln of the rate constant beta0 (1/s with d in m)",
-           "paper 001, Table 9"},
-          {"tau_spray", "-", d::kTauSpray, 0.0, 1.0, "fraction of particles in the spray zone", "paper 001, Table 9"},
-          {"d_droplet", "m", d::kDropletDiameter, 1e-7, 1e-3, "droplet diameter", "paper 001, Table 9"},
-          {"rho_env", "kg/m3", d::kParticleDensity, 1.0, 1e4, "particle envelope density in Eq. (42)",
-           "paper 001, Table 9"},
-          {"rho_droplet", "kg/m3", d::kDropletDensity, 1.0, 1e4, "droplet density", "paper 001, Eq. (42)"},
-          {"gt_k", "-", d::kGordonTaylorK, 0.01, 100.0, "Gordon-Taylor constant", "paper 001, Table 9"},
-          {"tg_liquid", "K", d::kTgLiquid, 1.0, 1000.0, "glass transition of water", "paper 001, Table 9"},
-          {"tg_solid", "K", d::kTgSolid, 1.0, 1000.0, "glass transition of the dry solid", "paper 001, Table 9"},
-          {"sticky_slope", "K", d::kStickySlope, 0.01, 1000.0, "C1 of Eq. (53)", "paper 001, Table 9"},
-          {"sticky_offset", "K", d::kStickyOffset, -200.0, 200.0, "C2 of Eq. (53)", "paper 001, Table 9"}};
+  const std::string t9 = "paper 001, Table 9";
+  std::vector<ParamSpec> v = {
+      {"ln_beta0", "-", d::kLnBeta0, -60.0, 10.0, "ln of the agglomeration rate constant (beta0 in 1/s with d in m)",
+       t9},
+      {"tau_spray", "-", d::kTauSpray, 0.0, 1.0, "fraction of particles in the spray zone, Eq. (37)", t9},
+      {"gt_k", "-", d::kGordonTaylorK, 0.01, 100.0, "Gordon-Taylor constant, Eq. (54)", t9},
+      {"Tg_liquid", "K", d::kTgLiquid, 50.0, 400.0, "glass transition of water, Eq. (54)", t9},
+      {"Tg_solid", "K", d::kTgSolid, 200.0, 700.0, "glass transition of the dry solid, Eq. (54)", t9},
+      {"sticky_slope", "K", d::kStickySlope, 0.1, 200.0, "width of the sticky transition, Eq. (53)", t9},
+      {"sticky_offset", "K", d::kStickyOffset, -200.0, 200.0, "sticky point above Tg, Eq. (53)", t9}};
+  if (per_volume_)
+    v.push_back({"V_vessel", "m3", d::kEquipmentVolume, 1e-3, 1e3, "vessel volume (beta0 per m3 of vessel)",
+                 "paper 001, Table 6"});
+  return v;
+}
+
+void GlassTransitionKernel::declare(Settings& s, const std::string& prefix) {
+  per_volume_ = s.get_choice(prefix + "beta0_basis", "absolute", {"absolute", "per_m3"},
+                             "beta0 for absolute particle numbers (default, docs/paper001_decisions.md) or per m3 of "
+                             "vessel") == "per_m3";
 }
 
 void register_glass_transition(Registry<AggregationKernel>& r) {

@@ -17,7 +17,7 @@ class KapurKernel : public PairKernel<KapurKernel> {
             {"b", "-", 0.0, 0.0, 5.0, "exponent of the product of the volumes", "Kapur 1972"}};
   }
   template <class T>
-  T pair(const ClassState<T>& s, int i, int j, const T* p) const {
+  T factor(const ClassState<T>& s, int i, int j, const T* p) const {
     using std::pow;
     const T su = (s.volume[i] + s.volume[j]) / p[1], pr = (s.volume[i] / p[1]) * (s.volume[j] / p[1]);
     return p[0] * pow(su, p[2]) / pow(pr, p[3]);

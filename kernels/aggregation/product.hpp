@@ -13,7 +13,7 @@ class ProductKernel : public PairKernel<ProductKernel> {
             reference_volume_param()};
   }
   template <class T>
-  T pair(const ClassState<T>& s, int i, int j, const T* p) const {
+  T factor(const ClassState<T>& s, int i, int j, const T* p) const {
     return p[0] * (s.volume[i] / p[1]) * (s.volume[j] / p[1]);
   }
 };

@@ -14,7 +14,7 @@ class ShearKernel : public PairKernel<ShearKernel> {
             {"volume", "m3", 1.0, 1e-12, 1e6, "volume shared by the particles", "per-pair basis (absolute numbers)"}};
   }
   template <class T>
-  T pair(const ClassState<T>& s, int i, int j, const T* p) const {
+  T factor(const ClassState<T>& s, int i, int j, const T* p) const {
     const double dd = s.diameter[i] + s.diameter[j];
     return p[0] * (dd * dd * dd / 6.0) / p[1];
   }

@@ -26,7 +26,7 @@ class StokesKernel : public PairKernel<StokesKernel> {
             {"rho", "kg/m3", 1000.0, 1.0, 1e5, "particle density for the masses", "paper 003, Eq. (7.57)"}};
   }
   template <class T>
-  T pair(const ClassState<T>& s, int i, int j, const T* p) const {
+  T factor(const ClassState<T>& s, int i, int j, const T* p) const {
     using std::log;
     const T mi = p[6] * s.volume[i], mj = p[6] * s.volume[j];
     const T m = 2.0 * mi * mj / (mi + mj);

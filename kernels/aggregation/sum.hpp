@@ -13,7 +13,7 @@ class SumKernel : public PairKernel<SumKernel> {
             reference_volume_param()};
   }
   template <class T>
-  T pair(const ClassState<T>& s, int i, int j, const T* p) const {
+  T factor(const ClassState<T>& s, int i, int j, const T* p) const {
     return p[0] * (s.volume[i] + s.volume[j]) / p[1];
   }
 };

@@ -48,9 +48,9 @@ class PowerLawFragments : public FragmentLaw<PowerLawFragments> {
 class TanhPowerLawFragments : public FragmentLaw<TanhPowerLawFragments> {
  public:
   std::vector<ParamSpec> params() const override {
-    return {{"q", "-", paper001::defaults::kFragmentExponent, 0.01, 10.0, "power-law exponent on d/d_parent",
-             "paper 001, Table 10"},
-            {"d_min", "m", paper001::defaults::kFragmentDiameterMin, 1e-7, 1e-1, "minimum fragment size",
+    return {{"q_frag", "-", paper001::defaults::kFragmentExponent, 0.01, 10.0,
+             "power-law exponent on d/d_parent, Eq. (93)", "paper 001, Table 10"},
+            {"d_frag_min", "m", paper001::defaults::kFragmentDiameterMin, 1e-7, 1e-2, "minimum fragment size, Eq. (93)",
              "paper 001, Table 10"}};
   }
   template <class T>

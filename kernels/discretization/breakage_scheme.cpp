@@ -5,7 +5,7 @@
 namespace granuflow::kernels {
 namespace {
 
-enum class Segments { kPivotIntervals, kCells };
+enum class Segments { kPivotIntervals, kCells, kCellMass };
 
 template <class T>
 void build_matrix(const Grid& g, const FragmentDistribution& f, const T* p, T* A, Segments seg) {
@@ -28,6 +28,15 @@ void build_matrix(const Grid& g, const FragmentDistribution& f, const T* p, T* A
         packet(g.pivot_ext(a), g.pivot(a + 1), number, volume);
         split_between(g, a, number, volume, col.data());
       }
+    } else if (seg == Segments::kCellMass) {
+      // The mass of the fragments in each cell (the parent's own cell up to its pivot), placed on the cell's pivot:
+      // volume is kept, number is not. Fines below the first edge go to the first class.
+      T below(0.0);
+      for (int c = 0; c <= k; ++c) {
+        const T b = f.cumulative(c == k ? u : g.edge(c + 1), u, p) * norm;
+        col[c] += (b - below) * (u / g.pivot(c));
+        below = b;
+      }
     } else {
       col[n + kVolumeBelow] += u * f.cumulative(g.edge(0), u, p) * norm;
       for (int i = 0; i <= k; ++i) {
@@ -41,6 +50,13 @@ void build_matrix(const Grid& g, const FragmentDistribution& f, const T* p, T* A
 }
 
 }  // namespace
+
+void CellMassBreakage::build(const Grid& g, const FragmentDistribution& f, const double* p, double* A) const {
+  build_matrix(g, f, p, A, Segments::kCellMass);
+}
+void CellMassBreakage::build(const Grid& g, const FragmentDistribution& f, const Jet* p, Jet* A) const {
+  build_matrix(g, f, p, A, Segments::kCellMass);
+}
 
 void FixedPivotBreakage::build(const Grid& g, const FragmentDistribution& f, const double* p, double* A) const {
   build_matrix(g, f, p, A, Segments::kPivotIntervals);

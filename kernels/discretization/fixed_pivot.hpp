@@ -1,39 +1,31 @@
 // Fixed pivot technique (Kumar & Ramkrishna 1996, Chem. Eng. Sci. 51, Eqs. (9)-(10)) for aggregation: each
-// aggregate of volume x_j + x_k is split between the two pivots around it so that number and volume are kept.
-// The split fractions depend on the grid only, so they are tabulated once per pair in setup().
+// aggregate of volume v = x_j + x_k is split between the two pivots around it so that number and volume are kept.
+// The split depends on the grid only, so it is tabulated once per pair. An aggregate beyond the top pivot splits
+// between x_{n-1} and the virtual pivot x_hi, the part at x_hi leaving the grid ("above"); beyond x_hi it leaves
+// whole.
 #pragma once
 #include "discretization/aggregation_scheme.hpp"
 
 namespace granuflow::kernels {
 
-class FixedPivotAggregation : public AggregationSchemeT<FixedPivotAggregation> {
+class FixedPivotAggregation : public AggregationScheme {
  public:
+  struct Target {
+    int lo;       // lower class, or -1
+    int hi;       // upper class, or -1: the upper part leaves the grid at the top
+    double w_lo;  // particles placed per event
+    double w_hi;
+    double f_lo;  // fraction of the aggregate's volume placed
+    double f_hi;
+  };
+  std::string name() const override { return "fixed_pivot"; }
   void setup(const Grid& g) override;
-  void add_jacobian(const double* N, const double* beta, double* J) const override;
-
-  template <class T>
-  void rates(const T* N, const T* beta, T* out) const {
-    for_each_event(n_, N, beta, out, [&](size_t p, const T& r) { scatter(p, r, out); });
-  }
+  const Target& target(size_t pair) const { return targets_[pair]; }
+  double volume(size_t pair) const { return vsum_[pair]; }
 
  private:
-  template <class T>
-  void scatter(size_t p, const T& r, T* out) const {
-    if (lower_[p] >= 0) {
-      out[lower_[p]] += w_lower_[p] * r;
-      out[lower_[p] + 1] += w_upper_[p] * r;
-    } else {
-      for (const Weight& w : edge_[-lower_[p] - 1].w)
-        if (w.row >= 0) out[w.row] += w.w * r;
-    }
-  }
-  struct EdgePair {
-    Weight w[3];
-  };
-  int n_ = 0;
-  std::vector<int> lower_;  // per pair j <= k (row-major upper triangle): lower pivot, or -(edge index + 1)
-  std::vector<double> w_lower_, w_upper_;
-  std::vector<EdgePair> edge_;  // pairs that reach the top (rows n + kNumberAbove ...)
+  std::vector<Target> targets_;
+  std::vector<double> vsum_;
 };
 
 }  // namespace granuflow::kernels

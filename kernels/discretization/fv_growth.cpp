@@ -89,21 +89,6 @@ void FvGrowth::growth_at_faces(const std::vector<Face<T>>& fc, const GrowthTerms
 }
 
 template <class T>
-void FvGrowth::face_rates(const T* G, const std::vector<Face<T>>& fc, T* out) const {
-  for (int f = 0; f <= n_; ++f) {
-    const T F = G[f] * fc[f].phi;
-    if (f > 0)
-      out[f - 1] -= F;
-    else
-      out[n_ + kVolumeBelow] -= F * grid_->lower_virtual();
-    if (f < n_)
-      out[f] += F;
-    else
-      out[n_ + kNumberAbove] += F, out[n_ + kVolumeAbove] += F * grid_->upper_virtual();
-  }
-}
-
-template <class T>
 void FvGrowth::faces_and_growth(const T* N, const GrowthTerms<T>& g, std::vector<Face<T>>& fc, std::vector<T>& G,
                                 std::vector<T>& inv_integral) const {
   const int nf = n_ + 1;
@@ -119,30 +104,35 @@ void FvGrowth::faces_and_growth(const T* N, const GrowthTerms<T>& g, std::vector
 }
 
 template <class T>
-T FvGrowth::rates(const T* N, const GrowthTerms<T>& g, T* out) const {
+T FvGrowth::flux_values(const T* N, const GrowthTerms<T>& g, T* F, int* donor) const {
   const int nf = n_ + 1;
   std::vector<Face<T>> fc;
   std::vector<T> G, inv;
   faces_and_growth(N, g, fc, G, inv);
-  face_rates(G.data(), fc, out);
   T W(0.0);
-  for (int f = 0; f < nf; ++f) W += G[f] * fc[f].phi * dx_face_[f];
+  for (int f = 0; f < nf; ++f) {
+    F[f] = G[f] * fc[f].phi;
+    donor[f] = fc[f].cols[0];
+    W += F[f] * dx_face_[f];
+  }
   return W;
 }
 
-double FvGrowth::add_rates(const double* N, const GrowthTerms<double>& g, double* out) const {
-  return rates(N, g, out);
+double FvGrowth::fluxes(const double* N, const GrowthTerms<double>& g, double* F, int* donor) const {
+  return flux_values(N, g, F, donor);
 }
-Jet FvGrowth::add_rates(const Jet* N, const GrowthTerms<Jet>& g, Jet* out) const { return rates(N, g, out); }
+Jet FvGrowth::fluxes(const Jet* N, const GrowthTerms<Jet>& g, Jet* F, int* donor) const {
+  return flux_values(N, g, F, donor);
+}
 
-void FvGrowth::add_jacobian(const double* N, const GrowthTerms<double>& g, double* J, double* dW) const {
+void FvGrowth::flux_jacobian(const double* N, const GrowthTerms<double>& g, double* dF) const {
   const int n = n_, nf = n_ + 1;
   std::vector<Face<double>> fc;
   std::vector<double> G, inv;
   faces_and_growth(N, g, fc, G, inv);
   // dF_f/dN_l = G_f dphi_f/dN_l + phi_f dG_f/dN_l; the second term only for normalized laws, where
   // dG_f/dN_l = -sum_k a_k s_kf / I_k^2 dI_k/dN_l and dI_k/dN_l = sum_f' s_kf' dx_f' dphi_f'/dN_l.
-  std::vector<double> dF(size_t(nf) * n, 0.0);
+  std::fill(dF, dF + size_t(nf) * n, 0.0);
   for (int f = 0; f < nf; ++f)
     for (int c = 0; c < 3; ++c)
       if (fc[f].cols[c] >= 0) dF[size_t(f) * n + fc[f].cols[c]] += G[f] * fc[f].d[c];
@@ -162,24 +152,6 @@ void FvGrowth::add_jacobian(const double* N, const GrowthTerms<double>& g, doubl
         double* row = &dF[size_t(f) * n];
         for (int l = 0; l < n; ++l) row[l] += w * dI[l];
       }
-    }
-  }
-  for (int l = 0; l < n; ++l) dW[l] = 0.0;
-  for (int f = 0; f < nf; ++f) {
-    const double* row = &dF[size_t(f) * n];
-    for (int l = 0; l < n; ++l) {
-      if (row[l] == 0.0) continue;
-      if (f > 0)
-        J[size_t(f - 1) * n + l] -= row[l];
-      else
-        J[size_t(n + kVolumeBelow) * n + l] -= row[l] * grid_->lower_virtual();
-      if (f < n)
-        J[size_t(f) * n + l] += row[l];
-      else {
-        J[size_t(n + kNumberAbove) * n + l] += row[l];
-        J[size_t(n + kVolumeAbove) * n + l] += row[l] * grid_->upper_virtual();
-      }
-      dW[l] += row[l] * dx_face_[f];
     }
   }
 }

@@ -39,11 +39,13 @@ class FvGrowth {
   int faces() const { return n_ + 1; }
   const std::vector<double>& face_diameters() const { return d_face_; }
 
-  // Adds the growth rates to out (n + kOutsideRows) and returns the volume creation rate W (m^3/s).
-  double add_rates(const double* N, const GrowthTerms<double>& g, double* out) const;
-  Jet add_rates(const Jet* N, const GrowthTerms<Jet>& g, Jet* out) const;
-  // Adds d out / dN to J ((n + kOutsideRows) x n, row-major) and writes dW/dN to dW (n).
-  void add_jacobian(const double* N, const GrowthTerms<double>& g, double* J, double* dW) const;
+  // Number fluxes F_f through the n + 1 faces (positive upward) and the donor cell of each face (-1: nothing
+  // crosses the boundary inward); returns the volume creation rate W = sum_f F_f (x_f - x_{f-1}) (m^3/s).
+  double fluxes(const double* N, const GrowthTerms<double>& g, double* F, int* donor) const;
+  Jet fluxes(const Jet* N, const GrowthTerms<Jet>& g, Jet* F, int* donor) const;
+  // dF_f/dN_l, (n + 1) x n row-major.
+  void flux_jacobian(const double* N, const GrowthTerms<double>& g, double* dF) const;
+  const std::vector<double>& face_volume_steps() const { return dx_face_; }  // x_f - x_{f-1}, virtual pivots at ends
 
  private:
   // Face density and its derivatives with respect to the (up to) three cells around the donor.
@@ -55,14 +57,12 @@ class FvGrowth {
   };
   template <class T>
   Face<T> face(const T* N, int f, bool upward) const;
-  template <class T>
-  void face_rates(const T* G, const std::vector<Face<T>>& fc, T* out) const;
   // Face densities (upwind by the sign of G) and the growth rates at the faces, shared by rates and Jacobian.
   template <class T>
   void faces_and_growth(const T* N, const GrowthTerms<T>& g, std::vector<Face<T>>& fc, std::vector<T>& G,
                         std::vector<T>& inv_integral) const;
   template <class T>
-  T rates(const T* N, const GrowthTerms<T>& g, T* out) const;
+  T flux_values(const T* N, const GrowthTerms<T>& g, T* F, int* donor) const;
   template <class T>
   void growth_at_faces(const std::vector<Face<T>>& fc, const GrowthTerms<T>& g, std::vector<T>& G,
                        std::vector<T>& inv_integral) const;

@@ -38,17 +38,4 @@ double characteristic_diameter(const Grid& g, const double* N, double x) {
   return characteristic_diameter_of_mass(g.diameter_edges(), volume.data(), x);
 }
 
-double characteristic_diameter_of_mass(const std::vector<double>& d, const double* mass, double x) {
-  if (!(x > 0 && x < 1)) throw ConfigError(violation("characteristic diameter fraction", x, "", "0 < x < 1"));
-  const int n = static_cast<int>(d.size()) - 1;
-  std::vector<double> q(n + 1, 0.0);
-  for (int i = 0; i < n; ++i) q[i + 1] = q[i] + std::max(0.0, mass[i]);
-  if (!(q[n] > 0)) return std::nan("");
-  for (int i = 0; i < n; ++i) {
-    const double lo = q[i] / q[n], hi = q[i + 1] / q[n];
-    if (hi >= x && hi > lo) return d[i] * std::pow(d[i + 1] / d[i], (x - lo) / (hi - lo));
-  }
-  return d[n];
-}
-
 }  // namespace granuflow::kernels

@@ -5,9 +5,11 @@
 // interpolated linearly in ln d inside a cell (the class's mass spread uniformly over ln d):
 //     d_x = d_i (d_{i+1} / d_i)^((x - Q3(d_i)) / (Q3(d_{i+1}) - Q3(d_i))).
 #pragma once
+#include <cmath>
 #include <vector>
 
 #include "discretization/grid.hpp"
+#include "granuflow/errors.hpp"
 
 namespace granuflow::kernels {
 
@@ -22,7 +24,20 @@ void mass_density(const Grid& g, const double* N, double rho, double* out);
 // Mass-based characteristic diameter d_{x,3}, m; NaN for an empty population.
 double characteristic_diameter(const Grid& g, const double* N, double x);
 // The same from the mass (or volume) of each of the n cells between the n + 1 diameter edges (m); negative
-// amounts count as empty.
-double characteristic_diameter_of_mass(const std::vector<double>& diameter_edges, const double* mass, double x);
+// amounts count as empty. A template, so that sensitivities of d_x to the class masses are exact (Jets).
+template <class T>
+T characteristic_diameter_of_mass(const std::vector<double>& d, const T* mass, double x) {
+  if (!(x > 0 && x < 1)) throw ConfigError(violation("characteristic diameter fraction", x, "", "0 < x < 1"));
+  const int n = static_cast<int>(d.size()) - 1;
+  std::vector<T> q(n + 1, T(0.0));
+  for (int i = 0; i < n; ++i) q[i + 1] = q[i] + (mass[i] > 0.0 ? mass[i] : T(0.0));
+  if (!(q[n] > 0.0)) return T(std::nan(""));
+  for (int i = 0; i < n; ++i) {
+    const T lo = q[i] / q[n], hi = q[i + 1] / q[n];
+    using std::pow;
+    if (hi >= x && hi > lo) return d[i] * pow(d[i + 1] / d[i], (x - lo) / (hi - lo));
+  }
+  return T(d[n]);
+}
 
 }  // namespace granuflow::kernels

@@ -274,7 +274,7 @@ void register_calibration(py::module_& m) {
   m.def(
       "output_sensitivities",
       [](Scene& s, double t_end, const std::vector<double>& t_out, const std::vector<std::string>& params,
-         double rel_step) {
+         double /*rel_step: finite-difference step of earlier versions; output sensitivities are exact now*/) {
         SimOptions o = s.options;
         o.t_end = t_end;
         o.t_out = t_out;
@@ -284,9 +284,7 @@ void register_calibration(py::module_& m) {
         {
           py::gil_scoped_release release;
           const SimResult r = simulate(*s.flowsheet, o);
-          OutputSensitivityOptions so;
-          so.rel_step = rel_step;
-          dz = output_sensitivities(*s.flowsheet, r, so);
+          dz = output_sensitivities(*s.flowsheet, r);
           no = r.output_names.size();
         }
         py::array_t<double> a({static_cast<py::ssize_t>(t_out.size()), static_cast<py::ssize_t>(params.size()),

@@ -16,11 +16,21 @@ namespace granuflow::pbm_test {
 using Strings = std::map<std::string, std::string>;
 using Values = std::map<std::string, double>;
 
+// The grid settings (grid, q, v_min, classes, d_min, d_max) go to the particle system, the rest to pbm_batch.
 inline std::unique_ptr<Flowsheet> flowsheet(const Strings& settings, const Values& params = {}) {
   auto fs = std::make_unique<Flowsheet>("pbm");
-  fs->add_unit("pbm", units::builtin().create("pbm_batch"), Settings("pbm", settings));
+  Strings grid{{"grid", "geometric"}}, unit;
+  for (const auto& [k, v] : settings)
+    (k == "grid" || k == "q" || k == "v_min" || k == "classes" || k == "d_min" || k == "d_max" ? grid : unit)[k] = v;
+  fs->add_unit("particles", units::builtin().create("particles"), Settings("particles", grid));
+  fs->add_unit("pbm", units::builtin().create("pbm_batch"), Settings("pbm", unit));
   fs->finalize();
-  for (const auto& [k, v] : params) fs->set_param("pbm." + k, v);
+  // "rho": the particles' envelope density (solid without pores)
+  for (const auto& [k, v] : params)
+    if (k == "rho")
+      fs->set_param("particles.rho_s", v), fs->set_param("particles.eps_intra", 0.0);
+    else
+      fs->set_param("pbm." + k, v);
   return fs;
 }
 

@@ -54,6 +54,23 @@ inline void expect_jacobian_matches_fd(DaeSystem& sys, double t, const std::vect
   }
 }
 
+// The structured Jacobian (analytic parts, coloured AD, reductions) against plain forward AD of every unit
+// (DaeSystem::reference_jacobian), relative to each column's largest entry. `sys` must not inline explicit units.
+inline void expect_jacobian_matches_reference(DaeSystem& sys, double t, const std::vector<double>& y,
+                                              const std::vector<double>& yp, double cj, double rel) {
+  const int n = sys.size();
+  std::vector<double> jac(size_t(n) * n), ref(size_t(n) * n);
+  sys.jacobian(t, y.data(), yp.data(), cj, jac.data(), nullptr);
+  sys.reference_jacobian(t, y.data(), yp.data(), cj, ref.data());
+  for (int c = 0; c < n; ++c) {
+    double colmax = 0;
+    for (int r = 0; r < n; ++r) colmax = std::max(colmax, std::abs(ref[size_t(c) * n + r]));
+    for (int r = 0; r < n; ++r)
+      EXPECT_NEAR(jac[size_t(c) * n + r], ref[size_t(c) * n + r], rel * colmax + 1e-300)
+          << "d(" << sys.describe_row(r) << ") / d(" << sys.flowsheet().state_names()[c] << ")";
+  }
+}
+
 // Column of the reported output `name` (a failure, not a silent 0, when the run does not report it).
 inline int output_index(const SimResult& r, const std::string& name) {
   for (size_t i = 0; i < r.output_names.size(); ++i)

@@ -130,15 +130,17 @@ TEST(PbmKernels, AggregationKernelsAreSymmetricFiniteAndNonNegative) {
   set_table("test_collisions",
             collision_frequency_table(std::vector<double>(25, 10.0), std::vector<double>(5, 1e3), 0.5, "test"));
   std::vector<double> X(5, 0.05), T(5, 330.0), LC{0.1, 0.3, 0.1, 0.3, 0.5};
-  ClassState<double> cs{5,        g.pivots().data(), g.diameter_pivots().data(), nullptr, X.data(), X.data(),
-                        T.data(), LC.data()};
+  ClassState<double> cs;
+  cs.n = 5, cs.volume = g.pivots().data(), cs.diameter = g.diameter_pivots().data();
+  cs.fields[0] = X.data(), cs.fields[1] = X.data(), cs.fields[2] = T.data(), cs.fields[3] = LC.data();
+  cs.fields[4] = LC.data();  // wetted fraction
   for (const auto& name : registries().aggregation.names()) {
     auto k = registries().aggregation.create(name);
     Settings st("test", {{"agg_collisions", "test_collisions"}});
     k->declare(st, "agg_");
     std::vector<double> p, beta(25);
     for (const auto& s : k->params()) p.push_back(s.value);
-    k->evaluate(cs, p.data(), beta.data());
+    k->beta(cs, p.data(), beta.data());
     double beta_max = 0;
     for (int i = 0; i < 5; ++i)
       for (int j = 0; j < 5; ++j) {

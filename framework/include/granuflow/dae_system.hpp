@@ -1,8 +1,13 @@
 // The assembled DAE F(t, y, y', p) = 0 of a finalized flowsheet: residual, exact Jacobian dF/dy + cj dF/dy'
-// (per unit: the unit's analytic Jacobian if it supplies one, else forward AD over its local variables),
-// sensitivity residuals for named parameters, initial values, and per-state metadata for the solvers.
+// (per unit: forward AD over its local variables, coloured by the unit's per-class layout, plus the analytic part
+// a unit may supply), quadrature rates, sensitivity residuals for named parameters, initial values, reported
+// outputs and their exact sensitivities, and per-state metadata for the solvers.
+//
+// A DaeSystem is one run's view of a flowsheet: it reads the flowsheet's parameters once (run_params) and keeps
+// every unit's Workspace, so several DaeSystems over one flowsheet can run in parallel threads.
 #pragma once
 #include <Eigen/Dense>
+#include <memory>
 #include <string>
 #include <tuple>
 #include <unordered_map>
@@ -22,16 +27,18 @@ struct SparsityPattern {
 
 class DaeSystem {
  public:
-  // Calls configure() of every unit with the current parameters. The flowsheet must be finalized and must
-  // outlive this object; parameter changes need a new DaeSystem (cheap) or reconfigure().
-  // With `inline_explicit`, the states of explicit units (UnitSpec::set_explicit) are not unknowns of the
-  // system: they are evaluated from the others before every residual and eliminated from the Jacobian by the
-  // Schur complement J_RR - J_RS J_SS^-1 J_SR (dense Jacobians only).
-  explicit DaeSystem(Flowsheet& fs, bool inline_explicit = true);
+  // Configures every unit (a workspace each) with the flowsheet's current parameters. The flowsheet must be
+  // finalized and must outlive this object and stay unchanged while it runs; parameter changes need
+  // reconfigure(). With `inline_explicit`, the states of explicit units (UnitSpec::set_explicit) are not unknowns
+  // of the system: they are evaluated from the others before every residual and eliminated from the Jacobian by
+  // the Schur complement J_RR - J_RS J_SS^-1 J_SR (dense Jacobians only).
+  explicit DaeSystem(const Flowsheet& fs, bool inline_explicit = true);
+  ~DaeSystem();
   void reconfigure();
 
   int size() const { return n_; }           // unknowns of the integrator
   int full_size() const { return n_ext_; }  // every state of the flowsheet, explicit ones last
+  int n_quadratures() const { return n_quad_; }
   bool inlined() const { return inline_; }
   // Fraction of the entries of the Jacobian over all states that can be nonzero (the units' blocks).
   double fill() const { return fill_; }
@@ -49,6 +56,9 @@ class DaeSystem {
   Status residual(double t, const double* y, const double* yp, double* r);
   // Dense column-major n x n (ld = n) when `dense` != nullptr, else values in `pattern()` order.
   void jacobian(double t, const double* y, const double* yp, double cj, double* dense, double* sparse_values);
+  // The same Jacobian by plain forward AD over every local column of every unit (no analytic parts, no colouring,
+  // no reductions): the reference the structured Jacobian is tested against. Dense, without inlined units.
+  void reference_jacobian(double t, const double* y, const double* yp, double cj, double* dense);
   const SparsityPattern& pattern() const {
     if (pattern_.col_ptr.empty()) build_sparse_maps();
     return pattern_;
@@ -57,13 +67,23 @@ class DaeSystem {
   // Sensitivity residuals r_k = F_y s_k + F_y' s'_k + F_p e_{p_k} for global parameter ids `params`.
   Status sens_residual(double t, const double* y, const double* yp, const std::vector<int>& params,
                        const double* const* yS, const double* const* ypS, double* const* rS);
+  // Quadrature rates dq/dt at the integrator's y (explicit states evaluated inline), and their sensitivities.
+  Status quadrature(double t, const double* y, const double* yp, double* qdot);
+  Status quadrature_sens(double t, const double* y, const double* yp, const std::vector<int>& params,
+                         const double* const* yS, double* const* qdotS);
 
   void initial_values(std::vector<double>& y0) const;
   void initial_sensitivities(const std::vector<int>& params, std::vector<std::vector<double>>& yS0) const;
   std::vector<double> differential_id() const;  // 1 differential, 0 algebraic
   std::vector<double> scales() const;
-  // Reported outputs at the full state vector (see extend()).
-  void report(double t, const double* y_full, const double* yp_full, double* out);
+  std::vector<double> quadrature_scales() const;
+  // Reported outputs at the full state vector (see extend()) and the quadratures.
+  void report(double t, const double* y_full, const double* yp_full, const double* q, double* out);
+  // d outputs / d p_k for every parameter k in `params`, exact: the outputs evaluated with Jets carrying the
+  // states' and quadratures' sensitivities (full vectors) and the parameters' own directions.
+  void report_sensitivities(double t, const double* y_full, const double* yp_full, const double* q,
+                            const std::vector<int>& params, const double* const* yS_full, const double* const* qS,
+                            double* const* dout);
   // Unit and state name of a global row, for error messages.
   std::string describe_row(int row) const;
 
@@ -71,28 +91,36 @@ class DaeSystem {
   long jacobian_count() const { return n_jac_; }
 
  private:
+  struct AdPlan;
+  class Recorder;
+  class FactoringSink;
   void fill_params(double t);
   void build_sparse_maps() const;
+  void build_ad_plan(int u);
+  template <class T>
+  Ctx<T> ctx(int u, double t, const T* y, const T* yp, const std::vector<std::vector<T>>& params, T* r) const;
   template <class T>
   void evaluate_explicit(double t, T* x, T* xd, const std::vector<std::vector<T>>& params, std::vector<T>& scratch);
   // With `factor_outer`, explicit units' outer products are collected in outer_ instead of added to `dense`.
   void assemble(double t, const double* y, const double* yp, double cj, int dim, double* dense, double* sparse,
                 bool factor_outer = false);
+  void ad_unit(int u, double t, const double* y, const double* yp, double cj, JacobianSink& sink,
+               const AdPlan* plan = nullptr);
   void seed(int id, int u, size_t slot, std::vector<Jet>& pj) const;
   void load_directions(const double* y, const double* yp, const std::vector<int>& params, size_t d0, size_t d1,
-                       const double* const* yS, const double* const* ypS);
-  template <class T>
-  void params_as(int unit, std::vector<T>& out) const;
+                       const double* const* yS, const double* const* ypS, int n_loaded);
+  void params_as_jets();
 
-  Flowsheet& fs_;
+  const Flowsheet& fs_;
   int n_;      // unknowns
   int n_ext_;  // all states
+  int n_quad_ = 0;
   bool inline_ = false;
   double fill_ = 0.0;
+  std::vector<std::unique_ptr<Workspace>> ws_;       // per unit, this run's
   std::vector<int> explicit_order_;                  // explicit units, each after the explicit units it reads
   std::vector<std::pair<int, int>> explicit_reads_;  // (u, v): explicit unit u reads explicit unit v, in order
-  class FactoringSink;
-  struct OuterTerm {  // u w^T on the rows of an explicit unit, columns integrated states
+  struct OuterTerm {                                 // u w^T on the rows of an explicit unit, columns integrated states
     int unit = -1;
     std::vector<double> u, w;
     std::vector<int> cols;
@@ -105,15 +133,15 @@ class DaeSystem {
   std::vector<std::tuple<int, int, int>> schur_row_runs_;  // (position in schur_rows_, first row, length)
   std::vector<double> y_ext_, yp_ext_, jac_ext_, scratch_;
   double segment_start_ = 0.0;
-  std::vector<std::vector<double>> pvals_;    // per unit, at the last fill time
-  std::vector<std::vector<int>> local_cols_;  // per unit: global columns its rows depend on
+  std::vector<std::vector<double>> pvals_;      // per unit, at the last fill time
+  std::vector<std::vector<double>> pconst_;     // per unit, the run's values at t = 0 (links applied)
+  std::vector<std::vector<int>> local_cols_;    // per unit: global columns its rows depend on
+  std::vector<std::unique_ptr<AdPlan>> plans_;  // per unit: how its AD sweeps seed directions
   // Sparse structure, built on first use (dense runs never need it).
-  mutable std::vector<std::vector<int>>
-      block_pos_;  // per unit: row-major [local row][local col] -> position in sparse values
+  mutable std::vector<std::vector<int>> block_pos_;            // per unit: row-major [local row][local col] -> position
   mutable std::vector<std::unordered_map<int, int>> col_map_;  // per unit: global column -> local column
-  std::vector<std::vector<size_t>> ad_pos_;                    // per unit: positions in local_cols_ found by AD
   mutable SparsityPattern pattern_;
-  std::vector<Jet> xj_, xdj_, rj_, jet_scratch_;
+  std::vector<Jet> xj_, xdj_, rj_, jet_scratch_, qj_;
   std::vector<std::vector<Jet>> pj_;  // per unit: parameters as Jets (seeded for sensitivities)
   std::vector<double> rbuf_;
   long n_res_ = 0, n_jac_ = 0;

@@ -16,6 +16,9 @@ namespace granuflow {
 
 // Settings given to one unit in a scene. A unit reads each one while declaring, with its type, default and
 // allowed range; reading declares it. Settings the unit never reads are reported as unknown keys.
+class Flowsheet;
+struct UnitInstance;
+
 class Settings {
  public:
   Settings() = default;
@@ -31,6 +34,9 @@ class Settings {
   void check_all_used() const;
   const std::vector<SettingSpec>& declared() const { return declared_; }
   const std::string& where() const { return where_; }
+  // A unit instance added to the flowsheet before this one (a particle system other units share), or nullptr.
+  const UnitInstance* unit(const std::string& name) const;
+  void attach(const Flowsheet* fs) { fs_ = fs; }
 
  private:
   const std::string* given(const std::string& name);
@@ -38,6 +44,7 @@ class Settings {
   std::map<std::string, std::string> given_;
   std::vector<std::string> used_;
   std::vector<SettingSpec> declared_;
+  const Flowsheet* fs_ = nullptr;
 };
 
 struct UnitInstance {
@@ -50,6 +57,8 @@ struct UnitInstance {
   std::vector<std::optional<PiecewiseLinear>> inputs;  // per param: time-dependent override
   std::vector<std::vector<int>> port_index;            // per port, per field: global state index
   std::vector<std::pair<int, int>> peers;              // per port: (unit index, port index) of the connected port
+  int quad_offset = 0;                                 // global index of own quadrature 0
+  int shared = -1;  // unit index of the particle system whose parameters it reads (UnitSpec::use_shared_params)
 };
 
 class Flowsheet {
@@ -79,19 +88,21 @@ class Flowsheet {
   std::pair<int, int> param_location(int id) const;  // (unit index, local param index)
   void set_input(const std::string& qualified, PiecewiseLinear input);
   bool has_input(int id) const;
-  // Links: parameter `target` takes the value of `source` (its value at t = 0 if `source` is an input) at
-  // the start of every run, e.g. the initial bed temperature follows the inlet temperature (a value set on a
-  // linked target is overwritten then); a sensitivity with respect to `source` includes the path through
-  // `target`.
+  // Links: parameter `target` takes the value of `source` (its value at t = 0 if `source` is an input) in every
+  // run, e.g. the initial bed temperature follows the inlet temperature; a sensitivity with respect to `source`
+  // includes the path through `target`.
   // Setting a link target (set_param, set_input) to anything but the value it follows is a ConfigError that
   // names the link; param() of a link target is its source's value.
   void link(const std::string& target, const std::string& source);
-  void apply_links();
   int link_source(int target) const;         // -1 unless `target` follows a parameter
   std::string qualified_name(int id) const;  // "unit.param"
-  // apply_links(), then every unit's configure(); a ConfigError from a unit names the unit instance.
-  void configure_units();
-  void check_units();  // apply_links(), then every unit's check() (no configure()), named as above
+  // The parameter values unit `u` runs with at t = 0: its own, link targets at their sources' values (checked
+  // against the targets' bounds: a ConfigError names the link). Reading only: runs never change the flowsheet.
+  std::vector<double> run_params(int u) const;
+  // Every unit's check() on run_params(); a ConfigError from a unit names the unit instance.
+  void check_units() const;
+  // "unit NAME (TYPE): message" for a ConfigError a unit threw relative to itself.
+  std::string qualify_unit_message(int u, const std::string& message) const;
   std::vector<int> linked_targets(int source) const;
   // Breakpoints of all inputs inside (0, t_end).
   std::vector<double> breakpoints(double t_end) const;
@@ -99,7 +110,8 @@ class Flowsheet {
   // Layout (after finalize).
   int n_states() const { return n_states_; }
   int n_explicit_states() const { return n_explicit_; }  // the last ones, belonging to explicit units
-  std::vector<std::string> state_names() const;          // "unit.state"
+  int n_quadratures() const { return n_quads_; }
+  std::vector<std::string> state_names() const;  // "unit.state"
   const StateSpec& state_spec(int global) const;
   int state_unit(int global) const;  // unit index owning a state
   int state_id(const std::string& qualified) const;
@@ -113,8 +125,8 @@ class Flowsheet {
  private:
   std::pair<int, int> split_port(const std::string& qualified) const;
   double linked_value(int source) const;
+  int resolve_field(int u, int p, int f, int depth) const;
   void store_param(int id, double value_si);  // bounds-checked, ignores links
-  static std::string qualify_unit_message(const UnitInstance& inst, const std::string& message);
   std::string name_;
   std::vector<UnitInstance> units_;
   std::vector<std::pair<std::pair<int, int>, std::pair<int, int>>> connections_;
@@ -123,6 +135,7 @@ class Flowsheet {
   std::vector<std::pair<int, int>> links_;  // (target, source) parameter ids
   int n_states_ = 0;
   int n_explicit_ = 0;
+  int n_quads_ = 0;
   bool finalized_ = false;
 };
 

@@ -41,6 +41,7 @@ struct SolverStats {
   long reinits = 0;          // restarts at input breakpoints
   long states = 0;           // unknowns of the integrator
   long explicit_states = 0;  // states of explicit units, evaluated inline
+  long quadratures = 0;      // integrals of flows, outside the Newton system
   std::string linear_solver;
 };
 
@@ -52,7 +53,8 @@ struct SimResult {
   std::vector<std::string> output_names;
   std::vector<double> outputs;  // row-major [time][output]
   std::vector<std::string> sens_params;
-  std::vector<double> sens;  // row-major [time][param][state]
+  std::vector<double> sens;         // row-major [time][param][state]
+  std::vector<double> output_sens;  // row-major [time][param][output], exact (outputs differentiated with Jets)
   SolverStats stats;
   double wall_time_s = 0.0;
   int n_states() const { return static_cast<int>(state_names.size()); }
@@ -75,6 +77,8 @@ struct SteadyResult {
 };
 
 // Solves F(y, y' = 0) = 0 from the initial values (or from `guess` when given) with KINSOL (line search).
+// SteadyResult::y is the full state vector (explicit units' states evaluated); a guess may be full or cover
+// the integrated states only.
 SteadyResult solve_steady_state(Flowsheet& fs, const SteadyOptions& options,
                                 const std::vector<double>* guess = nullptr);
 

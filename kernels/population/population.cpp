@@ -1,0 +1,823 @@
+#include "population/population.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <type_traits>
+
+#include "discretization/cell_average.hpp"
+#include "discretization/fixed_pivot.hpp"
+#include "discretization/redistribution.hpp"
+#include "granuflow/errors.hpp"
+#include "granuflow/flowsheet.hpp"
+#include "registry.hpp"
+
+namespace granuflow::kernels {
+
+namespace {
+constexpr const char* kNone = "none";
+
+std::vector<std::string> with_none(std::vector<std::string> names) {
+  names.insert(names.begin(), kNone);
+  return names;
+}
+
+// Skips empty classes in double evaluations only: with Jets a zero value may still carry a derivative.
+template <class T>
+bool is_empty(const T& v) {
+  if constexpr (std::is_same_v<T, double>)
+    return v == 0.0;
+  else
+    return false;
+}
+
+bool has_derivative(const double*, int, int) { return false; }
+bool has_derivative(const Jet* p, int first, int count) {
+  for (int k = first; k < first + count; ++k)
+    if (!p[k].v.isZero()) return true;
+  return false;
+}
+
+void to_jets(const std::vector<double>& v, std::vector<Jet>& out) {
+  out.resize(v.size());
+  for (size_t k = 0; k < v.size(); ++k) out[k] = Jet(v[k]);
+}
+}  // namespace
+
+const char* field_name(Field f) {
+  static const char* names[kFields] = {"moisture", "spot_moisture", "temperature", "liquid_fraction",
+                                       "wetted_fraction"};
+  return names[static_cast<int>(f)];
+}
+
+// Everything one run of a population computes: the tables that depend on parameters only (refreshed when a
+// parameter value changes), and the work arrays of the rates and the Jacobian.
+struct Population::Work {
+  std::vector<double> snapshot;  // kernel parameter values of the tables
+  std::vector<double> K, S, A;   // beta factors (n x n), selection rates (n), breakage matrix ((n + 3) x n)
+  std::vector<Jet> K_jet, S_jet, A_jet;
+  template <class T>
+  struct Scratch {
+    std::vector<T> K, S, A, phi, pi, B, V, Q, shape, amount, F, sn, rows, dq, beta;
+    std::vector<int> donor;
+  };
+  Scratch<double> sd;
+  Scratch<Jet> sj;
+  template <class T>
+  Scratch<T>& scratch() {
+    if constexpr (std::is_same_v<T, double>)
+      return sd;
+    else
+      return sj;
+  }
+  // Jacobian work
+  std::vector<double> D, G, dB, dV, dQ, dF, jinv;
+  std::vector<Jet> jp, jN, jq, jf, jphi;
+};
+
+Population::Population() = default;
+Population::~Population() = default;
+Population::Population(Population&&) noexcept = default;
+Population& Population::operator=(Population&&) noexcept = default;
+
+template <class K>
+Population::Plugin<K> Population::plugin(UnitSpec& s, Settings& st, const Registry<K>& reg, const std::string& name,
+                                         const std::string& param_prefix, const std::string& setting_prefix) {
+  Plugin<K> pl;
+  if (name == kNone) return pl;
+  pl.kernel = reg.create(name, st.where());
+  pl.kernel->declare(st, setting_prefix);
+  pl.first = static_cast<int>(s.params().size());
+  for (ParamSpec spec : pl.kernel->params()) {
+    spec.name = param_prefix + spec.name;
+    if (s.param_index(spec.name) >= 0)
+      throw ConfigError(st.where() + ": parameter '" + spec.name + "' of " + name +
+                        " is declared twice in this unit (two mechanisms with the same parameter name)");
+    s.add_param(std::move(spec));
+  }
+  pl.count = static_cast<int>(s.params().size()) - pl.first;
+  for (int k = pl.first; k < pl.first + pl.count; ++k) kernel_params_.push_back(k);
+  needs_ |= pl.kernel->needs();
+  return pl;
+}
+
+void Population::declare(UnitSpec& s, Settings& st, std::shared_ptr<const Grid> grid, const PopulationOptions& o) {
+  const auto& reg = registries();
+  grid_ = std::move(grid);
+  n_ = grid_->size();
+  property_names_ = o.properties;
+  outside_ = st.get_choice("outside", o.outside == Outside::kFold ? "fold" : "remove", {"fold", "remove"},
+                           "particles leaving the grid: kept in the end class with their volume (fold, paper 001) "
+                           "or removed and counted (remove)") == "fold"
+                 ? Outside::kFold
+                 : Outside::kRemove;
+  const std::string agg =
+      st.get_choice("aggregation", o.aggregation, with_none(reg.aggregation.names()), "aggregation kernel");
+  agg_ = plugin(s, st, reg.aggregation, agg, o.agg_prefix, o.agg_settings);
+  if (agg_.kernel) {
+    agg_scheme_ = reg.aggregation_schemes.create(st.get_choice("aggregation_scheme", o.aggregation_scheme,
+                                                               reg.aggregation_schemes.names(), "aggregation scheme"),
+                                                 st.where());
+    agg_scheme_->setup(*grid_);
+  }
+  const std::string sel =
+      st.get_choice("breakage", o.breakage, with_none(reg.selection.names()), "breakage selection rate");
+  sel_ = plugin(s, st, reg.selection, sel, o.sel_prefix, o.sel_settings);
+  if (sel_.kernel) {
+    frag_ = plugin(s, st, reg.fragments,
+                   st.get_choice("fragments", o.fragments, reg.fragments.names(), "fragment distribution"),
+                   o.frag_prefix, o.frag_settings);
+    brk_scheme_ = reg.breakage_schemes.create(
+        st.get_choice("breakage_scheme", o.breakage_scheme, reg.breakage_schemes.names(), "breakage scheme"),
+        st.where());
+  }
+  const std::string gr = st.get_choice("growth", o.growth, with_none(reg.growth.names()), "growth law");
+  growth_ = plugin(s, st, reg.growth, gr, o.growth_prefix, o.growth_settings);
+  if (growth_.kernel) {
+    growth_scheme_ = reg.growth_schemes.create(
+        st.get_choice("growth_scheme", o.growth_scheme, reg.growth_schemes.names(), "growth scheme"), st.where());
+    growth_scheme_->setup(*grid_);
+  }
+  field_index_.clear();
+  for (int f = 0; f < kFields; ++f)
+    if (needs_.field(static_cast<Field>(f))) field_index_.push_back(f);
+}
+
+Population::WorkPtr Population::make_work() const { return WorkPtr(new Work()); }
+void Population::WorkDeleter::operator()(Work* w) const { delete w; }
+
+template <class T>
+ClassState<T> Population::class_state(const State<T>& s) const {
+  ClassState<T> cs;
+  cs.n = n_;
+  cs.volume = grid_->pivots().data();
+  cs.diameter = grid_->diameter_pivots().data();
+  cs.number = s.N;
+  for (int f = 0; f < kFields; ++f) cs.fields[f] = s.fields[f];
+  return cs;
+}
+
+void Population::configure(Work& w, const double* p, const std::string& where) const {
+  ClassState<double> cs;
+  cs.n = n_;
+  cs.volume = grid_->pivots().data();
+  cs.diameter = grid_->diameter_pivots().data();
+  const std::pair<const KernelBase*, int> kernels[] = {{agg_.kernel.get(), agg_.first},
+                                                       {sel_.kernel.get(), sel_.first},
+                                                       {frag_.kernel.get(), frag_.first},
+                                                       {growth_.kernel.get(), growth_.first}};
+  for (const auto& [k, first] : kernels)
+    if (k) k->check(cs, p + first, where);
+  w.snapshot.clear();
+  refresh(w, p);
+}
+
+// Re-evaluates the tables when a kernel parameter value changed since the last evaluation (a time-dependent input).
+void Population::refresh(Work& w, const double* p) const {
+  bool same = w.snapshot.size() == kernel_params_.size();
+  for (size_t k = 0; same && k < kernel_params_.size(); ++k) same = w.snapshot[k] == p[kernel_params_[k]];
+  if (same) return;
+  w.snapshot.resize(kernel_params_.size());
+  for (size_t k = 0; k < kernel_params_.size(); ++k) w.snapshot[k] = p[kernel_params_[k]];
+  ClassState<double> cs;
+  cs.n = n_;
+  cs.volume = grid_->pivots().data();
+  cs.diameter = grid_->diameter_pivots().data();
+  if (agg_.kernel) {
+    w.K.resize(size_t(n_) * n_);
+    agg_.kernel->factor(cs, p + agg_.first, w.K.data());
+    to_jets(w.K, w.K_jet);
+  }
+  if (sel_.kernel) {
+    if (!sel_.kernel->state_dependent()) {
+      w.S.resize(n_);
+      sel_.kernel->evaluate(cs, p + sel_.first, w.S.data());
+      to_jets(w.S, w.S_jet);
+    }
+    w.A.resize(size_t(n_ + kOutsideRows) * n_);
+    brk_scheme_->build(*grid_, *frag_.kernel, p + frag_.first, w.A.data());
+    to_jets(w.A, w.A_jet);
+  }
+}
+
+template <class T>
+bool Population::fresh_tables(const Work&, const T* p, int first, int count) const {
+  return has_derivative(p, first, count);
+}
+
+void Population::rates(Work& w, const State<double>& s, const Rates<double>& r) const {
+  refresh(w, s.p);
+  rates_t(w, s, r, true);
+}
+
+void Population::rates(Work& w, const State<Jet>& s, const Rates<Jet>& r) const {
+  std::vector<double>& v = w.jinv;  // parameter values without derivatives, for the cached tables
+  int np = 0;
+  for (int k : kernel_params_) np = std::max(np, k + 1);
+  v.resize(np);
+  for (int k : kernel_params_) v[k] = s.p[k].a;
+  refresh(w, v.data());
+  rates_t(w, s, r, true);
+}
+
+// The rates of every mechanism into work rows (class rows, then the outside rows), folded, then added to `r`.
+template <class T>
+void Population::rates_t(Work& w, const State<T>& s, const Rates<T>& r, bool fold) const {
+  const int n = n_, P = properties(), no = outside_rows();
+  auto& sc = w.scratch<T>();
+  const ClassState<T> cs = class_state(s);
+  const T* N = s.N;
+  sc.rows.assign(n + no, T(0.0));
+  sc.dq.assign(size_t(P) * n, T(0.0));
+  T* dN = sc.rows.data();
+  T* out = dN + n;
+  T* dq = sc.dq.data();
+  sc.pi.resize(size_t(P) * n);
+  for (int p = 0; p < P; ++p)
+    for (int i = 0; i < n; ++i) sc.pi[size_t(p) * n + i] = s.q[p][i] / (N[i] + (s.floor ? s.floor[i] : T(0.0)));
+  const T* pi = sc.pi.data();
+  const auto& x = grid_->pivots();
+
+  if (agg_.kernel) {
+    const T* K;
+    if constexpr (std::is_same_v<T, double>) {
+      K = w.K.data();
+    } else if (fresh_tables(w, s.p, agg_.first, agg_.count)) {
+      sc.K.resize(size_t(n) * n);
+      agg_.kernel->factor(cs, s.p + agg_.first, sc.K.data());
+      K = sc.K.data();
+    } else {
+      K = w.K_jet.data();
+    }
+    const int m = agg_.kernel->n_features();
+    if (m > 0) {
+      sc.phi.resize(size_t(n) * m);
+      agg_.kernel->features(cs, s.p + agg_.first, sc.phi.data());
+    }
+    const T* kp = s.p + agg_.first;
+    const auto* fp = dynamic_cast<const FixedPivotAggregation*>(agg_scheme_.get());
+    const auto* ca = dynamic_cast<const CellAverageAggregation*>(agg_scheme_.get());
+    if (ca) {
+      sc.B.assign(n + 1, T(0.0));
+      sc.V.assign(n + 1, T(0.0));
+      sc.Q.assign(size_t(P) * (n + 1), T(0.0));
+    }
+    size_t pr = 0;
+    for (int j = 0; j < n; ++j) {
+      if (is_empty(N[j])) {
+        pr += n - j;
+        continue;
+      }
+      for (int k = j; k < n; ++k, ++pr) {
+        if (is_empty(N[k])) continue;
+        T beta = K[size_t(j) * n + k];
+        if (m > 0) beta *= agg_.kernel->efficiency(&sc.phi[size_t(j) * m], &sc.phi[size_t(k) * m], kp);
+        const T rate = (j == k ? 0.5 : 1.0) * beta * N[j] * N[k];  // paper 001, Eqs. (21), (24)
+        dN[j] -= rate;
+        dN[k] -= rate;
+        for (int p = 0; p < P; ++p) {
+          dq[size_t(p) * n + j] -= rate * pi[size_t(p) * n + j];
+          dq[size_t(p) * n + k] -= rate * pi[size_t(p) * n + k];
+        }
+        if (fp) {
+          const FixedPivotAggregation::Target& t = fp->target(pr);
+          if (t.lo >= 0) dN[t.lo] += t.w_lo * rate;
+          if (t.hi >= 0) {
+            dN[t.hi] += t.w_hi * rate;
+          } else {
+            out[kOutNumberAbove] += t.w_hi * rate;
+            out[kOutVolumeAbove] += t.f_hi * fp->volume(pr) * rate;
+          }
+          for (int p = 0; p < P; ++p) {
+            const T carried = rate * (pi[size_t(p) * n + j] + pi[size_t(p) * n + k]);
+            if (t.lo >= 0) dq[size_t(p) * n + t.lo] += t.f_lo * carried;
+            if (t.hi >= 0)
+              dq[size_t(p) * n + t.hi] += t.f_hi * carried;
+            else
+              out[out_property_above(p)] += t.f_hi * carried;
+          }
+        } else {
+          const int c = ca->cell(pr);
+          sc.B[c] += rate;
+          sc.V[c] += ca->volume(pr) * rate;
+          for (int p = 0; p < P; ++p)
+            sc.Q[size_t(p) * (n + 1) + c] += rate * (pi[size_t(p) * n + j] + pi[size_t(p) * n + k]);
+        }
+      }
+    }
+    if (ca) {
+      // Each packet split on the side of its mean volume (Kumar et al. 2006, Eq. (15)); properties follow the volume.
+      std::vector<T> split(n + kOutsideRows);
+      for (int c = 0; c < n; ++c) {
+        if (is_empty(sc.B[c])) continue;
+        const int a = ca->side(*grid_, c, sc.B[c], sc.V[c]);
+        std::fill(split.begin(), split.end(), T(0.0));
+        split_between(*grid_, a, sc.B[c], sc.V[c], split.data());
+        for (int i = 0; i < n; ++i) dN[i] += split[i];
+        out[kOutNumberAbove] += split[n + kNumberAbove];
+        out[kOutVolumeAbove] += split[n + kVolumeAbove];
+        out[kOutVolumeBelow] += split[n + kVolumeBelow];
+        for (int p = 0; p < P && value_of(sc.V[c]) != 0.0; ++p) {
+          const T per_volume = sc.Q[size_t(p) * (n + 1) + c] / sc.V[c];
+          for (int i = std::max(a, 0); i <= std::min(a + 1, n - 1); ++i)
+            dq[size_t(p) * n + i] += per_volume * x[i] * split[i];
+          out[out_property_above(p)] += per_volume * split[n + kVolumeAbove];
+          out[out_property_below(p)] += per_volume * split[n + kVolumeBelow];
+        }
+      }
+      out[kOutNumberAbove] += sc.B[n];  // aggregates beyond the top edge leave whole
+      out[kOutVolumeAbove] += sc.V[n];
+      for (int p = 0; p < P; ++p) out[out_property_above(p)] += sc.Q[size_t(p) * (n + 1) + n];
+    }
+  }
+
+  if (sel_.kernel) {
+    // Paper 001, Eqs. (23), (25): dN/dt = A (S o N); a property follows the volume of its parent's fragments.
+    const T* S;
+    if (sel_.kernel->state_dependent() || fresh_tables(w, s.p, sel_.first, sel_.count)) {
+      sc.S.resize(n);
+      sel_.kernel->evaluate(cs, s.p + sel_.first, sc.S.data());
+      S = sc.S.data();
+    } else if constexpr (std::is_same_v<T, double>) {
+      S = w.S.data();
+    } else {
+      S = w.S_jet.data();
+    }
+    const T* A;
+    if (fresh_tables(w, s.p, frag_.first, frag_.count)) {
+      sc.A.resize(size_t(n + kOutsideRows) * n);
+      brk_scheme_->build(*grid_, *frag_.kernel, s.p + frag_.first, sc.A.data());
+      A = sc.A.data();
+    } else if constexpr (std::is_same_v<T, double>) {
+      A = w.A.data();
+    } else {
+      A = w.A_jet.data();
+    }
+    sc.sn.resize(n);
+    for (int k = 0; k < n; ++k) sc.sn[k] = S[k] * N[k];
+    for (int row = 0; row < n + kOutsideRows; ++row) {
+      const T* a = A + size_t(row) * n;
+      T acc(0.0);
+      // Fragments land at or below the parent's pivot: class row r only sees parents k >= r.
+      for (int k = row < n ? row : 0; k < n; ++k) acc += a[k] * sc.sn[k];
+      if (row < n)
+        dN[row] += acc;
+      else
+        out[row - n] += acc;  // kNumberAbove, kVolumeAbove, kVolumeBelow line up with kOut*
+    }
+    for (int p = 0; p < P; ++p) {
+      const T* q = s.q[p];
+      for (int row = 0; row < n; ++row) {
+        T acc(0.0);
+        for (int k = row; k < n; ++k) acc += (A[size_t(row) * n + k] * (x[row] / x[k])) * S[k] * q[k];
+        dq[size_t(p) * n + row] += acc;
+      }
+      T below(0.0);
+      for (int k = 0; k < n; ++k) below += A[size_t(n + kVolumeBelow) * n + k] / x[k] * S[k] * q[k];
+      out[out_property_below(p)] += below;
+    }
+  }
+
+  if (growth_.kernel) {
+    const int nf = n + 1, terms = growth_.kernel->terms();
+    sc.shape.resize(size_t(terms) * nf);
+    sc.amount.resize(terms);
+    growth_.kernel->evaluate(growth_scheme_->face_diameters().data(), nf, s.p + growth_.first, sc.shape.data(),
+                             sc.amount.data());
+    const GrowthTerms<T> g{terms, sc.shape.data(), sc.amount.data(), growth_.kernel->volume_normalized()};
+    sc.F.resize(nf);
+    sc.donor.resize(nf);
+    const T W = growth_scheme_->fluxes(N, g, sc.F.data(), sc.donor.data());
+    // paper 003, Eqs. (7.32), (7.34): dN_i/dt = F_i - F_{i+1}; what crosses an end face leaves at its virtual pivot
+    for (int f = 0; f < nf; ++f) {
+      const T& F = sc.F[f];
+      if (f > 0)
+        dN[f - 1] -= F;
+      else
+        out[kOutVolumeBelow] -= F * grid_->lower_virtual();
+      if (f < n)
+        dN[f] += F;
+      else
+        out[kOutNumberAbove] += F, out[kOutVolumeAbove] += F * grid_->upper_virtual();
+      const int d = sc.donor[f];
+      if (d < 0) continue;
+      for (int p = 0; p < P; ++p) {
+        const T Fq = F * pi[size_t(p) * n + d];
+        if (f > 0)
+          dq[size_t(p) * n + f - 1] -= Fq;
+        else
+          out[out_property_below(p)] -= Fq;
+        if (f < n)
+          dq[size_t(p) * n + f] += Fq;
+        else
+          out[out_property_above(p)] += Fq;
+      }
+    }
+    if (r.grown) *r.grown += W;
+  }
+
+  if (fold && outside_ == Outside::kFold) {
+    dN[0] += out[kOutVolumeBelow] / x[0];
+    dN[n - 1] += out[kOutVolumeAbove] / x[n - 1];
+    for (int p = 0; p < P; ++p) {
+      dq[size_t(p) * n] += out[out_property_below(p)];
+      dq[size_t(p) * n + n - 1] += out[out_property_above(p)];
+    }
+  }
+  for (int i = 0; i < n; ++i) r.dN[i] += dN[i];
+  for (int p = 0; p < P; ++p)
+    for (int i = 0; i < n; ++i) r.dq[p][i] += dq[size_t(p) * n + i];
+  if (r.outside)
+    for (int k = 0; k < no; ++k) r.outside[k] += out[k];
+}
+
+int Population::input_cols() const { return n_ * (1 + properties() + static_cast<int>(field_index_.size())); }
+
+void Population::fold_rows(double* D, int cols) const {
+  if (outside_ != Outside::kFold) return;
+  const int n = n_, P = properties();
+  const auto& x = grid_->pivots();
+  const size_t out0 = size_t(n) * (1 + P);
+  auto row = [&](size_t r) { return D + r * cols; };
+  for (int c = 0; c < cols; ++c) {
+    row(0)[c] += row(out0 + kOutVolumeBelow)[c] / x[0];
+    row(n - 1)[c] += row(out0 + kOutVolumeAbove)[c] / x[n - 1];
+    for (int p = 0; p < P; ++p) {
+      row(size_t(n) * (1 + p))[c] += row(out0 + out_property_below(p))[c];
+      row(size_t(n) * (1 + p) + n - 1)[c] += row(out0 + out_property_above(p))[c];
+    }
+  }
+}
+
+void Population::jacobian(Work& w, const State<double>& s, const Map& m, JacobianSink& sink) const {
+  refresh(w, s.p);
+  const int n = n_, P = properties(), no = outside_rows(), C = input_cols();
+  const int R = n * (1 + P) + no + 1;  // the last row: the volume growth creates
+  w.D.assign(size_t(R) * C, 0.0);
+  if (needs_.number || (sel_.kernel && sel_.kernel->state_dependent()))
+    ad_jacobian(w, s, w.D);
+  else
+    analytic_jacobian(w, s, w.D);
+  fold_rows(w.D.data(), C);
+  // Map the engine's rows and inputs to the unit's.
+  for (int r = 0; r < R; ++r) {
+    int row;
+    double factor;
+    if (r < n) {
+      row = m.N_row[r], factor = m.N_factor[r];
+    } else if (r < n * (1 + P)) {
+      row = m.q_row[(r - n) / n][(r - n) % n], factor = m.q_factor;
+    } else if (r < R - 1) {
+      const int k = r - n * (1 + P);
+      row = k < static_cast<int>(m.outside_row.size()) ? m.outside_row[k] : -1, factor = -1.0;
+    } else {
+      row = m.grown_row, factor = -1.0;
+    }
+    if (row < 0) continue;
+    const double* d = &w.D[size_t(r) * C];
+    for (int c = 0; c < C; ++c) {
+      if (d[c] == 0.0) continue;
+      int col;
+      double scale = 1.0;
+      if (c < n) {
+        col = m.N_col[c], scale = m.N_scale[c];
+      } else if (c < n * (1 + P)) {
+        col = m.q_col[(c - n) / n][(c - n) % n];
+      } else {
+        const int fi = (c - n * (1 + P)) / n, i = (c - n * (1 + P)) % n;
+        col = m.field_col[field_index_[fi]].empty() ? -1 : m.field_col[field_index_[fi]][i];
+      }
+      if (col >= 0) sink.add(row, col, factor * d[c] * scale);
+    }
+  }
+}
+
+// d(rates)/d(N, q, fields) of the built-in mechanisms into D (rows: class numbers, properties, outside; columns: N,
+// q, the fields read), before folding.
+void Population::analytic_jacobian(Work& w, const State<double>& s, std::vector<double>& Dv) const {
+  const int n = n_, P = properties(), C = input_cols(), nfr = static_cast<int>(field_index_.size());
+  const auto& x = grid_->pivots();
+  double* D = Dv.data();
+  const size_t out0 = size_t(n) * (1 + P);
+  auto rowN = [&](int i) { return size_t(i); };
+  auto rowQ = [&](int p, int i) { return size_t(n) * (1 + p) + i; };
+  auto rowO = [&](int k) { return out0 + k; };
+  auto colQ = [&](int p, int i) { return n * (1 + p) + i; };
+  auto colF = [&](int fi, int i) { return n * (1 + P) + fi * n + i; };
+  auto add = [&](size_t r, int c, double v) { D[r * C + c] += v; };
+  const double* N = s.N;
+  // Per-particle properties and their derivatives.
+  std::vector<double> pi(size_t(P) * n), dpi_dN(size_t(P) * n), dpi_dq(size_t(P) * n);
+  for (int p = 0; p < P; ++p)
+    for (int i = 0; i < n; ++i) {
+      const double den = N[i] + (s.floor ? s.floor[i] : 0.0);
+      pi[size_t(p) * n + i] = s.q[p][i] / den;
+      dpi_dq[size_t(p) * n + i] = 1.0 / den;
+      dpi_dN[size_t(p) * n + i] = -pi[size_t(p) * n + i] / den;
+    }
+
+  if (agg_.kernel) {
+    const double* kp = s.p + agg_.first;
+    const int mf = agg_.kernel->n_features();
+    // Features and dphi_i/dfield_i: every class's field f seeded in direction f at once (phi_i reads class i only).
+    std::vector<double> phi(size_t(n) * mf), G(size_t(n) * mf * std::max(nfr, 1), 0.0);
+    if (mf > 0) {
+      w.jf.resize(size_t(kFields) * n);
+      ClassState<Jet> cj;
+      cj.n = n, cj.volume = x.data(), cj.diameter = grid_->diameter_pivots().data();
+      for (int fi = 0; fi < nfr; ++fi) {
+        const int f = field_index_[fi];
+        for (int i = 0; i < n; ++i) {
+          w.jf[size_t(f) * n + i] = Jet(s.fields[f][i]);
+          w.jf[size_t(f) * n + i].v[fi] = 1.0;
+        }
+        cj.fields[f] = &w.jf[size_t(f) * n];
+      }
+      w.jp.resize(agg_.count);
+      for (int k = 0; k < agg_.count; ++k) w.jp[k] = Jet(kp[k]);
+      w.jphi.resize(size_t(n) * mf);
+      agg_.kernel->features(cj, w.jp.data(), w.jphi.data());
+      for (int i = 0; i < n; ++i)
+        for (int a = 0; a < mf; ++a) {
+          phi[size_t(i) * mf + a] = w.jphi[size_t(i) * mf + a].a;
+          for (int fi = 0; fi < nfr; ++fi) G[(size_t(i) * mf + a) * nfr + fi] = w.jphi[size_t(i) * mf + a].v[fi];
+        }
+    }
+    const auto* fp = dynamic_cast<const FixedPivotAggregation*>(agg_scheme_.get());
+    const auto* ca = dynamic_cast<const CellAverageAggregation*>(agg_scheme_.get());
+    if (ca) {
+      w.dB.assign(size_t(n + 1) * C, 0.0);
+      w.dV.assign(size_t(n + 1) * C, 0.0);
+      w.dQ.assign(size_t(P) * (n + 1) * C, 0.0);
+    }
+    std::vector<double> B(n + 1, 0.0), V(n + 1, 0.0), Q(size_t(P) * (n + 1), 0.0);
+    // The event's inputs: N_j, N_k and the fields of both partners.
+    struct In {
+      int col;
+      double d;
+    };
+    std::vector<In> ev;
+    Jet a[kMaxFeatures], b[kMaxFeatures];
+    size_t pr = 0;
+    for (int j = 0; j < n; ++j)
+      for (int k = j; k < n; ++k, ++pr) {
+        const double h = j == k ? 0.5 : 1.0, K = w.K[size_t(j) * n + k];
+        double E = 1.0, dEa[kMaxFeatures] = {}, dEb[kMaxFeatures] = {};
+        if (mf > 0) {
+          for (int c = 0; c < mf; ++c) {
+            a[c] = Jet(phi[size_t(j) * mf + c]), a[c].v[c] = 1.0;
+            b[c] = Jet(phi[size_t(k) * mf + c]), b[c].v[mf + c] = 1.0;
+          }
+          const Jet e = agg_.kernel->efficiency(a, b, w.jp.data());
+          E = e.a;
+          for (int c = 0; c < mf; ++c) dEa[c] = e.v[c], dEb[c] = e.v[mf + c];
+        }
+        const double beta = K * E, rate = h * beta * N[j] * N[k];
+        ev.clear();
+        ev.push_back({j, h * beta * N[k]});
+        ev.push_back({k, h * beta * N[j]});
+        for (int fi = 0; fi < nfr && mf > 0; ++fi) {
+          double dj = 0, dk = 0;
+          for (int c = 0; c < mf; ++c) {
+            dj += dEa[c] * G[(size_t(j) * mf + c) * nfr + fi];
+            dk += dEb[c] * G[(size_t(k) * mf + c) * nfr + fi];
+          }
+          ev.push_back({colF(fi, j), h * K * N[j] * N[k] * dj});
+          ev.push_back({colF(fi, k), h * K * N[j] * N[k] * dk});
+        }
+        // deaths of the partners, with their properties
+        for (const In& e : ev) {
+          add(rowN(j), e.col, -e.d);
+          add(rowN(k), e.col, -e.d);
+          for (int p = 0; p < P; ++p) {
+            add(rowQ(p, j), e.col, -e.d * pi[size_t(p) * n + j]);
+            add(rowQ(p, k), e.col, -e.d * pi[size_t(p) * n + k]);
+          }
+        }
+        for (int p = 0; p < P; ++p)
+          for (int i : {j, k}) {
+            add(rowQ(p, i), i, -rate * dpi_dN[size_t(p) * n + i]);
+            add(rowQ(p, i), colQ(p, i), -rate * dpi_dq[size_t(p) * n + i]);
+          }
+        if (fp) {
+          const FixedPivotAggregation::Target& t = fp->target(pr);
+          // number and property rows that receive the aggregate, with their weights on rate and on carried property
+          struct Dest {
+            int cls;  // -1: above
+            double w, f;
+          };
+          const Dest dests[2] = {{t.lo, t.w_lo, t.f_lo}, {t.hi, t.w_hi, t.f_hi}};
+          for (const Dest& d : dests) {
+            if (d.w == 0.0 && d.f == 0.0) continue;
+            for (const In& e : ev) {
+              if (d.cls >= 0) {
+                add(rowN(d.cls), e.col, d.w * e.d);
+              } else {
+                add(rowO(kOutNumberAbove), e.col, d.w * e.d);
+                add(rowO(kOutVolumeAbove), e.col, d.f * fp->volume(pr) * e.d);
+              }
+              for (int p = 0; p < P; ++p) {
+                const double carried = pi[size_t(p) * n + j] + pi[size_t(p) * n + k];
+                add(d.cls >= 0 ? rowQ(p, d.cls) : rowO(out_property_above(p)), e.col, d.f * carried * e.d);
+              }
+            }
+            for (int p = 0; p < P; ++p) {
+              const size_t row = d.cls >= 0 ? rowQ(p, d.cls) : rowO(out_property_above(p));
+              for (int i : {j, k}) {
+                add(row, i, d.f * rate * dpi_dN[size_t(p) * n + i]);
+                add(row, colQ(p, i), d.f * rate * dpi_dq[size_t(p) * n + i]);
+              }
+            }
+          }
+        } else {
+          const int c = ca->cell(pr);
+          const double v = ca->volume(pr);
+          B[c] += rate;
+          V[c] += v * rate;
+          double* db = &w.dB[size_t(c) * C];
+          double* dv = &w.dV[size_t(c) * C];
+          for (const In& e : ev) db[e.col] += e.d, dv[e.col] += v * e.d;
+          for (int p = 0; p < P; ++p) {
+            const double carried = pi[size_t(p) * n + j] + pi[size_t(p) * n + k];
+            Q[size_t(p) * (n + 1) + c] += rate * carried;
+            double* dqc = &w.dQ[(size_t(p) * (n + 1) + c) * C];
+            for (const In& e : ev) dqc[e.col] += carried * e.d;
+            for (int i : {j, k}) {
+              dqc[i] += rate * dpi_dN[size_t(p) * n + i];
+              dqc[colQ(p, i)] += rate * dpi_dq[size_t(p) * n + i];
+            }
+          }
+        }
+      }
+    if (ca) {
+      SplitRow rows[3];
+      for (int c = 0; c <= n; ++c) {
+        const double* db = &w.dB[size_t(c) * C];
+        const double* dv = &w.dV[size_t(c) * C];
+        if (c == n) {  // beyond the top edge: leaves whole
+          for (int col = 0; col < C; ++col) {
+            add(rowO(kOutNumberAbove), col, db[col]);
+            add(rowO(kOutVolumeAbove), col, dv[col]);
+            for (int p = 0; p < P; ++p)
+              add(rowO(out_property_above(p)), col, w.dQ[(size_t(p) * (n + 1) + n) * C + col]);
+          }
+          continue;
+        }
+        const int side = ca->side(*grid_, c, B[c], V[c]);
+        const int m = split_rows(*grid_, side, rows);
+        for (int r = 0; r < m; ++r) {
+          const size_t row = rows[r].row < n ? rowN(rows[r].row) : rowO(rows[r].row - n);
+          for (int col = 0; col < C; ++col)
+            if (db[col] != 0.0 || dv[col] != 0.0)
+              add(row, col, rows[r].d_number * db[col] + rows[r].d_volume * dv[col]);
+        }
+        if (P == 0 || V[c] == 0.0) continue;
+        // Property share of a placement: Q vol / V with vol = X (d_number B + d_volume V) linear in (B, V).
+        for (int r = 0; r < m; ++r) {
+          const int rr = rows[r].row;
+          if (rr == n + kNumberAbove) continue;   // a number row; its volume row carries the property
+          const double X = rr < n ? x[rr] : 1.0;  // outside rows already count volume
+          const double vol = X * (rows[r].d_number * B[c] + rows[r].d_volume * V[c]);
+          for (int p = 0; p < P; ++p) {
+            const double Qc = Q[size_t(p) * (n + 1) + c];
+            const double* dqc = &w.dQ[(size_t(p) * (n + 1) + c) * C];
+            const size_t row = rr < n                   ? rowQ(p, rr)
+                               : rr == n + kVolumeAbove ? rowO(out_property_above(p))
+                                                        : rowO(out_property_below(p));
+            for (int col = 0; col < C; ++col) {
+              const double dvol = X * (rows[r].d_number * db[col] + rows[r].d_volume * dv[col]);
+              const double d = (vol * dqc[col] + Qc * dvol) / V[c] - Qc * vol * dv[col] / (V[c] * V[c]);
+              if (d != 0.0) add(row, col, d);
+            }
+          }
+        }
+      }
+    }
+  }
+
+  if (sel_.kernel) {
+    const double* S = w.S.data();
+    const double* A = w.A.data();
+    for (int row = 0; row < n + kOutsideRows; ++row)
+      for (int k = row < n ? row : 0; k < n; ++k) {
+        const double v = A[size_t(row) * n + k] * S[k];
+        if (v == 0.0) continue;
+        add(row < n ? rowN(row) : rowO(row - n), k, v);
+      }
+    for (int p = 0; p < P; ++p) {
+      for (int row = 0; row < n; ++row)
+        for (int k = row; k < n; ++k) {
+          const double v = A[size_t(row) * n + k] * (x[row] / x[k]) * S[k];
+          if (v != 0.0) add(rowQ(p, row), colQ(p, k), v);
+        }
+      for (int k = 0; k < n; ++k)
+        add(rowO(out_property_below(p)), colQ(p, k), A[size_t(n + kVolumeBelow) * n + k] / x[k] * S[k]);
+    }
+  }
+
+  if (growth_.kernel) {
+    const int nf = n + 1, terms = growth_.kernel->terms();
+    auto& sc = w.sd;
+    sc.shape.resize(size_t(terms) * nf);
+    sc.amount.resize(terms);
+    growth_.kernel->evaluate(growth_scheme_->face_diameters().data(), nf, s.p + growth_.first, sc.shape.data(),
+                             sc.amount.data());
+    const GrowthTerms<double> g{terms, sc.shape.data(), sc.amount.data(), growth_.kernel->volume_normalized()};
+    sc.F.resize(nf);
+    sc.donor.resize(nf);
+    growth_scheme_->fluxes(N, g, sc.F.data(), sc.donor.data());
+    w.dF.resize(size_t(nf) * n);
+    growth_scheme_->flux_jacobian(N, g, w.dF.data());
+    const size_t grown = out0 + outside_rows();
+    const auto& dx = growth_scheme_->face_volume_steps();
+    for (int f = 0; f < nf; ++f) {
+      const double* dF = &w.dF[size_t(f) * n];
+      for (int l = 0; l < n; ++l) {
+        if (dF[l] == 0.0) continue;
+        add(grown, l, dF[l] * dx[f]);
+        if (f > 0)
+          add(rowN(f - 1), l, -dF[l]);
+        else
+          add(rowO(kOutVolumeBelow), l, -dF[l] * grid_->lower_virtual());
+        if (f < n) {
+          add(rowN(f), l, dF[l]);
+        } else {
+          add(rowO(kOutNumberAbove), l, dF[l]);
+          add(rowO(kOutVolumeAbove), l, dF[l] * grid_->upper_virtual());
+        }
+      }
+      const int d = sc.donor[f];
+      if (d < 0) continue;
+      for (int p = 0; p < P; ++p) {
+        const size_t from = f > 0 ? rowQ(p, f - 1) : rowO(out_property_below(p));
+        const size_t to = f < n ? rowQ(p, f) : rowO(out_property_above(p));
+        const double pid = pi[size_t(p) * n + d];
+        // Fq = F pi_d: dFq/dN_l = dF/dN_l pi_d + F dpi_d/dN_d [l = d], dFq/dq_d = F dpi_d/dq_d
+        for (int l = 0; l < n; ++l) {
+          double v = dF[l] * pid;
+          if (l == d) v += sc.F[f] * dpi_dN[size_t(p) * n + d];
+          if (v == 0.0) continue;
+          add(from, l, -v);
+          add(to, l, v);
+        }
+        const double vq = sc.F[f] * dpi_dq[size_t(p) * n + d];
+        add(from, colQ(p, d), -vq);
+        add(to, colQ(p, d), vq);
+      }
+    }
+  }
+}
+
+// Forward AD over the engine's inputs (N, q, fields), kAdChunk at a time: for kernels that read N.
+void Population::ad_jacobian(Work& w, const State<double>& s, std::vector<double>& D) const {
+  const int n = n_, P = properties(), no = outside_rows(), C = input_cols(),
+            nfr = static_cast<int>(field_index_.size());
+  int np = 0;
+  for (int k : kernel_params_) np = std::max(np, k + 1);
+  w.jp.resize(np);
+  for (int k : kernel_params_) w.jp[k] = Jet(s.p[k]);
+  w.jN.resize(n), w.jq.resize(size_t(P) * n), w.jf.resize(size_t(kFields) * n);
+  std::vector<Jet> jfloor(n), dN(n), dq(size_t(P) * n), out(no);
+  Jet grown;
+  for (int i = 0; i < n; ++i) jfloor[i] = Jet(s.floor ? s.floor[i] : 0.0);
+  State<Jet> js;
+  js.N = w.jN.data();
+  js.floor = jfloor.data();
+  js.p = w.jp.data();
+  for (int p = 0; p < P; ++p) js.q.push_back(&w.jq[size_t(p) * n]);
+  for (int fi = 0; fi < nfr; ++fi) js.fields[field_index_[fi]] = &w.jf[size_t(field_index_[fi]) * n];
+  Rates<Jet> jr;
+  jr.dN = dN.data();
+  for (int p = 0; p < P; ++p) jr.dq.push_back(&dq[size_t(p) * n]);
+  jr.outside = out.data();
+  jr.grown = &grown;
+  for (int c0 = 0; c0 < C; c0 += kAdChunk) {
+    const int c1 = std::min(C, c0 + kAdChunk);
+    for (int i = 0; i < n; ++i) w.jN[i] = Jet(s.N[i]);
+    for (int p = 0; p < P; ++p)
+      for (int i = 0; i < n; ++i) w.jq[size_t(p) * n + i] = Jet(s.q[p][i]);
+    for (int fi = 0; fi < nfr; ++fi)
+      for (int i = 0; i < n; ++i) w.jf[size_t(field_index_[fi]) * n + i] = Jet(s.fields[field_index_[fi]][i]);
+    for (int c = c0; c < c1; ++c) {
+      if (c < n)
+        w.jN[c].v[c - c0] = 1.0;
+      else if (c < n * (1 + P))
+        w.jq[c - n].v[c - c0] = 1.0;
+      else
+        w.jf[size_t(field_index_[(c - n * (1 + P)) / n]) * n + (c - n * (1 + P)) % n].v[c - c0] = 1.0;
+    }
+    std::fill(dN.begin(), dN.end(), Jet(0.0));
+    std::fill(dq.begin(), dq.end(), Jet(0.0));
+    std::fill(out.begin(), out.end(), Jet(0.0));
+    grown = Jet(0.0);
+    rates_t(w, js, jr, false);  // folding is applied to D afterwards
+    for (int c = c0; c < c1; ++c) {
+      for (int i = 0; i < n; ++i) D[size_t(i) * C + c] = dN[i].v[c - c0];
+      for (int p = 0; p < P; ++p)
+        for (int i = 0; i < n; ++i) D[(size_t(n) * (1 + p) + i) * C + c] = dq[size_t(p) * n + i].v[c - c0];
+      for (int k = 0; k < no; ++k) D[(size_t(n) * (1 + P) + k) * C + c] = out[k].v[c - c0];
+      D[(size_t(n) * (1 + P) + no) * C + c] = grown.v[c - c0];
+    }
+  }
+}
+
+}  // namespace granuflow::kernels

@@ -1,0 +1,28 @@
+// The stream kinds of paper 001's spray-zone/bed coupling, defined with the units that use them (the framework's
+// generic kinds are in framework/include/granuflow/stream.hpp):
+//   * holdup (a bed's state read through its probe port): per class dry-solid mass, per class water mass, the bed
+//     temperature and the superficial gas velocity;
+//   * wetting (spray zone -> bed, per class): deposited liquid flow, wetted surface fraction (Eq. (41)), wet-spot
+//     moisture (Eq. (55)), then the liquid temperature.
+#pragma once
+#include "granuflow/stream.hpp"
+
+namespace granuflow::units::paper001 {
+
+StreamKind holdup_stream();
+StreamKind wetting_stream();
+
+namespace holdup {
+inline int mass(int i) { return i; }
+inline int water(int classes, int i) { return classes + i; }
+inline int T(int classes) { return 2 * classes; }
+inline int u0(int classes) { return 2 * classes + 1; }
+}  // namespace holdup
+namespace wetting {
+inline int mdot(int i) { return i; }
+inline int fwet(int classes, int i) { return classes + i; }
+inline int Xwet(int classes, int i) { return 2 * classes + i; }
+inline int T(int classes) { return 3 * classes; }
+}  // namespace wetting
+
+}  // namespace granuflow::units::paper001

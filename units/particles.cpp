@@ -1,0 +1,69 @@
+#include "particles.hpp"
+
+#include <cmath>
+
+#include "granuflow/errors.hpp"
+#include "granuflow/flowsheet.hpp"
+#include "kernels/paper001_defaults.hpp"
+
+namespace granuflow::units {
+
+namespace {
+// n >= 2 diameters from lo to hi (both included), equally spaced in ln d.
+std::vector<double> log_spaced(double lo, double hi, int n) {
+  std::vector<double> d(n);
+  for (int i = 0; i < n; ++i) d[i] = lo * std::pow(hi / lo, double(i) / (n - 1));
+  return d;
+}
+}  // namespace
+
+void ParticleSystem::declare(UnitSpec& s, Settings& st) {
+  namespace def = kernels::paper001::defaults;
+  const std::string kind =
+      st.get_choice("grid", "log_diameter", {"log_diameter", "geometric"},
+                    "log-spaced diameter pivots (paper 001, Table 5) or geometric in volume with ratio 2^(1/q)");
+  if (kind == "log_diameter") {
+    const long n = st.get_int("classes", def::kSizeClasses, 3, 2000, "size classes (pivots log-spaced in diameter)");
+    const double lo = st.get_real("d_min", def::kDiameterMin, 1e-7, 1e-2, "smallest pivot diameter, m (Table 5)");
+    const double hi = st.get_real("d_max", def::kDiameterMax, 1e-7, 1e-1, "largest pivot diameter, m (Table 5)");
+    if (!(hi > lo))
+      throw ConfigError(violation(st.where() + ".d_max", hi, "m", "d_max > d_min (" + fmt_num(lo) + " m)"));
+    grid_ = std::make_shared<const kernels::Grid>(
+        kernels::Grid::from_diameter_pivots(log_spaced(lo, hi, static_cast<int>(n))));
+  } else {
+    const long q = st.get_int("q", 2, 1, 64, "classes per doubling of the particle volume (ratio 2^(1/q))");
+    const double v_min = st.get_real("v_min", std::exp2(-12.0), 1e-30, 1e6, "lowest volume edge, m3");
+    const long n = st.get_int("classes", 27 * q, 2, 4000, "number of classes");
+    grid_ = std::make_shared<const kernels::Grid>(
+        kernels::Grid::geometric(v_min, static_cast<int>(q), static_cast<int>(n)));
+  }
+  params_.rho_s = s.add_param({"rho_s", "kg/m3", def::kSolidSkeletalDensity, 100.0, 5000.0,
+                               "skeletal density of the solid", "paper 001, Table 6"});
+  params_.eps_intra = s.add_param({"eps_intra", "-", def::kIntraParticleVoidFraction, 0.0, 0.9,
+                                   "intra-particle void fraction", "paper 001, Table 7"});
+  params_.rho_p = s.add_param({"rho_p", "kg/m3", def::kParticleDensity, 100.0, 5000.0,
+                               "particle density of the closures, Eqs. (33), (42)",
+                               "paper 001, Table 9; docs/paper001_decisions.md"});
+  params_.cp_s =
+      s.add_param({"cp_s", "J/(kg K)", def::kSolidCp, 100.0, 1e4, "heat capacity of the solid", "paper 001, Table 6"});
+}
+
+const ParticleSystem& particle_system(UnitSpec& s, Settings& st) {
+  const std::string name =
+      st.get_choice("particles", "particles", {}, "the particle system (size grid, product properties) used");
+  const UnitInstance* inst = st.unit(name);
+  const auto* ps = inst ? dynamic_cast<const ParticleSystem*>(inst->unit.get()) : nullptr;
+  if (!ps)
+    throw ConfigError(st.where() + ".particles = '" + name +
+                      "': no particle system of that name; declare the size grid and product once in the scene's "
+                      "`particles:` section (settings: grid, classes, d_min, d_max; params: rho_s, eps_intra, ...)");
+  s.use_shared_params(name);
+  return *ps;
+}
+
+void register_particles(Registry<Unit>& r) {
+  r.add("particles", "the flowsheet's size grid and product properties, shared by every particle unit",
+        [] { return std::make_unique<ParticleSystem>(); });
+}
+
+}  // namespace granuflow::units

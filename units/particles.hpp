@@ -1,0 +1,49 @@
+// The particle system of a flowsheet: one size grid and one set of product properties, declared once and shared by
+// every unit that holds or moves particles (scene key `particles:`; units find it by its instance name, setting
+// `particles`, default "particles"). Grid: paper 001's log-spaced diameter pivots (Table 5: 10 classes, 50-1000 um)
+// or a geometric grid in volume (ratio 2^(1/q), Kumar & Ramkrishna 1996) for verification. Properties: skeletal
+// density and intra-particle porosity (the envelope density rho_s (1 - eps) relates size and mass), the particle
+// density of paper 001's closures (Table 9) and the solid heat capacity.
+#pragma once
+#include <memory>
+
+#include "granuflow/registry.hpp"
+#include "granuflow/unit.hpp"
+#include "kernels/discretization/grid.hpp"
+
+namespace granuflow::units {
+
+struct ParticleParams {
+  ParamId rho_s, eps_intra, rho_p, cp_s;
+  // Envelope density rho_s (1 - eps_intra), kg/m3, from the particle system's parameters `shared`.
+  template <class T>
+  T envelope_density(const T* shared) const {
+    return shared[rho_s.i] * (1.0 - shared[eps_intra.i]);
+  }
+};
+
+class ParticleSystem : public UnitBase<ParticleSystem> {
+ public:
+  std::string type() const override { return "particles"; }
+  void declare(UnitSpec& s, Settings& st) override;
+  template <class T>
+  Status eval(const Ctx<T>&) const {
+    return Status::kOk;
+  }
+  template <class T>
+  void init(InitCtx<T>&) const {}
+  std::shared_ptr<const kernels::Grid> grid() const { return grid_; }
+  const ParticleParams& params() const { return params_; }
+
+ private:
+  std::shared_ptr<const kernels::Grid> grid_;
+  ParticleParams params_;
+};
+
+// The particle system a unit uses (setting `particles` names the instance); marks the unit as reading its
+// parameters (Ctx::sh). ConfigError naming the unit when the flowsheet declares none.
+const ParticleSystem& particle_system(UnitSpec& s, Settings& st);
+
+void register_particles(Registry<Unit>& r);
+
+}  // namespace granuflow::units
