@@ -78,8 +78,6 @@ class PbmBatch : public UnitBase<PbmBatch> {
     }
     PopulationOptions o;  // defaults: verification-oriented, mechanisms off unless named
     pop_.declare(s, st, grid_, o);
-    if (!pop_.aggregation() && !pop_.breakage() && !pop_.growth())
-      throw ConfigError(st.where() + ": name at least one mechanism (aggregation, breakage or growth)");
     // Per-class fields the kernels read; a batch has them as (uniform) parameters.
     const std::string batch = "batch value for every class (user)";
     const ParamSpec field_specs[kFields] = {

@@ -230,7 +230,10 @@ void Flowsheet::finalize() {
 
 // Global state index behind field f of port p of unit u, or -1 (an optional port left open reads zero).
 int Flowsheet::resolve_field(int u, int p, int f, int depth) const {
-  if (depth > static_cast<int>(units_.size()) + 1)
+  // every step of a resolution passes one port, so a chain longer than all ports is a loop
+  int ports = 0;
+  for (const auto& u : units_) ports += static_cast<int>(u.spec.ports().size());
+  if (depth > ports + 1)
     throw ConfigError("port " + units_[u].name + "." + units_[u].spec.ports()[p].name +
                       ": a stream field cannot be resolved (forwarded fields form a loop, or no unit provides it)");
   const UnitInstance& inst = units_[u];

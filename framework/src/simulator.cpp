@@ -129,6 +129,7 @@ struct IdaUser {
   std::vector<double*> rS, qS;
   void* mem = nullptr;  // the IDA integrator, when Jacobians may be reused (simulate, dense)
   JacobianCache cache;
+  bool fresh_only = false;  // consistent initialization: Newton from a guess needs the Jacobian of each iterate
 };
 
 int ida_res(realtype t, N_Vector y, N_Vector yp, N_Vector r, void* ud) {
@@ -157,7 +158,8 @@ int ida_jac(realtype t, realtype cj, N_Vector y, N_Vector yp, N_Vector, SUNMatri
         if (!u->sens_params.empty() && IDAGetSensNumNonlinSolvConvFails(u->mem, &sens_fails) == IDA_SUCCESS)
           fails += sens_fails;
       }
-      if (u->mem && k.valid && k.reusable == 1 && fails == k.conv_fails && step - k.step < JacobianCache::kMaxAge) {
+      if (u->mem && !u->fresh_only && k.valid && k.reusable == 1 && fails == k.conv_fails &&
+          step - k.step < JacobianCache::kMaxAge) {
         std::copy(k.jac.begin(), k.jac.end(), a);
         for (int i : k.differential) a[size_t(i) * n + i] += cj - k.cj;
         return 0;
@@ -511,7 +513,9 @@ SimResult simulate(Flowsheet& fs, const SimOptions& opt) {
     // on y', whose correction is measured times h_ic. 1 % of the segment (15 residuals there); not the first
     // output time, so that results do not depend on which output times are asked for.
     const double tout1 = t0 + 0.01 * (t1 - t0);
+    user.fresh_only = true;
     int flag = IDACalcIC(mem, IDA_YA_YDP_INIT, tout1);
+    user.fresh_only = false;
     if (flag < 0) fail(flag, "consistent initialization (IDACalcIC)");
     check(IDAGetConsistentIC(mem, y.v, yp.v), "IDAGetConsistentIC");
     user.cache.valid = false;  // evaluated at IDACalcIC's iterates

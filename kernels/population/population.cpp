@@ -53,6 +53,7 @@ const char* field_name(Field f) {
 // parameter value changes), and the work arrays of the rates and the Jacobian.
 struct Population::Work {
   std::vector<double> snapshot;  // kernel parameter values of the tables
+  bool fresh = false;            // the tables were computed for `snapshot`
   std::vector<double> K, S, A;   // beta factors (n x n), selection rates (n), breakage matrix ((n + 3) x n)
   std::vector<Jet> K_jet, S_jet, A_jet;
   template <class T>
@@ -167,17 +168,18 @@ void Population::configure(Work& w, const double* p, const std::string& where) c
                                                        {growth_.kernel.get(), growth_.first}};
   for (const auto& [k, first] : kernels)
     if (k) k->check(cs, p + first, where);
-  w.snapshot.clear();
+  w.fresh = false;
   refresh(w, p);
 }
 
 // Re-evaluates the tables when a kernel parameter value changed since the last evaluation (a time-dependent input).
 void Population::refresh(Work& w, const double* p) const {
-  bool same = w.snapshot.size() == kernel_params_.size();
+  bool same = w.fresh && w.snapshot.size() == kernel_params_.size();
   for (size_t k = 0; same && k < kernel_params_.size(); ++k) same = w.snapshot[k] == p[kernel_params_[k]];
   if (same) return;
   w.snapshot.resize(kernel_params_.size());
   for (size_t k = 0; k < kernel_params_.size(); ++k) w.snapshot[k] = p[kernel_params_[k]];
+  w.fresh = true;
   ClassState<double> cs;
   cs.n = n_;
   cs.volume = grid_->pivots().data();

@@ -34,14 +34,36 @@ py::list settings_list(const std::vector<SettingSpec>& settings) {
   return out;
 }
 
+const char* role_name(OutputRole r) {
+  switch (r) {
+    case OutputRole::kBalanceIn:
+      return "balance in";
+    case OutputRole::kBalanceOut:
+      return "balance out";
+    case OutputRole::kBalanceHold:
+      return "balance hold-up";
+    case OutputRole::kSizeDiameter:
+      return "size distribution: pivot diameter";
+    case OutputRole::kSizeMass:
+      return "size distribution: class mass";
+    case OutputRole::kRegularization:
+      return "regularization count";
+    case OutputRole::kGridEnd:
+      return "mass fraction at the grid's end";
+    default:
+      return "value";
+  }
+}
+
 // Declares a fresh unit of `type` with the given settings (defaults for the rest) and reports what it declared.
+// Particle units read the flowsheet's particle system: a default one (paper 001's grid) is declared first.
 py::dict unit_reference(const std::string& type, const std::map<std::string, std::string>& given) {
   const auto& reg = units::builtin();
-  auto unit = reg.create(type, "unit_reference");
-  UnitSpec spec;
-  Settings settings("unit_reference(" + type + ").settings", given);
-  unit->declare(spec, settings);
-  settings.check_all_used();
+  Flowsheet fs("unit_reference");
+  if (type != "particles") fs.add_unit("particles", reg.create("particles"), Settings("particles", {}));
+  fs.add_unit(type, reg.create(type, "unit_reference"), Settings("unit_reference(" + type + ").settings", given));
+  const UnitInstance& inst = fs.units().back();
+  const UnitSpec& spec = inst.spec;
   py::list ports, params, states, outputs;
   for (const auto& p : spec.ports())
     ports.append(py::dict("name"_a = p.name, "kind"_a = to_string(p.kind), "direction"_a = to_string(p.dir),
@@ -51,15 +73,23 @@ py::dict unit_reference(const std::string& type, const std::map<std::string, std
     states.append(py::dict("name"_a = s.name,
                            "kind"_a = s.kind == StateKind::Differential ? "differential" : "algebraic",
                            "unit"_a = s.unit, "scale"_a = s.scale));
-  for (const auto& o : spec.outputs()) outputs.append(py::dict("name"_a = o.name, "unit"_a = o.unit));
+  for (const auto& o : spec.outputs()) {
+    bool quad = false;
+    for (const auto& q : spec.quadratures()) quad = quad || q.output.i == &o - spec.outputs().data();
+    outputs.append(py::dict("name"_a = o.name, "unit"_a = o.unit, "role"_a = role_name(o.role),
+                            "quantity"_a = o.quantity, "integrated"_a = quad));
+  }
   return py::dict("type"_a = type, "description"_a = reg.description(type), "explicit"_a = spec.is_explicit(),
-                  "ports"_a = ports, "settings"_a = settings_list(settings.declared()), "params"_a = params,
-                  "states"_a = states, "outputs"_a = outputs);
+                  "ports"_a = ports, "settings"_a = settings_list(inst.settings), "params"_a = params,
+                  "states"_a = states, "outputs"_a = outputs,
+                  "particle_system"_a = spec.shared_params().empty() ? py::object(py::none())
+                                                                     : py::object(py::str(spec.shared_params())));
 }
 
 py::dict needs_dict(const kernels::ClassNeeds& n) {
   return py::dict("number"_a = n.number, "moisture"_a = n.moisture, "spot_moisture"_a = n.spot_moisture,
-                  "temperature"_a = n.temperature, "liquid_fraction"_a = n.liquid_fraction);
+                  "temperature"_a = n.temperature, "liquid_fraction"_a = n.liquid_fraction,
+                  "wetted_fraction"_a = n.wetted_fraction);
 }
 
 template <class Base>

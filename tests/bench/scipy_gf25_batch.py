@@ -21,7 +21,7 @@ import statistics
 import time
 
 import numpy as np
-from scipy.integrate import solve_ivp
+from scipy.integrate import quad, solve_ivp
 from scipy.special import erfc
 
 # ------------------------------------------------------------------ constants (framework/.../properties.hpp)
@@ -174,9 +174,10 @@ class Model:
         self.cf = np.where(j == k, 0.5, 1.0) * cf
 
     def _breakage(self, on: bool):
-        """Eq. (92) selection rate per class (d in um) and Eq. (93) fragment mass split over the cells below the
-        parent (fines below the first edge go to class 0); fragments keep the parent's moisture."""
-        n, d, de = self.n, self.d, self.de
+        """Eq. (92) selection rate per class (d in um) and Eq. (93) fragments split between neighbouring pivots
+        keeping their number and volume (fixed pivot, granuflow's default breakage_scheme); what falls below the
+        grid stays in class 0 with its mass. Fragments keep the parent's moisture."""
+        n, d, x = self.n, self.d, self.x
         self.Kb = None
         if not on:
             return
@@ -188,12 +189,31 @@ class Model:
         def cut(z):  # tanh cut-off of Eq. (93)
             return 0.5 * (1.0 + np.tanh((z - D_FRAG_MIN) / D_FRAG_MIN))
 
+        x_lo = x[0] ** 2 / x[1]                                         # virtual pivot below the grid
+        xe = np.concatenate(([x_lo], x))                                 # pivots, x_lo first
         frag = np.zeros((n, n))
         for kk in range(n):
-            upper = np.append(de[1:kk + 1], d[kk])                      # edges c + 1 < k, then the parent
-            b = (upper / d[kk]) ** Q_FRAG * cut(upper) / cut(d[kk])     # Eq. (93), cumulative
-            frag[:kk + 1, kk] = np.diff(np.concatenate(([0.0], b)))
-            frag[kk, kk] -= 1.0                                         # the parent leaves class k
+            u = x[kk]
+
+            def B(v, dk=d[kk]):  # Eq. (93): cumulative volume fraction of fragments below volume v
+                dv = np.cbrt(6.0 * v / math.pi)
+                return (dv / dk) ** Q_FRAG * cut(dv) / cut(dk)
+
+            mass = np.zeros(n)
+            mass[0] += u * B(x_lo)                                        # below the grid: kept in class 0
+            for a in range(kk + 1):                                       # interval [xe[a], xe[a + 1]]
+                lo, hi = xe[a], xe[a + 1]
+                vol = u * (B(hi) - B(lo))
+                # number of fragments in [lo, hi]: u int (1/v) dB = u [B/v] + u int B / v^2 dv (by parts)
+                num = u * (B(hi) / hi - B(lo) / lo + quad(lambda v: B(v) / v ** 2, lo, hi, limit=200)[0])
+                nu = (vol - lo * num) / (hi - lo)                         # to the upper pivot, number and volume kept
+                mass[a] += hi * nu                                        # pivot a + 1 of xe is class a
+                if a > 0:
+                    mass[a - 1] += lo * (num - nu)
+                else:
+                    mass[0] += lo * (num - nu)                            # at x_lo: kept in class 0 with its mass
+            frag[:, kk] = mass / u
+            frag[kk, kk] -= 1.0                                           # the parent leaves class k
         self.Kb = K_BREAK * frag * shape[None, :]
 
     # -------------------------------------------------------------- units

@@ -15,7 +15,7 @@ BAD_SCENES = {
     "spray stops before it starts": ("t_on: 0 s, t_off: 60 min", "t_on: 30 min, t_off: 10 min",
                                      ["units.nozzle.params.t_off", "600 s", "t_off >= t_on (1800 s)"]),
     "negative smallest size": ("d_min: 50e-6", "d_min: -50e-6",
-                               ["units.bed.settings.d_min", "-5e-05", "1e-07 <= d_min <= 0.01"]),
+                               ["particles.settings.d_min", "-5e-05", "1e-07 <= d_min <= 0.01"]),
     # the scene key, not SimOptions.t_end
     "zero end time": ("t_end: 60 min", "t_end: 0 min", ["t_end = 0 s", "t_end > 0"]),
     "output time past the end": ("output: {n: 121}", "output: {times: [0 s, 30 min, 90 min]}",

@@ -140,22 +140,22 @@ BAD_SCENES = {
                            ["units.bed.type", "'fluid_beds'", "allowed:", "fluid_bed,"]),
     "misspelt top-level key": ("solver: {", "solvr: {", ["solvr: unknown key", "allowed:", "solver"]),
     "misspelt port": ("  - inlet.out -> gas.in\n", "  - inlet.out -> gas.inn\n", ["'inn'", "ports: in,"]),
-    "misspelt setting value": ("settings: {classes: 10, d_min", "settings: {aggregation: sometimes, classes: 10, d_min",
-                               ["units.bed.settings.aggregation", "'sometimes'", "glass_transition, constant, none"]),
+    "misspelt setting value": ("    type: fluid_bed\n", "    type: fluid_bed\n    settings: {aggregation: sometimes}\n",
+                               ["units.bed.settings.aggregation", "'sometimes'", "none, constant", "glass_transition"]),
     # mistyped
     "list for a number": ("bed_mass: 15 kg", "bed_mass: [15]",
                           ["units.bed.params.bed_mass", "expected a single value"]),
     "word for a number": ("bed_mass: 15 kg", "bed_mass: fifteen",
                           ["units.bed.params.bed_mass", "'fifteen'", "expected a number with an optional unit", "kg"]),
     "wrong unit": ("mdot: 90 g/min", "mdot: 90 degC", ["units.nozzle.params.mdot", "'degC'", "must be in kg/s"]),
-    "word for an integer": ("settings: {classes: 10}", "settings: {classes: ten}",
-                            ["units.spray_zone.settings.classes", "'ten'", "integer in [3, 200]"]),
+    "word for an integer": ("settings: {classes: 10,", "settings: {classes: ten,",
+                            ["particles.settings.classes", "'ten'", "integer in [3, 2000]"]),
     # out of range
     "inlet temperature": ("T: 60 degC", "T: 900 degC", ["units.inlet.params.T", "1173.15 K", "250 <= T <= 600"]),
     "size spread": ("sigma_0: 1.5", "sigma_0: 0.5", ["units.bed.params.sigma_0", "0.5", "1.01 <= sigma_0 <= 5"]),
-    "class count": ("settings: {classes: 10}", "settings: {classes: 1}",
-                    ["units.spray_zone.settings.classes", "= 1", "3 <= classes <= 200"]),
-    "grid bounds": ("d_max: 1000e-6", "d_max: 10e-6", ["units.bed.settings.d_max", "1e-05 m", "d_max > d_min"]),
+    "class count": ("settings: {classes: 10,", "settings: {classes: 1,",
+                    ["particles.settings.classes", "= 1", "3 <= classes <= 2000"]),
+    "grid bounds": ("d_max: 1000e-6", "d_max: 10e-6", ["particles.settings.d_max", "1e-05 m", "d_max > d_min"]),
     "negative tolerance": ("rtol: 1e-6", "rtol: -1", ["rtol = -1", "0 < rtol < 1"]),
     # syntax, structure, non-finite values, times
     "YAML syntax error": ("T: 60 degC, Y: 5 g/kg}", "T: 60 degC, Y: 5 g/kg", ["not valid YAML"]),
@@ -175,8 +175,8 @@ BAD_SCENES = {
                              ["exhaust.in", "connected twice"]),
     "stream kinds differ": ("  - gas.out -> exhaust.in\n", "  - gas.out -> spray_zone.liquid\n",
                             ["gas.out -> spray_zone.liquid", "gas vs liquid"]),
-    "class counts differ": ("settings: {classes: 10}", "settings: {classes: 12}",
-                            ["bed.state -> spray_zone.bed", "10 vs 12"]),
+    "two particle systems": ("    type: spray_zone\n", "    type: spray_zone\n    settings: {particles: grid2}\n",
+                             ["units.spray_zone.settings.particles", "'grid2'", "no particle system"]),
 }
 
 
@@ -380,9 +380,9 @@ def test_linear_solver_choice_follows_the_jacobian_fill():
     fine = gf.load_text(bench.scene_variant_text(SCENE, 200), "gf25_200")
     res = fine.simulate(t_end=600, t_out=[0, 600])
     assert res.stats["linear_solver"].startswith("dense")
-    assert (res.stats["states"], res.stats["explicit_states"]) == (2 * 200 + 29, 3 * 200 + 5)
-    assert all(v < 1e-9 for v in res.summary["balance"].values())
-    chain = gf.load_text(bench.tank_chain_text(250), "chain")
+    assert (res.stats["states"], res.stats["explicit_states"]) == (2 * 200 + 9, 3 * 200 + 1 + 4 + 3 + 2 + 1)
+    assert all(v < res.rtol for v in res.summary["balance"].values())
+    chain = gf.load_text(bench.tank_chain_text(600), "chain")
     res = chain.simulate()
     assert res.stats["states"] > 1000 and res.stats["linear_solver"].startswith("sparse")
 

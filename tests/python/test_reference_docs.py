@@ -39,9 +39,10 @@ def test_unit_reference_is_what_a_scene_builds():
         assert (spec["unit"], spec["lower"], spec["upper"]) == (p["unit"], p["lower"], p["upper"]), p["name"]
     outs = {o["name"]: o["unit"] for o in ref["outputs"]}
     assert outs["d50"] == "m" and fs.unit_of("bed.d50") == "m"
-    # settings shape the structure: 20 classes give 20 mass states
-    n = sum(s["name"].startswith("M_") for s in gf.unit_reference("fluid_bed", {"classes": 20})["states"])
-    assert n == 20
+    # the particle system's grid shapes the structure: 20 classes give the bed 20 mass states
+    fine = fs.text.replace("settings: {classes: 10,", "settings: {classes: 20,")
+    assert sum(n.startswith("bed.M_") for n in gf.load_text(fine, "fine").simulate(t_end=1).state_names) == 20
+    assert gf.unit_reference("fluid_bed")["particle_system"] == "particles"
     assert str(ref) == (DOCS / "units" / "fluid_bed.md").read_text()  # printed, it is the reference page
     with pytest.raises(gf.ConfigError, match="classes"):
         gf.unit_reference("fluid_bed", {"classes": 1})
