@@ -186,7 +186,7 @@ class FluidBed : public UnitBase<FluidBed> {
       kernels::Population::State<T> st = population_state(c, sc, pm);
       kernels::Population::Rates<T> r;
       r.dN = sc.dN.data();
-      r.dq = {sc.dW.data()};
+      r.dq[0] = sc.dW.data();
       pop_.rates(*w.pop, st, r);
     }
     // Eqs. (70)-(89): drying and heat transfer per class; the bed's particle surface enters Eqs. (74), (87).
@@ -195,12 +195,12 @@ class FluidBed : public UnitBase<FluidBed> {
     for (int i = 0; i < n_; ++i) class_transfer(c, i, M[i], W[i], pm[i], g, &sc.dry[i], &sc.q[i]);
     const T m_vap = c.reduce(r_drying_, n_, [&](int i) { return sc.dry[i]; });
     const T q_sum = c.reduce(r_heat_, n_, [&](int i) { return sc.q[i]; });
-    const T dep = c.reduce(r_deposit_, n_, [&](int i) { return deposit(c, i); });
+    const T dep = c.reduce(r_deposit_, n_, [&](int i) { return deposit(c, i, wet); });
     const T cp_s = c.sh(pp_.cp_s);
     const T capacity = c.reduce(r_capacity_, n_, [&](int i) { return M[i] * cp_s + W[i] * c.par(p_cpl_); });
     for (int i = 0; i < n_; ++i) {
-      c.res(sM_ + i) = c.xd(sM_ + i) - pm[i] * sc.dN[i];                        // Eq. (20), paper 001, in mass
-      c.res(sW_ + i) = c.xd(sW_ + i) - (deposit(c, i) - sc.dry[i] + sc.dW[i]);  // Eq. (58), as water mass per class
+      c.res(sM_ + i) = c.xd(sM_ + i) - pm[i] * sc.dN[i];                             // Eq. (20), paper 001, in mass
+      c.res(sW_ + i) = c.xd(sW_ + i) - (deposit(c, i, wet) - sc.dry[i] + sc.dW[i]);  // Eq. (58), water per class
     }
     const T t_liq = wet ? c.port(wet_, wetting::T(n_)) : T(props::kT0);
     // Eq. (59), paper 001, conservative: deposited liquid at its enthalpy, drying vapour leaves at h_v(T_S)
@@ -321,8 +321,8 @@ class FluidBed : public UnitBase<FluidBed> {
   }
 
   template <class T>
-  T deposit(const Ctx<T>& c, int i) const {
-    return c.connected(wet_) ? c.port(wet_, wetting::mdot(i)) : T(0.0);
+  T deposit(const Ctx<T>& c, int i, bool wet) const {
+    return wet ? c.port(wet_, wetting::mdot(i)) : T(0.0);
   }
 
   // The engine's inputs: class numbers, water per class, and the fields its kernels read (wetted fraction and
@@ -340,7 +340,7 @@ class FluidBed : public UnitBase<FluidBed> {
     }
     kernels::Population::State<T> st;
     st.N = sc.N.data();
-    st.q = {&c.x(sW_)};
+    st.q[0] = &c.x(sW_);
     st.floor = sc.floor.data();
     st.fields[static_cast<int>(Field::kWettedFraction)] = sc.fwet.data();
     st.fields[static_cast<int>(Field::kSpotMoisture)] = sc.xwet.data();

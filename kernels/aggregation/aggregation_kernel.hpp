@@ -39,6 +39,9 @@ class AggregationKernel : public KernelBase {
   virtual void features(const ClassState<Jet>& /*s*/, const Jet* /*p*/, Jet* /*phi*/) const {}
   virtual double efficiency(const double* /*phi_i*/, const double* /*phi_j*/, const double* /*p*/) const { return 1.0; }
   virtual Jet efficiency(const Jet* /*phi_i*/, const Jet* /*phi_j*/, const Jet* /*p*/) const { return Jet(1.0); }
+  // E for every pair i <= j of n classes, in row-major upper-triangle order (one call per residual).
+  virtual void efficiencies(const double* phi, int n, const double* p, double* E) const = 0;
+  virtual void efficiencies(const Jet* phi, int n, const Jet* p, Jet* E) const = 0;
   // beta = K E for all pairs, row-major n x n (for tests and tools; the engine uses the parts).
   void beta(const ClassState<double>& s, const double* p, double* out) const {
     factor(s, p, out);
@@ -73,6 +76,8 @@ class PairKernel : public AggregationKernel {
   void features(const ClassState<Jet>& s, const Jet* p, Jet* phi) const override { feat(s, p, phi); }
   double efficiency(const double* a, const double* b, const double* p) const override { return eff(a, b, p); }
   Jet efficiency(const Jet* a, const Jet* b, const Jet* p) const override { return eff(a, b, p); }
+  void efficiencies(const double* phi, int n, const double* p, double* E) const override { all(phi, n, p, E); }
+  void efficiencies(const Jet* phi, int n, const Jet* p, Jet* E) const override { all(phi, n, p, E); }
 
  private:
   const Derived& self() const { return static_cast<const Derived&>(*this); }
@@ -92,6 +97,13 @@ class PairKernel : public AggregationKernel {
     constexpr int m = features_of<Derived>();
     if constexpr (m > 0)
       for (int i = 0; i < s.n; ++i) self().features(s, i, p, phi + size_t(i) * m);
+  }
+  template <class T>
+  void all(const T* phi, int n, const T* p, T* E) const {
+    constexpr int m = features_of<Derived>();
+    size_t q = 0;
+    for (int i = 0; i < n; ++i)
+      for (int j = i; j < n; ++j, ++q) E[q] = eff(phi + size_t(i) * m, phi + size_t(j) * m, p);
   }
   template <class T>
   T eff(const T* a, const T* b, const T* p) const {

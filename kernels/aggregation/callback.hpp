@@ -4,6 +4,7 @@
 // needs().number is false) and parameter sensitivities through it are zero. State-independent callables are
 // still evaluated once per run.
 #pragma once
+#include <algorithm>
 #include <functional>
 #include <string>
 
@@ -22,6 +23,12 @@ class CallbackKernel : public AggregationKernel {
   ClassNeeds needs() const override { return needs_; }
   void factor(const ClassState<double>& s, const double* p, double* beta) const override { fn_(s, p, beta); }
   void factor(const ClassState<Jet>& s, const Jet* p, Jet* beta) const override;
+  void efficiencies(const double*, int n, const double*, double* E) const override {
+    std::fill(E, E + size_t(n) * (n + 1) / 2, 1.0);
+  }
+  void efficiencies(const Jet*, int n, const Jet*, Jet* E) const override {
+    std::fill(E, E + size_t(n) * (n + 1) / 2, Jet(1.0));
+  }
 
  private:
   std::vector<ParamSpec> specs_;

@@ -43,6 +43,28 @@ void to_jets(const std::vector<double>& v, std::vector<Jet>& out) {
 }
 }  // namespace
 
+// h K per pair, row-major upper triangle.
+template <class T>
+void pack_pairs(const std::vector<T>& K, int n, std::vector<T>& Kh) {
+  Kh.resize(pair_count(n));
+  size_t q = 0;
+  for (int j = 0; j < n; ++j)
+    for (int k = j; k < n; ++k, ++q) Kh[q] = (j == k ? 0.5 : 1.0) * K[size_t(j) * n + k];
+}
+
+// BN = A diag(S), BQ = (x_r / x_k) BN over the class rows and the volume-below row (divided by x_k).
+template <class T>
+void breakage_tables(const Grid& g, const T* A, const T* S, std::vector<T>& BN, std::vector<T>& BQ) {
+  const int n = g.size();
+  BN.resize(size_t(n + kOutsideRows) * n);
+  BQ.resize(size_t(n + 1) * n);
+  for (int r = 0; r < n + kOutsideRows; ++r)
+    for (int k = 0; k < n; ++k) BN[size_t(r) * n + k] = A[size_t(r) * n + k] * S[k];
+  for (int r = 0; r < n; ++r)
+    for (int k = 0; k < n; ++k) BQ[size_t(r) * n + k] = BN[size_t(r) * n + k] * (g.pivot(r) / g.pivot(k));
+  for (int k = 0; k < n; ++k) BQ[size_t(n) * n + k] = BN[size_t(n + kVolumeBelow) * n + k] / g.pivot(k);
+}
+
 const char* field_name(Field f) {
   static const char* names[kFields] = {"moisture", "spot_moisture", "temperature", "liquid_fraction",
                                        "wetted_fraction"};
@@ -56,9 +78,16 @@ struct Population::Work {
   bool fresh = false;            // the tables were computed for `snapshot`
   std::vector<double> K, S, A;   // beta factors (n x n), selection rates (n), breakage matrix ((n + 3) x n)
   std::vector<Jet> K_jet, S_jet, A_jet;
+  // Per pair j <= k (row-major upper triangle) h K_jk, h = 1/2 for like pairs: the event rate is Kh E N_j N_k.
+  std::vector<double> Kh;
+  std::vector<Jet> Kh_jet;
+  // Breakage with the selection rates folded in: BN = A diag(S) ((n + 3) x n) moves numbers, BQ = (x_r / x_k) BN
+  // ((n + 1) x n: class rows, then the volume below) moves a property with its parent's share of volume.
+  std::vector<double> BN, BQ;
+  std::vector<Jet> BN_jet, BQ_jet;
   template <class T>
   struct Scratch {
-    std::vector<T> K, S, A, phi, pi, B, V, Q, shape, amount, F, sn, rows, dq, beta;
+    std::vector<T> K, Kh, S, A, BN, BQ, phi, E, pi, B, V, Q, shape, amount, F, rows, dq;
     std::vector<int> donor;
   };
   Scratch<double> sd;
@@ -71,7 +100,8 @@ struct Population::Work {
       return sj;
   }
   // Jacobian work
-  std::vector<double> D, G, dB, dV, dQ, dF, jinv;
+  std::vector<double> D, G, dB, dV, dQ, dF, jinv, map_factors, map_scales;
+  std::vector<int> map_rows, map_cols;
   std::vector<Jet> jp, jN, jq, jf, jphi;
 };
 
@@ -106,6 +136,8 @@ void Population::declare(UnitSpec& s, Settings& st, std::shared_ptr<const Grid> 
   grid_ = std::move(grid);
   n_ = grid_->size();
   property_names_ = o.properties;
+  if (properties() > kMaxProperties)
+    throw std::logic_error("a population carries at most " + std::to_string(kMaxProperties) + " properties per class");
   outside_ = st.get_choice("outside", o.outside == Outside::kFold ? "fold" : "remove", {"fold", "remove"},
                            "particles leaving the grid: kept in the end class with their volume (fold, paper 001) "
                            "or removed and counted (remove)") == "fold"
@@ -188,17 +220,40 @@ void Population::refresh(Work& w, const double* p) const {
     w.K.resize(size_t(n_) * n_);
     agg_.kernel->factor(cs, p + agg_.first, w.K.data());
     to_jets(w.K, w.K_jet);
+    pack_pairs(w.K, n_, w.Kh);
+    to_jets(w.Kh, w.Kh_jet);
   }
   if (sel_.kernel) {
+    w.A.resize(size_t(n_ + kOutsideRows) * n_);
+    fragment_matrix(p + frag_.first, w.A);
+    to_jets(w.A, w.A_jet);
     if (!sel_.kernel->state_dependent()) {
       w.S.resize(n_);
       sel_.kernel->evaluate(cs, p + sel_.first, w.S.data());
       to_jets(w.S, w.S_jet);
+      breakage_tables(*grid_, w.A.data(), w.S.data(), w.BN, w.BQ);
+      to_jets(w.BN, w.BN_jet);
+      to_jets(w.BQ, w.BQ_jet);
     }
-    w.A.resize(size_t(n_ + kOutsideRows) * n_);
-    brk_scheme_->build(*grid_, *frag_.kernel, p + frag_.first, w.A.data());
-    to_jets(w.A, w.A_jet);
   }
+}
+
+// The fragment matrix depends on the fragment law's parameters only and costs O(n^2) quadratures: the last one
+// built is kept (runs of a sweep or a calibration rarely change it).
+void Population::fragment_matrix(const double* p, std::vector<double>& A) const {
+  std::vector<double> key(p, p + frag_.count);
+  {
+    std::lock_guard<std::mutex> lock(frag_cache_->mutex);
+    if (frag_cache_->valid && frag_cache_->key == key) {
+      A = frag_cache_->A;
+      return;
+    }
+  }
+  brk_scheme_->build(*grid_, *frag_.kernel, p, A.data());
+  std::lock_guard<std::mutex> lock(frag_cache_->mutex);
+  frag_cache_->key = std::move(key);
+  frag_cache_->A = A;
+  frag_cache_->valid = true;
 }
 
 template <class T>
@@ -240,22 +295,26 @@ void Population::rates_t(Work& w, const State<T>& s, const Rates<T>& r, bool fol
   const auto& x = grid_->pivots();
 
   if (agg_.kernel) {
-    const T* K;
+    const T* Kh;
     if constexpr (std::is_same_v<T, double>) {
-      K = w.K.data();
+      Kh = w.Kh.data();
     } else if (fresh_tables(w, s.p, agg_.first, agg_.count)) {
       sc.K.resize(size_t(n) * n);
       agg_.kernel->factor(cs, s.p + agg_.first, sc.K.data());
-      K = sc.K.data();
+      pack_pairs(sc.K, n, sc.Kh);
+      Kh = sc.Kh.data();
     } else {
-      K = w.K_jet.data();
+      Kh = w.Kh_jet.data();
     }
     const int m = agg_.kernel->n_features();
+    const T* E = nullptr;
     if (m > 0) {
       sc.phi.resize(size_t(n) * m);
       agg_.kernel->features(cs, s.p + agg_.first, sc.phi.data());
+      sc.E.resize(pair_count(n));
+      agg_.kernel->efficiencies(sc.phi.data(), n, s.p + agg_.first, sc.E.data());
+      E = sc.E.data();
     }
-    const T* kp = s.p + agg_.first;
     const auto* fp = dynamic_cast<const FixedPivotAggregation*>(agg_scheme_.get());
     const auto* ca = dynamic_cast<const CellAverageAggregation*>(agg_scheme_.get());
     if (ca) {
@@ -269,17 +328,14 @@ void Population::rates_t(Work& w, const State<T>& s, const Rates<T>& r, bool fol
         pr += n - j;
         continue;
       }
+      // the deaths of j summed in a register (a store per pair would serialize the loop)
+      T death_j(0.0);
       for (int k = j; k < n; ++k, ++pr) {
         if (is_empty(N[k])) continue;
-        T beta = K[size_t(j) * n + k];
-        if (m > 0) beta *= agg_.kernel->efficiency(&sc.phi[size_t(j) * m], &sc.phi[size_t(k) * m], kp);
-        const T rate = (j == k ? 0.5 : 1.0) * beta * N[j] * N[k];  // paper 001, Eqs. (21), (24)
-        dN[j] -= rate;
+        const T rate = (E ? Kh[pr] * E[pr] : Kh[pr]) * N[j] * N[k];  // paper 001, Eqs. (21), (24)
+        death_j += rate;
         dN[k] -= rate;
-        for (int p = 0; p < P; ++p) {
-          dq[size_t(p) * n + j] -= rate * pi[size_t(p) * n + j];
-          dq[size_t(p) * n + k] -= rate * pi[size_t(p) * n + k];
-        }
+        for (int p = 0; p < P; ++p) dq[size_t(p) * n + k] -= rate * pi[size_t(p) * n + k];
         if (fp) {
           const FixedPivotAggregation::Target& t = fp->target(pr);
           if (t.lo >= 0) dN[t.lo] += t.w_lo * rate;
@@ -305,6 +361,8 @@ void Population::rates_t(Work& w, const State<T>& s, const Rates<T>& r, bool fol
             sc.Q[size_t(p) * (n + 1) + c] += rate * (pi[size_t(p) * n + j] + pi[size_t(p) * n + k]);
         }
       }
+      dN[j] -= death_j;
+      for (int p = 0; p < P; ++p) dq[size_t(p) * n + j] -= death_j * pi[size_t(p) * n + j];
     }
     if (ca) {
       // Each packet split on the side of its mean volume (Kumar et al. 2006, Eq. (15)); properties follow the volume.
@@ -333,34 +391,34 @@ void Population::rates_t(Work& w, const State<T>& s, const Rates<T>& r, bool fol
   }
 
   if (sel_.kernel) {
-    // Paper 001, Eqs. (23), (25): dN/dt = A (S o N); a property follows the volume of its parent's fragments.
-    const T* S;
-    if (sel_.kernel->state_dependent() || fresh_tables(w, s.p, sel_.first, sel_.count)) {
+    // Paper 001, Eqs. (23), (25): dN/dt = A (S o N) = BN N; a property follows the volume of its parent's fragments.
+    const T *BN, *BQ;
+    if (sel_.kernel->state_dependent() || fresh_tables(w, s.p, sel_.first, sel_.count) ||
+        fresh_tables(w, s.p, frag_.first, frag_.count)) {
       sc.S.resize(n);
       sel_.kernel->evaluate(cs, s.p + sel_.first, sc.S.data());
-      S = sc.S.data();
+      const T* A;
+      if (fresh_tables(w, s.p, frag_.first, frag_.count)) {
+        sc.A.resize(size_t(n + kOutsideRows) * n);
+        brk_scheme_->build(*grid_, *frag_.kernel, s.p + frag_.first, sc.A.data());
+        A = sc.A.data();
+      } else if constexpr (std::is_same_v<T, double>) {
+        A = w.A.data();
+      } else {
+        A = w.A_jet.data();
+      }
+      breakage_tables(*grid_, A, sc.S.data(), sc.BN, sc.BQ);
+      BN = sc.BN.data(), BQ = sc.BQ.data();
     } else if constexpr (std::is_same_v<T, double>) {
-      S = w.S.data();
+      BN = w.BN.data(), BQ = w.BQ.data();
     } else {
-      S = w.S_jet.data();
+      BN = w.BN_jet.data(), BQ = w.BQ_jet.data();
     }
-    const T* A;
-    if (fresh_tables(w, s.p, frag_.first, frag_.count)) {
-      sc.A.resize(size_t(n + kOutsideRows) * n);
-      brk_scheme_->build(*grid_, *frag_.kernel, s.p + frag_.first, sc.A.data());
-      A = sc.A.data();
-    } else if constexpr (std::is_same_v<T, double>) {
-      A = w.A.data();
-    } else {
-      A = w.A_jet.data();
-    }
-    sc.sn.resize(n);
-    for (int k = 0; k < n; ++k) sc.sn[k] = S[k] * N[k];
     for (int row = 0; row < n + kOutsideRows; ++row) {
-      const T* a = A + size_t(row) * n;
+      const T* b = BN + size_t(row) * n;
       T acc(0.0);
       // Fragments land at or below the parent's pivot: class row r only sees parents k >= r.
-      for (int k = row < n ? row : 0; k < n; ++k) acc += a[k] * sc.sn[k];
+      for (int k = row < n ? row : 0; k < n; ++k) acc += b[k] * N[k];
       if (row < n)
         dN[row] += acc;
       else
@@ -368,14 +426,15 @@ void Population::rates_t(Work& w, const State<T>& s, const Rates<T>& r, bool fol
     }
     for (int p = 0; p < P; ++p) {
       const T* q = s.q[p];
-      for (int row = 0; row < n; ++row) {
+      for (int row = 0; row <= n; ++row) {
+        const T* b = BQ + size_t(row) * n;
         T acc(0.0);
-        for (int k = row; k < n; ++k) acc += (A[size_t(row) * n + k] * (x[row] / x[k])) * S[k] * q[k];
-        dq[size_t(p) * n + row] += acc;
+        for (int k = row < n ? row : 0; k < n; ++k) acc += b[k] * q[k];
+        if (row < n)
+          dq[size_t(p) * n + row] += acc;
+        else
+          out[out_property_below(p)] += acc;
       }
-      T below(0.0);
-      for (int k = 0; k < n; ++k) below += A[size_t(n + kVolumeBelow) * n + k] / x[k] * S[k] * q[k];
-      out[out_property_below(p)] += below;
     }
   }
 
@@ -460,36 +519,31 @@ void Population::jacobian(Work& w, const State<double>& s, const Map& m, Jacobia
   else
     analytic_jacobian(w, s, w.D);
   fold_rows(w.D.data(), C);
-  // Map the engine's rows and inputs to the unit's.
+  // Map the engine's rows and inputs to the unit's (row, factor) and (column, scale).
+  std::vector<int>& rows = w.map_rows;
+  std::vector<int>& cols = w.map_cols;
+  std::vector<double>& factors = w.map_factors;
+  std::vector<double>& scales = w.map_scales;
+  rows.assign(R, -1), factors.assign(R, 0.0), cols.assign(C, -1), scales.assign(C, 1.0);
+  for (int i = 0; i < n; ++i) rows[i] = m.N_row[i], factors[i] = m.N_factor[i];
+  for (int p = 0; p < P; ++p)
+    for (int i = 0; i < n; ++i) rows[n * (1 + p) + i] = m.q_row[p][i], factors[n * (1 + p) + i] = m.q_factor;
+  for (int k = 0; k < no && k < static_cast<int>(m.outside_row.size()); ++k)
+    rows[n * (1 + P) + k] = m.outside_row[k], factors[n * (1 + P) + k] = -1.0;
+  rows[R - 1] = m.grown_row, factors[R - 1] = -1.0;
+  for (int i = 0; i < n; ++i) cols[i] = m.N_col[i], scales[i] = m.N_scale[i];
+  for (int p = 0; p < P; ++p)
+    for (int i = 0; i < n; ++i) cols[n * (1 + p) + i] = m.q_col[p][i];
+  for (size_t fi = 0; fi < field_index_.size(); ++fi) {
+    const std::vector<int>& fc = m.field_col[field_index_[fi]];
+    for (int i = 0; i < n && !fc.empty(); ++i) cols[n * (1 + P) + static_cast<int>(fi) * n + i] = fc[i];
+  }
   for (int r = 0; r < R; ++r) {
-    int row;
-    double factor;
-    if (r < n) {
-      row = m.N_row[r], factor = m.N_factor[r];
-    } else if (r < n * (1 + P)) {
-      row = m.q_row[(r - n) / n][(r - n) % n], factor = m.q_factor;
-    } else if (r < R - 1) {
-      const int k = r - n * (1 + P);
-      row = k < static_cast<int>(m.outside_row.size()) ? m.outside_row[k] : -1, factor = -1.0;
-    } else {
-      row = m.grown_row, factor = -1.0;
-    }
-    if (row < 0) continue;
+    if (rows[r] < 0) continue;
     const double* d = &w.D[size_t(r) * C];
-    for (int c = 0; c < C; ++c) {
-      if (d[c] == 0.0) continue;
-      int col;
-      double scale = 1.0;
-      if (c < n) {
-        col = m.N_col[c], scale = m.N_scale[c];
-      } else if (c < n * (1 + P)) {
-        col = m.q_col[(c - n) / n][(c - n) % n];
-      } else {
-        const int fi = (c - n * (1 + P)) / n, i = (c - n * (1 + P)) % n;
-        col = m.field_col[field_index_[fi]].empty() ? -1 : m.field_col[field_index_[fi]][i];
-      }
-      if (col >= 0) sink.add(row, col, factor * d[c] * scale);
-    }
+    const double f = factors[r];
+    for (int c = 0; c < C; ++c)
+      if (d[c] != 0.0 && cols[c] >= 0) sink.add(rows[r], cols[c], f * d[c] * scales[c]);
   }
 }
 
@@ -557,12 +611,13 @@ void Population::analytic_jacobian(Work& w, const State<double>& s, std::vector<
       int col;
       double d;
     };
-    std::vector<In> ev;
+    In ev_buf[2 + 2 * kFields];
+    int nev = 0;
     Jet a[kMaxFeatures], b[kMaxFeatures];
     size_t pr = 0;
     for (int j = 0; j < n; ++j)
       for (int k = j; k < n; ++k, ++pr) {
-        const double h = j == k ? 0.5 : 1.0, K = w.K[size_t(j) * n + k];
+        const double Kh = w.Kh[pr];
         double E = 1.0, dEa[kMaxFeatures] = {}, dEb[kMaxFeatures] = {};
         if (mf > 0) {
           for (int c = 0; c < mf; ++c) {
@@ -573,26 +628,27 @@ void Population::analytic_jacobian(Work& w, const State<double>& s, std::vector<
           E = e.a;
           for (int c = 0; c < mf; ++c) dEa[c] = e.v[c], dEb[c] = e.v[mf + c];
         }
-        const double beta = K * E, rate = h * beta * N[j] * N[k];
-        ev.clear();
-        ev.push_back({j, h * beta * N[k]});
-        ev.push_back({k, h * beta * N[j]});
+        const double beta = Kh * E, rate = beta * N[j] * N[k];
+        nev = 0;
+        ev_buf[nev++] = {j, beta * N[k]};
+        ev_buf[nev++] = {k, beta * N[j]};
         for (int fi = 0; fi < nfr && mf > 0; ++fi) {
           double dj = 0, dk = 0;
           for (int c = 0; c < mf; ++c) {
             dj += dEa[c] * G[(size_t(j) * mf + c) * nfr + fi];
             dk += dEb[c] * G[(size_t(k) * mf + c) * nfr + fi];
           }
-          ev.push_back({colF(fi, j), h * K * N[j] * N[k] * dj});
-          ev.push_back({colF(fi, k), h * K * N[j] * N[k] * dk});
+          ev_buf[nev++] = {colF(fi, j), Kh * N[j] * N[k] * dj};
+          ev_buf[nev++] = {colF(fi, k), Kh * N[j] * N[k] * dk};
         }
+        const In* ev_end = ev_buf + nev;
         // deaths of the partners, with their properties
-        for (const In& e : ev) {
-          add(rowN(j), e.col, -e.d);
-          add(rowN(k), e.col, -e.d);
+        for (const In* e = ev_buf; e != ev_end; ++e) {
+          add(rowN(j), e->col, -e->d);
+          add(rowN(k), e->col, -e->d);
           for (int p = 0; p < P; ++p) {
-            add(rowQ(p, j), e.col, -e.d * pi[size_t(p) * n + j]);
-            add(rowQ(p, k), e.col, -e.d * pi[size_t(p) * n + k]);
+            add(rowQ(p, j), e->col, -e->d * pi[size_t(p) * n + j]);
+            add(rowQ(p, k), e->col, -e->d * pi[size_t(p) * n + k]);
           }
         }
         for (int p = 0; p < P; ++p)
@@ -610,16 +666,16 @@ void Population::analytic_jacobian(Work& w, const State<double>& s, std::vector<
           const Dest dests[2] = {{t.lo, t.w_lo, t.f_lo}, {t.hi, t.w_hi, t.f_hi}};
           for (const Dest& d : dests) {
             if (d.w == 0.0 && d.f == 0.0) continue;
-            for (const In& e : ev) {
+            for (const In* e = ev_buf; e != ev_end; ++e) {
               if (d.cls >= 0) {
-                add(rowN(d.cls), e.col, d.w * e.d);
+                add(rowN(d.cls), e->col, d.w * e->d);
               } else {
-                add(rowO(kOutNumberAbove), e.col, d.w * e.d);
-                add(rowO(kOutVolumeAbove), e.col, d.f * fp->volume(pr) * e.d);
+                add(rowO(kOutNumberAbove), e->col, d.w * e->d);
+                add(rowO(kOutVolumeAbove), e->col, d.f * fp->volume(pr) * e->d);
               }
               for (int p = 0; p < P; ++p) {
                 const double carried = pi[size_t(p) * n + j] + pi[size_t(p) * n + k];
-                add(d.cls >= 0 ? rowQ(p, d.cls) : rowO(out_property_above(p)), e.col, d.f * carried * e.d);
+                add(d.cls >= 0 ? rowQ(p, d.cls) : rowO(out_property_above(p)), e->col, d.f * carried * e->d);
               }
             }
             for (int p = 0; p < P; ++p) {
@@ -637,12 +693,12 @@ void Population::analytic_jacobian(Work& w, const State<double>& s, std::vector<
           V[c] += v * rate;
           double* db = &w.dB[size_t(c) * C];
           double* dv = &w.dV[size_t(c) * C];
-          for (const In& e : ev) db[e.col] += e.d, dv[e.col] += v * e.d;
+          for (const In* e = ev_buf; e != ev_end; ++e) db[e->col] += e->d, dv[e->col] += v * e->d;
           for (int p = 0; p < P; ++p) {
             const double carried = pi[size_t(p) * n + j] + pi[size_t(p) * n + k];
             Q[size_t(p) * (n + 1) + c] += rate * carried;
             double* dqc = &w.dQ[(size_t(p) * (n + 1) + c) * C];
-            for (const In& e : ev) dqc[e.col] += carried * e.d;
+            for (const In* e = ev_buf; e != ev_end; ++e) dqc[e->col] += carried * e->d;
             for (int i : {j, k}) {
               dqc[i] += rate * dpi_dN[size_t(p) * n + i];
               dqc[colQ(p, i)] += rate * dpi_dq[size_t(p) * n + i];
@@ -697,23 +753,19 @@ void Population::analytic_jacobian(Work& w, const State<double>& s, std::vector<
   }
 
   if (sel_.kernel) {
-    const double* S = w.S.data();
-    const double* A = w.A.data();
+    const double* BN = w.BN.data();
+    const double* BQ = w.BQ.data();
     for (int row = 0; row < n + kOutsideRows; ++row)
       for (int k = row < n ? row : 0; k < n; ++k) {
-        const double v = A[size_t(row) * n + k] * S[k];
-        if (v == 0.0) continue;
-        add(row < n ? rowN(row) : rowO(row - n), k, v);
+        const double v = BN[size_t(row) * n + k];
+        if (v != 0.0) add(row < n ? rowN(row) : rowO(row - n), k, v);
       }
-    for (int p = 0; p < P; ++p) {
-      for (int row = 0; row < n; ++row)
-        for (int k = row; k < n; ++k) {
-          const double v = A[size_t(row) * n + k] * (x[row] / x[k]) * S[k];
-          if (v != 0.0) add(rowQ(p, row), colQ(p, k), v);
+    for (int p = 0; p < P; ++p)
+      for (int row = 0; row <= n; ++row)
+        for (int k = row < n ? row : 0; k < n; ++k) {
+          const double v = BQ[size_t(row) * n + k];
+          if (v != 0.0) add(row < n ? rowQ(p, row) : rowO(out_property_below(p)), colQ(p, k), v);
         }
-      for (int k = 0; k < n; ++k)
-        add(rowO(out_property_below(p)), colQ(p, k), A[size_t(n + kVolumeBelow) * n + k] / x[k] * S[k]);
-    }
   }
 
   if (growth_.kernel) {
@@ -785,11 +837,11 @@ void Population::ad_jacobian(Work& w, const State<double>& s, std::vector<double
   js.N = w.jN.data();
   js.floor = jfloor.data();
   js.p = w.jp.data();
-  for (int p = 0; p < P; ++p) js.q.push_back(&w.jq[size_t(p) * n]);
+  for (int p = 0; p < P; ++p) js.q[p] = &w.jq[size_t(p) * n];
   for (int fi = 0; fi < nfr; ++fi) js.fields[field_index_[fi]] = &w.jf[size_t(field_index_[fi]) * n];
   Rates<Jet> jr;
   jr.dN = dN.data();
-  for (int p = 0; p < P; ++p) jr.dq.push_back(&dq[size_t(p) * n]);
+  for (int p = 0; p < P; ++p) jr.dq[p] = &dq[size_t(p) * n];
   jr.outside = out.data();
   jr.grown = &grown;
   for (int c0 = 0; c0 < C; c0 += kAdChunk) {

@@ -25,6 +25,7 @@
 // exists (a kernel that reads N).
 #pragma once
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -46,6 +47,7 @@ class Settings;
 namespace granuflow::kernels {
 
 enum class Outside { kFold, kRemove };
+inline constexpr int kMaxProperties = 8;  // extensive properties a population carries per class
 
 // What a unit decides about its population: defaults of the mechanism settings, and the prefixes under which the
 // kernels' parameters and settings appear in the unit ("" keeps the kernels' own names, as the fluid bed does).
@@ -70,7 +72,7 @@ class Population {
   template <class T>
   struct State {
     const T* N = nullptr;
-    std::vector<const T*> q;
+    const T* q[kMaxProperties] = {};
     const T* floor = nullptr;  // f_i of pi_i = q_i / (N_i + f_i); null: 0
     const T* fields[kFields] = {nullptr, nullptr, nullptr, nullptr, nullptr};
     const T* p = nullptr;  // the unit's parameters; the kernels read theirs at the offsets declare() gave them
@@ -80,7 +82,7 @@ class Population {
   template <class T>
   struct Rates {
     T* dN = nullptr;
-    std::vector<T*> dq;
+    T* dq[kMaxProperties] = {};
     T* outside = nullptr;
     T* grown = nullptr;
   };
@@ -151,6 +153,7 @@ class Population {
   void analytic_jacobian(Work& w, const State<double>& s, std::vector<double>& D) const;
   void ad_jacobian(Work& w, const State<double>& s, std::vector<double>& D) const;
   void fold_rows(double* D, int cols) const;
+  void fragment_matrix(const double* p, std::vector<double>& A) const;
   int input_cols() const;  // N, q, fields read
 
   std::shared_ptr<const Grid> grid_;
@@ -167,6 +170,12 @@ class Population {
   Plugin<GrowthLaw> growth_;
   std::unique_ptr<FvGrowth> growth_scheme_;
   std::vector<int> kernel_params_;  // indices of every kernel parameter (the refresh snapshot)
+  struct FragmentCache {
+    std::mutex mutex;
+    bool valid = false;
+    std::vector<double> key, A;
+  };
+  std::shared_ptr<FragmentCache> frag_cache_ = std::make_shared<FragmentCache>();
 };
 
 }  // namespace granuflow::kernels
