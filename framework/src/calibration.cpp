@@ -57,8 +57,6 @@ void CalibrationOptions::validate() const {
   if (!(fd_step > 0 && fd_step < 1)) fail("fd_step", fd_step, "0 < fd_step < 1");
   if (!(rtol > 0 && rtol < 1)) fail("rtol", rtol, "0 < rtol < 1");
   if (!(atol > 0)) fail("atol", atol, "atol > 0");
-  if (!(output_rel_step > 0 && output_rel_step < 0.1))
-    fail("output_rel_step", output_rel_step, "0 < output_rel_step < 0.1");
   if (!(rse_threshold > 0)) fail("rse_threshold", rse_threshold, "rse_threshold > 0");
   if (!(correlation_threshold > 0 && correlation_threshold <= 1))
     fail("correlation_threshold", correlation_threshold, "0 < correlation_threshold <= 1");

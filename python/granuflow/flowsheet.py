@@ -159,14 +159,13 @@ class Flowsheet:
         return Result(raw, scene_name=self.name, summary_map=dict(self._scene.summary_map), units=self.units())
 
     def output_sensitivities(self, params: Sequence[str], *, t_end: float | None = None,
-                             times: Sequence[float] | None = None, rel_step: float = 1e-6):
+                             times: Sequence[float] | None = None):
         """Exact sensitivities of every reported output to ``params``: ``d output / d param`` as an array
         [time, param, output] (SI per SI) at ``times`` (default: the end time), from one forward-sensitivity solve
-        (outputs that are explicit functions of the states are chained; ``rel_step`` only for the few evaluated by
-        differences)."""
+        (the units' outputs are evaluated with the states' sensitivities carried through)."""
         t_end = self.t_end if t_end is None else float(t_end)
         times = [t_end] if times is None else [float(x) for x in times]
-        return _core.output_sensitivities(self._scene, t_end, times, list(params), float(rel_step))
+        return _core.output_sensitivities(self._scene, t_end, times, list(params))
 
     def time_residual(self, repeats: int = 7) -> dict:
         """Median time of one residual and one Jacobian evaluation at the initial state (benchmarks)."""

@@ -1,10 +1,11 @@
 """What output names mean: the one module of the package that interprets the names of states, reported outputs and
 summary keys.
 
-Reported outputs carry roles the Python side needs: balance terms (``balance_<quantity>_<in|out|hold>``), the size
-distribution (``psd_d_<i>``, ``psd_m_<i>``), regularization counts (``reg_<what>``) and characteristic diameters
-(``d10``, ``d50``, ...). Until the C++ core declares these roles, they are read from the names here and nowhere
-else, so that swapping this module for the declared roles changes nothing outside it.
+Reported outputs carry roles the units declare in C++ (``OutputRole``): balance terms (quantity water, solids or
+energy; in, out or hold-up), the size distribution (pivot diameter and class mass of class i), regularization
+counts and the mass fraction at the grid's end. The core hands them over with every result
+(``(role, quantity, class, unit)`` per output); this module reads them, and only the characteristic diameters
+(``d10``, ``d50``, ...) are recognised by name, for display.
 
 Display conventions (files and plots): sizes in µm (``um``), everything else in SI; summary keys carry their unit
 in the name (``d50_um``, ``T_gas_out_K``).
@@ -13,10 +14,7 @@ from __future__ import annotations
 
 import re
 
-_BALANCE = re.compile(r"^(?:.*\.)?balance_(water|solids|energy)_(in|out|hold)$")
-_PSD = re.compile(r"^(.*)\.psd_(d|m)_(\d+)$")
-_SIZE = re.compile(r"^(?:.*\.)?(d\d+)(?:_3)?$")  # characteristic diameters: d10, d50, ... (d50_3: older pbm_batch)
-_REG = re.compile(r"^(?:.*\.)?reg_\w+$")
+_SIZE = re.compile(r"^(?:.*\.)?(d\d+)$")  # characteristic diameters: d10, d50, ...
 
 BALANCE_QUANTITIES = ("water", "solids", "energy")
 # Summary keys every summary.json holds (null where the scene has no such quantity).
@@ -54,37 +52,42 @@ _SUMMARY_DISPLAY = {
 
 
 # -- roles ----------------------------------------------------------------------------------------------------------
-def balance_terms(output_names) -> list[tuple[int, str, str]]:
+# roles: the core's list of (role, quantity, class, unit) per output, aligned with the output names.
+def balance_terms(roles) -> list[tuple[int, str, str]]:
     """``(column, quantity, kind)`` of every balance output: quantity water|solids|energy, kind in|out|hold."""
-    return [(j, *m.groups()) for j, n in enumerate(output_names) if (m := _BALANCE.match(n))]
+    kinds = {"balance_in": "in", "balance_out": "out", "balance_hold": "hold"}
+    return [(j, q, kinds[r]) for j, (r, q, _, _) in enumerate(roles) if r in kinds]
 
 
-def psd_units(output_names) -> list[str]:
+def psd_units(roles) -> list[str]:
     """Units that report a size distribution."""
-    return sorted({m.group(1) for n in output_names if (m := _PSD.match(n))})
+    return sorted({u for r, _, _, u in roles if r == "size_mass"})
 
 
-def psd_columns(output_names, unit: str) -> tuple[list[int], list[int]]:
+def psd_columns(roles, unit: str) -> tuple[list[int], list[int]]:
     """Columns of the pivot diameters (m) and class masses (kg) of ``unit``, in class order."""
-    cols: dict[str, list] = {"d": [], "m": []}
-    for j, n in enumerate(output_names):
-        if (m := _PSD.match(n)) and m.group(1) == unit:
-            cols[m.group(2)].append((int(m.group(3)), j))
-    return [j for _, j in sorted(cols["d"])], [j for _, j in sorted(cols["m"])]
+    d = sorted((c, j) for j, (r, _, c, u) in enumerate(roles) if u == unit and r == "size_diameter")
+    m = sorted((c, j) for j, (r, _, c, u) in enumerate(roles) if u == unit and r == "size_mass")
+    return [j for _, j in d], [j for _, j in m]
 
 
-def is_psd(name: str) -> bool:
-    return bool(_PSD.match(name))
+def is_psd(roles, j: int) -> bool:
+    return roles[j][0] in ("size_diameter", "size_mass")
 
 
-def regularization_columns(output_names) -> list[tuple[int, str]]:
+def regularization_columns(roles, output_names) -> list[tuple[int, str]]:
     """``(column, name)`` of the outputs counting where a closure left the paper's literal equations."""
-    return [(j, n) for j, n in enumerate(output_names) if _REG.match(n)]
+    return [(j, output_names[j]) for j, (r, _, _, _) in enumerate(roles) if r == "regularization"]
+
+
+def grid_end_columns(roles, output_names) -> list[tuple[int, str]]:
+    """``(column, name)`` of the outputs giving the mass fraction at a population's grid end."""
+    return [(j, output_names[j]) for j, (r, _, _, _) in enumerate(roles) if r == "grid_end"]
 
 
 def is_size(name: str, si_unit: str = "m") -> bool:
-    """A characteristic diameter or a PSD pivot diameter (shown in µm)."""
-    return si_unit == "m" and (bool(_SIZE.match(name)) or (bool(_PSD.match(name)) and ".psd_d_" in name))
+    """A characteristic diameter or a size-distribution pivot diameter (shown in µm)."""
+    return si_unit == "m" and (bool(_SIZE.match(name)) or ".psd_d_" in name)
 
 
 def size_fraction(name: str) -> float | None:

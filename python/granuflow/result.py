@@ -26,6 +26,8 @@ class Result:
         self.state_names = list(raw["state_names"])
         self.outputs = raw["outputs"]
         self.output_names = list(raw["output_names"])
+        self.output_roles = [tuple(r) for r in raw["output_roles"]]  # (role, quantity, class, unit) per output
+        self.output_sens = raw.get("output_sens")
         self.sens = raw["sens"]
         self.sens_params = list(raw["sens_params"])
         self.stats = dict(raw["stats"])
@@ -121,7 +123,7 @@ class Result:
 
     # -- particle size distribution -------------------------------------------------------------
     def psd_units(self) -> list[str]:
-        return outputs.psd_units(self.output_names)
+        return outputs.psd_units(self.output_roles)
 
     def psd_arrays(self, t: float, unit: str | None = None) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
         """(output time in s, pivot diameters in µm, class masses in kg, mass fractions) at the output time nearest
@@ -133,7 +135,7 @@ class Result:
         if unit not in units:
             raise ValueError(f"psd: unit '{unit}' reports no size distribution (units with one: {', '.join(units)})")
         k = int(np.argmin(np.abs(self.t - t)))
-        dcols, mcols = outputs.psd_columns(self.output_names, unit)
+        dcols, mcols = outputs.psd_columns(self.output_roles, unit)
         w = self.outputs[k, mcols]
         frac = w / w.sum() if w.sum() > 0 else w
         return float(self.t[k]), from_si(self.outputs[k, dcols], "um", "m"), w, frac
@@ -156,7 +158,7 @@ class Result:
         """Relative closure error per conserved quantity at the final time:
         |hold(t) - hold(0) - (in - out)| / max(|hold(0)|, |hold(t)|, |in|, |out|); None if not tracked."""
         acc: dict = {}
-        for j, q, kind in outputs.balance_terms(self.output_names):
+        for j, q, kind in outputs.balance_terms(self.output_roles):
             acc.setdefault(q, {"in": 0.0, "out": 0.0, "hold0": 0.0, "hold": 0.0})
             col = self.outputs[:, j]
             if kind == "hold":
@@ -190,7 +192,7 @@ class Result:
         # Where a model left the paper's literal equations (floors, caps, regularizations): the largest count of
         # classes or instances affected at any output time, per unit (docs/paper001_decisions.md asks for this).
         s["regularizations"] = {n: _finite(np.max(self.outputs[:, j]))
-                                for j, n in outputs.regularization_columns(self.output_names)}
+                                for j, n in outputs.regularization_columns(self.output_roles, self.output_names)}
         s["wall_time_s"] = self.wall_time_s
         st = self.stats
         s["solver"] = {"states": st["states"], "steps": st["steps"], "residuals": st["residuals"],

@@ -118,7 +118,6 @@ const std::vector<std::pair<std::string, OptionSetter>>& option_setters() {
       {"rtol", set_field<&O::rtol>},
       {"atol", set_field<&O::atol>},
       {"sens_error_control", set_field<&O::sens_error_control>},
-      {"output_rel_step", set_field<&O::output_rel_step>},
       {"scale_covariance", set_field<&O::scale_covariance>},
       {"rse_threshold", set_field<&O::rse_threshold>},
       {"correlation_threshold", set_field<&O::correlation_threshold>},
@@ -273,8 +272,7 @@ void register_calibration(py::module_& m) {
 
   m.def(
       "output_sensitivities",
-      [](Scene& s, double t_end, const std::vector<double>& t_out, const std::vector<std::string>& params,
-         double /*rel_step: finite-difference step of earlier versions; output sensitivities are exact now*/) {
+      [](Scene& s, double t_end, const std::vector<double>& t_out, const std::vector<std::string>& params) {
         SimOptions o = s.options;
         o.t_end = t_end;
         o.t_out = t_out;
@@ -292,7 +290,7 @@ void register_calibration(py::module_& m) {
         std::copy(dz.begin(), dz.end(), a.mutable_data());
         return a;
       },
-      "scene"_a, "t_end"_a, "t_out"_a, "params"_a, "rel_step"_a = 1e-6,
+      "scene"_a, "t_end"_a, "t_out"_a, "params"_a,
       "d(output)/d(param) [time, param, output] from one forward-sensitivity solve.");
 
   py::class_<PyStageProblem>(m, "StageProblem")

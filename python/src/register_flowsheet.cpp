@@ -41,6 +41,17 @@ py::dict spec_dict(const ParamSpec& p, double value, bool input) {
                   "description"_a = p.description, "source"_a = p.source, "input"_a = input);
 }
 
+// What each reported output means (aligned with output_names): role, quantity (balances), class (size distribution).
+py::list output_roles(const Flowsheet& fs) {
+  static const char* names[] = {"value", "balance_in", "balance_out", "balance_hold", "size_diameter", "size_mass",
+                                "regularization", "grid_end"};
+  py::list out;
+  for (const auto& u : fs.units())
+    for (const auto& o : u.spec.outputs())
+      out.append(py::make_tuple(names[static_cast<int>(o.role)], o.quantity, o.cls, u.name));
+  return out;
+}
+
 py::dict simulate(Scene& s, std::optional<double> t_end, std::optional<std::vector<double>> t_out,
                   std::optional<int> n_out, std::optional<double> rtol, std::optional<double> atol,
                   std::vector<std::string> sensitivities, std::optional<std::string> linear_solver,
@@ -71,10 +82,11 @@ py::dict simulate(Scene& s, std::optional<double> t_end, std::optional<std::vect
                  "error_test_failures"_a = r.stats.error_test_failures,
                  "nonlinear_failures"_a = r.stats.nonlinear_failures, "reinits"_a = r.stats.reinits,
                  "states"_a = r.stats.states, "explicit_states"_a = r.stats.explicit_states,
-                 "linear_solver"_a = r.stats.linear_solver);
+                 "quadratures"_a = r.stats.quadratures, "linear_solver"_a = r.stats.linear_solver);
   return py::dict("t"_a = as_array(r.t, {nt}), "y"_a = as_array(r.y, {nt, ns}), "yp"_a = as_array(r.yp, {nt, ns}),
                   "state_names"_a = r.state_names, "outputs"_a = as_array(r.outputs, {nt, no}),
-                  "output_names"_a = r.output_names, "sens"_a = as_array(r.sens, {nt, np, ns}),
+                  "output_names"_a = r.output_names, "output_roles"_a = output_roles(*s.flowsheet),
+                  "output_sens"_a = as_array(r.output_sens, {nt, np, no}), "sens"_a = as_array(r.sens, {nt, np, ns}),
                   "sens_params"_a = r.sens_params, "stats"_a = stats, "wall_time_s"_a = r.wall_time_s,
                   "rtol"_a = o.rtol, "atol"_a = o.atol, "t_end"_a = o.t_end);
 }
@@ -151,6 +163,8 @@ void register_flowsheet(py::module_& m) {
       .def("param_names", [](const Scene& s) { return s.flowsheet->param_names(); })
       .def("state_names", [](const Scene& s) { return s.flowsheet->state_names(); })
       .def("output_names", [](const Scene& s) { return s.flowsheet->output_names(); })
+      .def("output_roles", [](const Scene& s) { return output_roles(*s.flowsheet); },
+           "(role, quantity, class, unit) of every reported output, aligned with output_names()")
       .def("n_states", [](const Scene& s) { return s.flowsheet->n_states(); })
       .def(
           "get", [](const Scene& s, const std::string& name) { return s.flowsheet->param(name); }, "name"_a)

@@ -110,7 +110,6 @@ struct CalibrationOptions {
   double rtol = 1e-5;               // 0 < rtol < 1
   double atol = 1e-7;               // > 0 (times each state's scale)
   bool sens_error_control = false;  // sensitivities in IDAS's error test (SimOptions::sens_error_control)
-  double output_rel_step = 1e-6;    // output_sensitivities() step
   // Statistics at the optimum.
   bool scale_covariance = false;        // multiply the covariance by the reduced χ² (σ not trusted)
   double rse_threshold = 0.3;           // flag (and profile): relative standard error above this, > 0

@@ -72,9 +72,9 @@ class _LinearizedPoint:
     """Executor task of the linear method: nominal outputs and their Jacobian w.r.t. the uncertain parameters at one
     grid point (picklable, so it runs on Dask workers too)."""
 
-    def __init__(self, base, params, outputs, sources, sim_kwargs, steps, use_core, rel_step):
+    def __init__(self, base, params, outputs, sources, sim_kwargs, steps, use_core):
         self.base, self.params, self.outputs, self.sources = base, params, outputs, sources
-        self.sim_kwargs, self.steps, self.use_core, self.rel_step = sim_kwargs, steps, use_core, rel_step
+        self.sim_kwargs, self.steps, self.use_core = sim_kwargs, steps, use_core
 
     def _values(self, fs) -> dict:
         return sweep.final_values(fs.simulate(**self.sim_kwargs), self.outputs)
@@ -90,7 +90,7 @@ class _LinearizedPoint:
             J = np.zeros((len(self.outputs), len(self.params)))
             if self.use_core:
                 t_end = float(self.sim_kwargs.get("t_end", fs.t_end))
-                dz = fs.output_sensitivities(list(self.params), t_end=t_end, rel_step=self.rel_step)
+                dz = fs.output_sensitivities(list(self.params), t_end=t_end)
                 row["n_sim"] += 1
                 names = fs.output_names
                 for a, (src, factor) in enumerate(self.sources):
@@ -118,7 +118,7 @@ def probabilistic_design_space(flowsheet: Flowsheet, x, y, constraints, *, param
                                fixed: Mapping[str, float | str] | None = None, t_end: float | str | None = None,
                                workers: int | None = None, executor: str | Any = "threads",
                                progress: bool | None = None, simulate: Mapping[str, Any] | None = None,
-                               sensitivities: str = "auto", rel_step: float = 1e-6) -> ProbabilityMap:
+                               sensitivities: str = "auto") -> ProbabilityMap:
     """Probability that every constraint is met at each operating point when the model parameters ``params`` are
     normally distributed with ``mean`` (default: the flowsheet's values) and ``covariance`` (SI units, e.g. from a
     calibration).
@@ -222,7 +222,7 @@ def probabilistic_design_space(flowsheet: Flowsheet, x, y, constraints, *, param
     use_core = core_ok and sensitivities != "fd"
     steps = [0.1 * math.sqrt(cov[j, j]) if cov[j, j] > 0 else max(1e-6 * abs(mu[j]), 1e-12) for j in range(k)]
     base = {p: fs.get(p) for p in (ax.param, ay.param)}
-    task = _LinearizedPoint(base, params, outputs, sources, sim_kwargs, steps, use_core, rel_step)
+    task = _LinearizedPoint(base, params, outputs, sources, sim_kwargs, steps, use_core)
     rows = sweep.runner.collect(sweep.make_executor(executor, workers), task, fs, list(enumerate(grid_pts)), progress,
                                 "probabilistic design space")
     eps = rng.standard_normal((n, k))

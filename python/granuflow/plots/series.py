@@ -65,7 +65,7 @@ def clipped_top_um(result, name: str, si_unit: str):
     below = outputs.size_fraction(name)
     if below is None or si_unit != "m" or unit not in result.psd_units():
         return None
-    dcols, mcols = outputs.psd_columns(result.output_names, unit)
+    dcols, mcols = outputs.psd_columns(result.output_roles, unit)
     m = result.outputs[:, mcols]
     total = m.sum(axis=1)
     frac = np.divide(m[:, -1], total, out=np.zeros_like(total), where=total > 0)
