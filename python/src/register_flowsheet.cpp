@@ -43,8 +43,8 @@ py::dict spec_dict(const ParamSpec& p, double value, bool input) {
 
 // What each reported output means (aligned with output_names): role, quantity (balances), class (size distribution).
 py::list output_roles(const Flowsheet& fs) {
-  static const char* names[] = {"value", "balance_in", "balance_out", "balance_hold", "size_diameter", "size_mass",
-                                "regularization", "grid_end"};
+  static const char* names[] = {"value",         "balance_in", "balance_out",    "balance_hold",
+                                "size_diameter", "size_mass",  "regularization", "grid_end"};
   py::list out;
   for (const auto& u : fs.units())
     for (const auto& o : u.spec.outputs())
@@ -163,8 +163,9 @@ void register_flowsheet(py::module_& m) {
       .def("param_names", [](const Scene& s) { return s.flowsheet->param_names(); })
       .def("state_names", [](const Scene& s) { return s.flowsheet->state_names(); })
       .def("output_names", [](const Scene& s) { return s.flowsheet->output_names(); })
-      .def("output_roles", [](const Scene& s) { return output_roles(*s.flowsheet); },
-           "(role, quantity, class, unit) of every reported output, aligned with output_names()")
+      .def(
+          "output_roles", [](const Scene& s) { return output_roles(*s.flowsheet); },
+          "(role, quantity, class, unit) of every reported output, aligned with output_names()")
       .def("n_states", [](const Scene& s) { return s.flowsheet->n_states(); })
       .def(
           "get", [](const Scene& s, const std::string& name) { return s.flowsheet->param(name); }, "name"_a)
