@@ -30,7 +30,8 @@ void register_schemes(KernelRegistries& r) {
                          [] { return std::make_unique<CellAverageBreakage>(); });
   r.breakage_schemes.add("cell_mass", "fragment mass per cell on the cell's pivot (number not kept; paper 001 reading)",
                          [] { return std::make_unique<CellMassBreakage>(); });
-  r.growth_schemes.add("fv_koren", "finite volumes in diameter, Koren limiter (second/third order, positive)",
+  r.growth_schemes.add("fv_koren",
+                       "finite volumes in diameter, Koren limiter (kappa = 1/3: third order where smooth, positive)",
                        [] { return std::make_unique<FvGrowth>(Limiter::kKoren); });
   r.growth_schemes.add("fv_upwind", "finite volumes in diameter, first-order upwind",
                        [] { return std::make_unique<FvGrowth>(Limiter::kNone); });

@@ -5,22 +5,23 @@
 namespace granuflow::kernels {
 namespace {
 
-// Koren's limited slope from the downwind jump a and the upwind jump b (both scaled to the cell width):
-// min(2|b|, (|a| + 2|b|)/3, 2|a|) with the common sign, 0 at extrema; da, db its derivatives.
+// Koren's limited slope (Koren 1993) from the downwind jump a and the upwind jump b (both scaled to the cell width):
+// the kappa = 1/3 reconstruction (2a + b)/3, third-order upwind-biased where the solution is smooth, limited to
+// min(2|a|, 2|b|) with the common sign and 0 at extrema; da, db its derivatives.
 template <class T>
 T koren(const T& a, const T& b, double& da, double& db) {
   da = db = 0.0;
   if (!(a * b > 0.0)) return T(0.0);
   const double s = a > 0.0 ? 1.0 : -1.0;
   const T abs_a = s * a, abs_b = s * b;
-  const T third = (abs_a + 2.0 * abs_b) / 3.0;
+  const T third = (2.0 * abs_a + abs_b) / 3.0;
   if (2.0 * abs_b <= third && 2.0 * abs_b <= 2.0 * abs_a) {
     db = 2.0;
     return 2.0 * b;
   }
   if (third <= 2.0 * abs_a) {
-    da = 1.0 / 3.0, db = 2.0 / 3.0;
-    return (a + 2.0 * b) / 3.0;
+    da = 2.0 / 3.0, db = 1.0 / 3.0;
+    return (2.0 * a + b) / 3.0;
   }
   da = 2.0;
   return 2.0 * a;

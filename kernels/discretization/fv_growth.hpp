@@ -2,7 +2,8 @@
 //     dn/dt + d(G n)/dd = 0        (paper 003, Eqs. (7.32), (7.34))
 // with the class numbers N_i as cell integrals of n over [d_i, d_{i+1}] (diameters of the volume edges):
 //     dN_i/dt = F_{i} - F_{i+1},   F_f = G(d_f) n_f   (number flux through face f).
-// The face density n_f comes from the upwind cell with a limited slope (Koren 1993: third-order upwind-biased
+// The face density n_f comes from the upwind cell with a limited slope (Koren 1993: the kappa = 1/3 reconstruction,
+// third-order upwind-biased
 // where smooth, first order at extrema and steep fronts), which keeps N >= 0 and adds little numerical
 // diffusion; fv_upwind is the first-order scheme. Particles crossing the top face leave the grid at the
 // virtual pivot (counted as number/volume above), those crossing the bottom face downwards at x_lo.

@@ -47,11 +47,13 @@ TEST(PbmGrowth, SizeIndependentGrowthShiftsTheDistribution) {
     const double v = pbm_test::moment(g, rk.N(1), 1) + rk.state(1, "volume_above") + rk.state(1, "volume_below");
     EXPECT_NEAR((v - rk.state(1, "volume_grown")) / v0, 1.0, 1e-12);
   }
-  // Measured L1 of the mass density (koren / upwind): q=4 0.059/0.30, q=8 0.017/0.16, q=16 0.0044/0.082:
-  // second order for the limited scheme once the grid resolves the distribution, first order upwind.
-  for (size_t k = 0; k < koren.size(); ++k) EXPECT_LT(koren[k], 0.6 * upwind[k]) << "little numerical diffusion";
+  // Measured L1 of the mass density (koren / upwind): q=4 0.0213/0.300, q=8 0.00408/0.159, q=16 0.00080/0.082:
+  // order 2.4 for the limited kappa = 1/3 scheme (third order where smooth, second at the distribution's peak, where
+  // the limiter acts), first order upwind. The kappa = -1/3 slope (a + 2b)/3 gave 0.059, 0.017, 0.0044 (order 1.9).
+  for (size_t k = 0; k < koren.size(); ++k) EXPECT_LT(koren[k], 0.1 * upwind[k]) << "little numerical diffusion";
+  EXPECT_LT(koren[1], 0.006);  // the kappa = -1/3 slope: 0.017
   for (size_t k = 1; k < koren.size(); ++k) {
-    EXPECT_GT(std::log2(koren[k - 1] / koren[k]), 1.6) << koren[k - 1] << " -> " << koren[k];
+    EXPECT_GT(std::log2(koren[k - 1] / koren[k]), 2.2) << koren[k - 1] << " -> " << koren[k];
     EXPECT_GT(std::log2(upwind[k - 1] / upwind[k]), 0.7) << upwind[k - 1] << " -> " << upwind[k];
   }
 }
