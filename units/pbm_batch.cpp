@@ -92,12 +92,13 @@ class PbmBatch : public UnitBase<PbmBatch> {
     sN_ = s.add_states("N", n_, StateKind::Differential, "-", number_scale);
     const double v_mid = grid_->pivot(n_ / 2);
     if (pop_.aggregation() || pop_.growth()) {
-      s_out_[kOutNumberAbove] = s.add_state("number_above", StateKind::Differential, "-", number_scale);
-      s_out_[kOutVolumeAbove] = s.add_state("volume_above", StateKind::Differential, "m3", number_scale * v_mid);
+      s_out_[kOutNumberAbove] = s.add_accumulator("number_above", "-", number_scale);
+      s_out_[kOutVolumeAbove] = s.add_accumulator("volume_above", "m3", number_scale * v_mid);
     }
+    // Accumulators, not quadratures: their rates come out of the same evaluation as the population's.
     if (pop_.breakage() || pop_.growth())
-      s_out_[kOutVolumeBelow] = s.add_state("volume_below", StateKind::Differential, "m3", number_scale * v_mid);
-    if (pop_.growth()) s_grown_ = s.add_state("volume_grown", StateKind::Differential, "m3", number_scale * v_mid);
+      s_out_[kOutVolumeBelow] = s.add_accumulator("volume_below", "m3", number_scale * v_mid);
+    if (pop_.growth()) s_grown_ = s.add_accumulator("volume_grown", "m3", number_scale * v_mid);
     s.set_classes({n_, {sN_}, {}});
     s.set_analytic_part();
 

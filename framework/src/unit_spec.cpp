@@ -10,8 +10,14 @@ StateId UnitSpec::add_state(std::string name, StateKind kind, std::string unit, 
   if (state_index(name) >= 0) throw std::logic_error("state '" + name + "' declared twice");
   if (!is_known_si_unit(unit)) throw std::logic_error("state '" + name + "' has unknown SI unit '" + unit + "'");
   if (!(scale > 0) || !std::isfinite(scale)) throw std::logic_error("state '" + name + "' needs a positive scale");
-  states_.push_back({std::move(name), kind, std::move(unit), scale});
+  states_.push_back({std::move(name), kind, std::move(unit), scale, false});
   return {static_cast<int>(states_.size()) - 1};
+}
+
+StateId UnitSpec::add_accumulator(std::string name, std::string unit, double scale) {
+  const StateId id = add_state(std::move(name), StateKind::Differential, std::move(unit), scale);
+  states_[id.i].accumulator = true;
+  return id;
 }
 
 StateId UnitSpec::add_states(const std::string& name, int n, StateKind kind, const std::string& unit, double scale) {

@@ -136,11 +136,17 @@ class Flowsheet:
         return self._scene.unit_settings()
 
     # -- simulation -----------------------------------------------------------------------------
-    def steady_state(self, *, t: float = 0.0, ftol: float = 1e-10, max_iterations: int = 200) -> dict:
-        """Steady state F(y, y' = 0) = 0 by Newton (KINSOL) from consistent initial values; inputs evaluated at
-        ``t``. Pure accumulators (cumulative amounts fed or collected) stay at their initial values. Returns
-        ``{"y": {state: value}, "iterations": ..., "residual_norm": ...}``; raises SolverError on failure."""
-        return self._scene.steady_state(t=float(t), ftol=float(ftol), max_iterations=int(max_iterations))
+    def steady_state(self, *, t: float = 0.0, ftol: float = 1e-10, max_iterations: int = 200,
+                     max_pseudo_steps: int = 2000) -> dict:
+        """Steady state F(y, y' = 0) = 0 with inputs evaluated at ``t``: Newton (KINSOL) from consistent initial
+        values, pseudo-transient continuation when Newton alone fails. Quantities the equations conserve (a batch
+        hold-up) keep their initial values and are listed under ``conserved``. Returns ``{"y": {state: value},
+        "iterations", "residual_norm", "method", "pseudo_steps", "conserved", "warnings", "wall_time_s"}``
+        (``warnings`` names a trivial root, e.g. an emptied population). Raises SolverError when the flowsheet has
+        no steady state (a quantity that changes at a constant rate, such as a batch being sprayed) or none is
+        found, naming the time and the unit."""
+        return self._scene.steady_state(t=float(t), ftol=float(ftol), max_iterations=int(max_iterations),
+                                        max_pseudo_steps=int(max_pseudo_steps))
 
     def simulate(self, t_end: float | None = None, *, t_out: Iterable[float] | None = None,
                  n_out: int | None = None, rtol: float | None = None, atol: float | None = None,

@@ -209,11 +209,12 @@ void register_flowsheet(py::module_& m) {
       .def("time_residual", &time_residual, "repeats"_a = 7, "dense_limit"_a = 400)
       .def(
           "steady_state",
-          [](Scene& s, double t, double ftol, long max_iterations) {
+          [](Scene& s, double t, double ftol, long max_iterations, long max_pseudo_steps) {
             SteadyOptions o;
             o.t = t;
             o.ftol = ftol;
             o.max_iterations = max_iterations;
+            o.max_pseudo_steps = max_pseudo_steps;
             SteadyResult r;
             {
               py::gil_scoped_release release;
@@ -222,9 +223,11 @@ void register_flowsheet(py::module_& m) {
             const auto names = s.flowsheet->state_names();
             py::dict y;
             for (size_t i = 0; i < r.y.size(); ++i) y[py::str(names[i])] = r.y[i];
-            return py::dict("y"_a = y, "iterations"_a = r.iterations, "residual_norm"_a = r.residual_norm);
+            return py::dict("y"_a = y, "iterations"_a = r.iterations, "residual_norm"_a = r.residual_norm,
+                            "method"_a = r.method, "pseudo_steps"_a = r.pseudo_steps, "conserved"_a = r.conserved,
+                            "warnings"_a = r.warnings, "wall_time_s"_a = r.wall_time_s);
           },
-          py::kw_only(), "t"_a = 0.0, "ftol"_a = 1e-10, "max_iterations"_a = 200)
+          py::kw_only(), "t"_a = 0.0, "ftol"_a = 1e-10, "max_iterations"_a = 200, "max_pseudo_steps"_a = 2000)
       .def("simulate", &simulate, py::kw_only(), "t_end"_a = py::none(), "t_out"_a = py::none(), "n_out"_a = py::none(),
            "rtol"_a = py::none(), "atol"_a = py::none(), "sensitivities"_a = std::vector<std::string>{},
            "linear_solver"_a = py::none(), "max_steps"_a = py::none());

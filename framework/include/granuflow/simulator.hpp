@@ -64,21 +64,28 @@ struct SimResult {
 SimResult simulate(Flowsheet& fs, const SimOptions& options);
 
 struct SteadyOptions {
-  double t = 0.0;       // time at which inputs are evaluated
-  double ftol = 1e-10;  // scaled residual tolerance
-  long max_iterations = 200;
+  double t = 0.0;                // time at which inputs are evaluated
+  double ftol = 1e-10;           // scaled residual tolerance
+  long max_iterations = 200;     // Newton iterations per attempt
+  long max_pseudo_steps = 2000;  // pseudo-transient steps when Newton from the start fails (0: none)
   void validate() const;
 };
 
 struct SteadyResult {
-  std::vector<double> y;
-  long iterations = 0;
+  std::vector<double> y;  // every state (explicit units' evaluated)
+  long iterations = 0;    // Newton iterations
   double residual_norm = 0.0;
+  std::string method;  // "newton" or "pseudo-transient continuation, then newton"
+  long pseudo_steps = 0;
+  std::vector<std::string> conserved;  // combinations the start fixes (a batch hold-up ...)
+  std::vector<std::string> warnings;   // e.g. the trivial root
+  double wall_time_s = 0.0;
 };
 
-// Solves F(y, y' = 0) = 0 from the initial values (or from `guess` when given) with KINSOL (line search).
-// SteadyResult::y is the full state vector (explicit units' states evaluated); a guess may be full or cover
-// the integrated states only.
+// Solves F(y, y' = 0) = 0 from the initial values (or from `guess` when given): conserved combinations kept at their
+// initial values, Newton (KINSOL, line search), pseudo-transient continuation if Newton fails (steady_state.cpp).
+// Throws SolverError when the flowsheet has no steady state (a combination that drifts at a constant rate) or none
+// is found. SteadyResult::y is the full state vector; a guess may be full or cover the integrated states only.
 SteadyResult solve_steady_state(Flowsheet& fs, const SteadyOptions& options,
                                 const std::vector<double>* guess = nullptr);
 

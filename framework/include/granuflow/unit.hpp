@@ -66,7 +66,8 @@ struct StateSpec {
   std::string name;
   StateKind kind;
   std::string unit;
-  double scale;  // typical magnitude: absolute tolerance = atol * scale
+  double scale;              // typical magnitude: absolute tolerance = atol * scale
+  bool accumulator = false;  // integrates a flow no equation reads (what left a grid): outside a steady state
 };
 
 struct PortSpec {
@@ -126,6 +127,10 @@ class Settings;  // scene settings of one unit (flowsheet.hpp)
 class UnitSpec {
  public:
   StateId add_state(std::string name, StateKind kind, std::string unit, double scale);
+  // A differential state that only integrates a flow for bookkeeping (no equation reads it; prefer a quadrature,
+  // add_quadrature, unless the flow is a by-product of the residual that a quadrature would evaluate again).
+  // A steady-state solve holds it and drops its equation.
+  StateId add_accumulator(std::string name, std::string unit, double scale);
   // n consecutive states name_0 .. name_{n-1}; returns the first.
   StateId add_states(const std::string& name, int n, StateKind kind, const std::string& unit, double scale);
   ParamId add_param(ParamSpec spec);

@@ -1,0 +1,96 @@
+// The SUNDIALS plumbing shared by dynamic runs (simulator.cpp) and steady-state solves (steady_state.cpp): RAII
+// holders, the linear solver choice, IDA's residual and Jacobian callbacks with the Jacobian reuse cache, and one
+// IDA integrator set up the same way everywhere.
+#pragma once
+#include <idas/idas.h>
+#include <nvector/nvector_serial.h>
+#include <sundials/sundials_context.h>
+#include <sunlinsol/sunlinsol_klu.h>
+#include <sunmatrix/sunmatrix_dense.h>
+#include <sunmatrix/sunmatrix_sparse.h>
+
+#include <string>
+#include <vector>
+
+#include "granuflow/dae_system.hpp"
+
+namespace granuflow::detail {
+
+struct Context {
+  SUNContext ctx = nullptr;
+  Context() { SUNContext_Create(nullptr, &ctx); }
+  ~Context() { SUNContext_Free(&ctx); }
+};
+struct NVec {
+  N_Vector v = nullptr;
+  NVec(int n, SUNContext ctx) : v(N_VNew_Serial(n, ctx)) { N_VConst(0.0, v); }
+  ~NVec() { N_VDestroy(v); }
+  double* data() const { return N_VGetArrayPointer(v); }
+};
+struct Mat {
+  SUNMatrix m = nullptr;
+  ~Mat() {
+    if (m) SUNMatDestroy(m);
+  }
+};
+struct LinSol {
+  SUNLinearSolver s = nullptr;
+  ~LinSol() {
+    if (s) SUNLinSolFree(s);
+  }
+};
+
+// Dense: Eigen's blocked LU behind a SUNDenseMatrix; sparse: KLU on the flowsheet's sparsity pattern.
+void make_linear_solver(bool dense, const DaeSystem& sys, N_Vector y, SUNContext ctx, Mat& a, LinSol& ls);
+std::string ida_flag_text(int flag);
+void check(int flag, const char* call);  // throws on a negative SUNDIALS flag
+
+// A dense Jacobian kept for reuse, the way CVODE keeps df/dy: IDA sets its Newton matrix up again whenever
+// cj = alpha / h moves by 25 %, and with every differential state's residual of the form y'_k - f(y) (all
+// units' contract, checked on the first evaluation of a run) only the diagonal of the differential states
+// depends on cj. An evaluation at most kMaxAge steps old is reused with cj updated, unless Newton (of the states
+// or of their sensitivities) has failed to converge since; IDACalcIC and each segment start from a fresh one.
+struct JacobianCache {
+  static constexpr long kMaxAge = 20;
+  std::vector<double> jac;        // column-major n x n, evaluated at cj
+  std::vector<int> differential;  // indices of the differential states
+  double cj = 0.0;
+  long step = 0, conv_fails = 0;
+  bool valid = false;
+  int reusable = -1;  // -1 unknown (checked on the first evaluation), 0 no, 1 yes
+};
+
+// State shared by the IDAS callbacks.
+struct IdaUser {
+  IdaUser(DaeSystem* s, bool d, std::vector<int> params = {}) : sys(s), dense(d), sens_params(std::move(params)) {}
+  DaeSystem* sys;
+  bool dense;
+  std::vector<int> sens_params;
+  std::string last_error;
+  std::vector<const double*> yS, ypS;
+  std::vector<double*> rS, qS;
+  void* mem = nullptr;  // the IDA integrator, when Jacobians may be reused (simulate, dense)
+  JacobianCache cache;
+  bool fresh_only = false;  // consistent initialization: Newton from a guess needs the Jacobian of each iterate
+};
+int ida_res(realtype t, N_Vector y, N_Vector yp, N_Vector r, void* ud);
+int ida_jac(realtype t, realtype cj, N_Vector y, N_Vector yp, N_Vector, SUNMatrix J, void* ud, N_Vector, N_Vector,
+            N_Vector);
+void ida_err(int code, const char* module, const char* function, char* msg, void* ud);
+
+// One IDA integrator over a DaeSystem, set up the same way for simulation and for the consistent starting point
+// of a steady-state solve: residual, tolerances, differential/algebraic ids, the linear solver and exact Jacobian.
+struct Ida {
+  void* mem = nullptr;
+  Mat A;
+  LinSol LS;
+  Ida(SUNContext ctx, IdaUser& user, double t0, const NVec& y, const NVec& yp, double rtol, const NVec& atol);
+  ~Ida() { IDAFree(&mem); }
+  Ida(const Ida&) = delete;
+  Ida& operator=(const Ida&) = delete;
+};
+
+// Dense Jacobians whenever the system is small or mostly full; see solver_setup.cpp.
+bool use_dense(const Flowsheet& fs, const std::string& choice, int dense_limit);
+
+}  // namespace granuflow::detail

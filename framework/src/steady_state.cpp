@@ -1,0 +1,447 @@
+// Steady states F(y, y' = 0) = 0 of a flowsheet.
+//
+// Structure first: at the starting point the Jacobian tells which quantities the equations cannot fix. An
+// accumulator (a state a unit declares as bookkeeping of a flow) is held at its value. A conserved combination b^T y (a
+// left null vector c of dF/dy: a batch hold-up, the solids of a closed loop) makes the steady state a family: one of
+// its rows is replaced by b^T (y - y0) = 0, so the answer keeps what the start had. If such a combination changes
+// at a constant rate whatever the state (c^T F != 0: inflow without outflow, a batch being sprayed), there is no
+// steady state at all, and the solve says so instead of failing in Newton.
+//
+// Then Newton (KINSOL, exact Jacobian, line search) from the start; if it fails, pseudo-transient continuation:
+// backward-Euler steps of the dynamics with step sizes that grow as the residual falls (switched evolution
+// relaxation), needing nothing from the user, and Newton again from where it led. A root where every state of a
+// unit that started non-zero is zero (an emptied population: the trivial root of aggregation and breakage with
+// removal) is reported as such.
+#include <kinsol/kinsol.h>
+
+#include <Eigen/Dense>
+#include <Eigen/SparseLU>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <sstream>
+
+#include "granuflow/errors.hpp"
+#include "granuflow/simulator.hpp"
+#include "solver_setup.hpp"
+
+namespace granuflow {
+
+void SteadyOptions::validate() const {
+  if (!(ftol > 0)) throw ConfigError(violation("SteadyOptions.ftol", ftol, "", "ftol > 0"));
+  if (max_iterations < 1)
+    throw ConfigError(violation("SteadyOptions.max_iterations", double(max_iterations), "", "max_iterations >= 1"));
+  if (max_pseudo_steps < 0)
+    throw ConfigError(violation("SteadyOptions.max_pseudo_steps", double(max_pseudo_steps), "", ">= 0"));
+}
+
+namespace {
+
+using namespace detail;
+
+// F(y, yp) of the flowsheet with the rows of held states and conserved combinations replaced.
+struct SteadySystem {
+  DaeSystem* sys = nullptr;
+  double t = 0.0;
+  bool dense = true;
+  int n = 0;
+  std::vector<double> y0, zeros;
+  std::vector<int> held;                                  // rows replaced by y_r - y0_r
+  std::vector<std::pair<int, std::vector<double>>> kept;  // rows replaced by b^T (y - y0) (b dense over states)
+  std::string last_error;
+
+  Status residual(const double* y, const double* yp, double* f) {
+    const Status s = sys->residual(t, y, yp, f);
+    for (int r : held) f[r] = y[r] - y0[r];
+    for (const auto& [r, b] : kept) {
+      double v = 0;
+      for (int i = 0; i < n; ++i) v += b[i] * (y[i] - y0[i]);
+      f[r] = v;
+    }
+    return s;
+  }
+  // Dense column-major n x n.
+  void jacobian_dense(const double* y, const double* yp, double cj, double* J) {
+    sys->jacobian(t, y, yp, cj, J, nullptr);
+    for (int r : held) {
+      for (int c = 0; c < n; ++c) J[size_t(c) * n + r] = 0.0;
+      J[size_t(r) * n + r] = 1.0;
+    }
+    for (const auto& [r, b] : kept)
+      for (int c = 0; c < n; ++c) J[size_t(c) * n + r] = b[c];
+  }
+  // Sparse values in the pattern's order; replaced rows only where the pattern has entries (held: the diagonal,
+  // which a unit's own state always has; kept combinations span the pattern of their row's unit).
+  void jacobian_sparse(const double* y, const double* yp, double cj, double* vals) {
+    sys->jacobian(t, y, yp, cj, nullptr, vals);
+    const auto& pat = sys->pattern();
+    for (int c = 0; c < pat.n; ++c)
+      for (int i = pat.col_ptr[c]; i < pat.col_ptr[c + 1]; ++i) {
+        const int r = pat.row_idx[i];
+        if (std::find(held.begin(), held.end(), r) != held.end()) vals[i] = (c == r) ? 1.0 : 0.0;
+        for (const auto& [kr, b] : kept)
+          if (kr == r) vals[i] = b[c];
+      }
+  }
+};
+
+struct KinUser {
+  SteadySystem* s;
+};
+
+int kin_res(N_Vector u, N_Vector f, void* ud) {
+  auto* k = static_cast<KinUser*>(ud);
+  try {
+    return static_cast<int>(k->s->residual(N_VGetArrayPointer(u), k->s->zeros.data(), N_VGetArrayPointer(f)));
+  } catch (const std::exception& e) {
+    k->s->last_error = e.what();
+    return -1;
+  }
+}
+
+int kin_jac(N_Vector u, N_Vector, SUNMatrix J, void* ud, N_Vector, N_Vector) {
+  auto* k = static_cast<KinUser*>(ud);
+  try {  // an exception must not unwind through KINSOL's C frames
+    if (k->s->dense) {
+      k->s->jacobian_dense(N_VGetArrayPointer(u), k->s->zeros.data(), 0.0, SUNDenseMatrix_Data(J));
+    } else {
+      const auto& pat = k->s->sys->pattern();
+      for (int c = 0; c <= pat.n; ++c) SUNSparseMatrix_IndexPointers(J)[c] = pat.col_ptr[c];
+      for (int i = 0; i < pat.nnz(); ++i) SUNSparseMatrix_IndexValues(J)[i] = pat.row_idx[i];
+      k->s->jacobian_sparse(N_VGetArrayPointer(u), k->s->zeros.data(), 0.0, SUNSparseMatrix_Data(J));
+    }
+    return 0;
+  } catch (const std::exception& e) {
+    k->s->last_error = e.what();
+    return -1;
+  }
+}
+
+void kin_err(int code, const char* module, const char* function, char* msg, void* ud) {
+  if (code >= 0) return;
+  static_cast<KinUser*>(ud)->s->last_error = std::string(module) + "." + function + ": " + msg;
+}
+
+// Algebraic states solved for the given differential states (IDACalcIC), used to start Newton from a point
+// where recycle flows are consistent rather than from structurally singular guesses.
+void consistent_initial_values(DaeSystem& sys, bool dense, double t, std::vector<double>& y0) {
+  const int n = sys.size();
+  Context C;
+  NVec y(n, C.ctx), yp(n, C.ctx), atol(n, C.ctx);
+  std::copy(y0.begin(), y0.end(), y.data());
+  N_VConst(1e-10, atol.v);
+  IdaUser user(&sys, dense);
+  Ida ida(C.ctx, user, t, y, yp, 1e-8, atol);
+  // Failure here is not fatal: Newton then starts from the unit guesses.
+  if (IDACalcIC(ida.mem, IDA_YA_YDP_INIT, t + 1.0) >= 0 && IDAGetConsistentIC(ida.mem, y.v, yp.v) >= 0)
+    y0.assign(y.data(), y.data() + n);
+}
+
+// "bed (M_0 .. M_9), gas (water)": the states of a combination, by unit.
+std::string describe_states(const Flowsheet& fs, const std::vector<int>& states) {
+  std::ostringstream os;
+  int last_unit = -1;
+  std::vector<std::string> names;
+  auto flush = [&]() {
+    if (last_unit < 0) return;
+    os << (os.tellp() > 0 ? ", " : "") << fs.units()[last_unit].name << " (";
+    if (names.size() > 3)
+      os << names.front() << " .. " << names.back();
+    else
+      for (size_t i = 0; i < names.size(); ++i) os << (i ? ", " : "") << names[i];
+    os << ")";
+  };
+  for (int s : states) {
+    const int u = fs.state_unit(s);
+    if (u != last_unit) flush(), names.clear(), last_unit = u;
+    names.push_back(fs.units()[u].spec.states()[s - fs.units()[u].offset].name);
+  }
+  flush();
+  return os.str();
+}
+
+// Finds the held states and conserved combinations at y0 (dense Jacobians only: the analysis is O(n^3)); throws a
+// SolverError when a combination drifts at a constant rate (no steady state).
+void analyse_structure(SteadySystem& s, const Flowsheet& fs, std::vector<std::string>& conserved) {
+  const int n = s.n;
+  std::vector<double> jac(size_t(n) * n), f0(n);
+  s.sys->jacobian(s.t, s.y0.data(), s.zeros.data(), 0.0, jac.data(), nullptr);
+  s.sys->residual(s.t, s.y0.data(), s.zeros.data(), f0.data());
+  const auto id = s.sys->differential_id();
+  const auto scale = s.sys->scales();
+  Eigen::Map<const Eigen::MatrixXd> J(jac.data(), n, n);
+  // Conserved combinations: left null vectors of J over the states that are not held (accumulators take up what
+  // the others lose), found on J scaled by rows and by the states' scales.
+  std::vector<int> keep;
+  for (int i = 0; i < n; ++i)
+    if (std::find(s.held.begin(), s.held.end(), i) == s.held.end()) keep.push_back(i);
+  const int m = static_cast<int>(keep.size());
+  Eigen::MatrixXd Js(m, m);
+  Eigen::VectorXd row_scale(m);
+  for (int a = 0; a < m; ++a) {
+    double mx = 0;
+    for (int b = 0; b < m; ++b) mx = std::max(mx, std::abs(J(keep[a], keep[b]) * scale[keep[b]]));
+    row_scale(a) = mx > 0 ? 1.0 / mx : 1.0;  // an all-zero row is itself a null vector
+    for (int b = 0; b < m; ++b) Js(a, b) = row_scale(a) * J(keep[a], keep[b]) * scale[keep[b]];
+  }
+  Eigen::FullPivLU<Eigen::MatrixXd> lu(Js.transpose());
+  lu.setThreshold(1e-9);
+  if (lu.rank() == m) return;
+  const Eigen::MatrixXd kernel = lu.kernel();
+  std::vector<char> used(n, 0);
+  for (int r : s.held) used[r] = 1;
+  for (int k = 0; k < kernel.cols(); ++k) {
+    Eigen::VectorXd cs = row_scale.asDiagonal() * kernel.col(k);  // J^T c = 0 over the kept states
+    const double cmax = cs.cwiseAbs().maxCoeff();
+    if (!(cmax > 0)) continue;
+    cs /= cmax;
+    std::vector<int> states;
+    std::vector<double> c(n, 0.0);
+    double drift = 0, drift_scale = 0;
+    for (int a = 0; a < m; ++a)
+      if (std::abs(cs(a)) > 1e-12) {
+        const int r = keep[a];
+        c[r] = cs(a);
+        states.push_back(r);
+        drift += c[r] * f0[r];
+        drift_scale += std::abs(c[r] * f0[r]);
+      }
+    // c^T F(y, 0) is the same for every y: with y' = 0 it must vanish (its terms cancel to round-off), else the
+    // combination drifts forever
+    if (std::abs(drift) > 1e-8 * drift_scale) {
+      std::ostringstream os;
+      os << "flowsheet '" << fs.name() << "' has no steady state at t = " << s.t << " s: the combination of "
+         << describe_states(fs, states) << " changes at a constant rate " << -drift
+         << " (per s, in the states' units) whatever the state (an inflow without outflow, or a batch that keeps "
+            "being fed); simulate it in time instead";
+      throw SolverError(os.str(), s.t, fs.units()[fs.state_unit(states.front())].name, std::abs(drift));
+    }
+    // the differential row of the combination with the largest weight carries b^T (y - y0) = 0 instead
+    int row = -1;
+    for (int r : states)
+      if (id[r] > 0 && !used[r] && (row < 0 || std::abs(c[r]) > std::abs(c[row]))) row = r;
+    if (row < 0) continue;
+    used[row] = 1;
+    std::vector<double> b(n, 0.0);
+    for (int r : states)
+      if (id[r] > 0) b[r] = c[r];
+    s.kept.emplace_back(row, std::move(b));
+    conserved.push_back(describe_states(fs, states) + " (kept at its initial value)");
+  }
+}
+
+double weighted_norm(const std::vector<double>& f, const std::vector<double>& w) {
+  double m = 0;
+  for (size_t i = 0; i < f.size(); ++i) m = std::max(m, std::abs(f[i] * w[i]));
+  return m;
+}
+
+// Pseudo-transient continuation: backward-Euler steps y_{k+1} - y_k = dtau f(y_{k+1}) on the differential rows (the
+// others solved as they are), dtau grown by the fall of the residual (switched evolution relaxation). Returns the
+// number of steps; y holds where it led.
+long pseudo_transient(SteadySystem& s, std::vector<double>& y, const SteadyOptions& opt, double ftol_w,
+                      const std::vector<double>& w) {
+  const int n = s.n;
+  const auto id = s.sys->differential_id();
+  std::vector<char> free_row(n, 0);
+  for (int r = 0; r < n; ++r) free_row[r] = id[r] > 0;
+  for (int r : s.held) free_row[r] = 0;
+  for (const auto& kr : s.kept) free_row[kr.first] = 0;
+  std::vector<double> f(n), yp(n, 0.0), y_old, dy(n), jac, vals;
+  auto residual_at = [&](const std::vector<double>& yy, const std::vector<double>& yold, double dtau) {
+    for (int i = 0; i < n; ++i) yp[i] = free_row[i] ? (yy[i] - yold[i]) / dtau : 0.0;
+    const Status st = s.residual(yy.data(), yp.data(), f.data());
+    if (st != Status::kOk) return false;
+    for (double v : f)
+      if (!std::isfinite(v)) return false;
+    return true;
+  };
+  std::vector<double> steady(n);
+  auto steady_norm = [&](const std::vector<double>& yy) {
+    if (s.residual(yy.data(), s.zeros.data(), steady.data()) != Status::kOk) return HUGE_VAL;
+    return weighted_norm(steady, w);
+  };
+  double r_old = steady_norm(y);
+  if (!std::isfinite(r_old)) return 0;
+  // the first step moves the states by about 1 % of their scale
+  double dtau = 1.0;
+  {
+    double rate = 0;
+    for (int i = 0; i < n; ++i)
+      if (free_row[i]) rate = std::max(rate, std::abs(steady[i]) * w[i]);
+    if (rate > 0) dtau = 1e-2 / rate;
+  }
+  Eigen::PartialPivLU<Eigen::MatrixXd> dense_lu;
+  Eigen::SparseLU<Eigen::SparseMatrix<double>> sparse_lu;
+  long steps = 0;
+  for (; steps < opt.max_pseudo_steps && r_old > ftol_w && dtau < 1e15; ++steps) {
+    y_old = y;
+    bool ok = false;
+    for (int attempt = 0; attempt < 12 && !ok; ++attempt) {
+      y = y_old;
+      // Newton on F(y, (y - y_old) / dtau) = 0 with the exact Jacobian dF/dy + dF/dy' / dtau
+      for (int it = 0; it < 8; ++it) {
+        if (!residual_at(y, y_old, dtau)) break;
+        const double fn = weighted_norm(f, w);
+        if (s.dense) {
+          jac.resize(size_t(n) * n);
+          s.jacobian_dense(y.data(), yp.data(), 1.0 / dtau, jac.data());
+          dense_lu.compute(Eigen::Map<Eigen::MatrixXd>(jac.data(), n, n));
+          Eigen::Map<Eigen::VectorXd>(dy.data(), n) = dense_lu.solve(Eigen::Map<Eigen::VectorXd>(f.data(), n));
+        } else {
+          const auto& pat = s.sys->pattern();
+          vals.resize(pat.nnz());
+          s.jacobian_sparse(y.data(), yp.data(), 1.0 / dtau, vals.data());
+          Eigen::Map<const Eigen::SparseMatrix<double>> A(n, n, pat.nnz(), pat.col_ptr.data(), pat.row_idx.data(),
+                                                          vals.data());
+          sparse_lu.compute(A);
+          if (sparse_lu.info() != Eigen::Success) break;
+          Eigen::Map<Eigen::VectorXd>(dy.data(), n) = sparse_lu.solve(Eigen::Map<Eigen::VectorXd>(f.data(), n));
+        }
+        double step = 0;
+        for (int i = 0; i < n; ++i) y[i] -= dy[i], step = std::max(step, std::abs(dy[i]) * w[i]);
+        if (!std::isfinite(step)) break;
+        if (step < 1e-6 || fn < 1e-3 * ftol_w) {
+          ok = residual_at(y, y_old, dtau);
+          break;
+        }
+      }
+      if (!ok) dtau *= 0.25;
+    }
+    if (!ok) {
+      y = y_old;
+      break;
+    }
+    const double r_new = steady_norm(y);
+    dtau *= std::min(10.0, std::max(0.1, r_old / std::max(r_new, 1e-300)));  // switched evolution relaxation
+    r_old = r_new;
+  }
+  return steps;
+}
+
+// KINSOL from y; returns the flag (>= 0 converged) and fills iterations and the residual norm.
+int newton(SteadySystem& s, std::vector<double>& y, const SteadyOptions& opt, const std::vector<double>& uscale,
+           long* iterations, double* norm) {
+  const int n = s.n;
+  Context C;
+  NVec u(n, C.ctx), su(n, C.ctx), sf(n, C.ctx);
+  std::copy(y.begin(), y.end(), u.data());
+  std::copy(uscale.begin(), uscale.end(), su.data());
+  N_VConst(1.0, sf.v);
+  KinUser user{&s};
+  void* mem = KINCreate(C.ctx);
+  std::unique_ptr<void, void (*)(void*)> guard(mem, [](void* m) { KINFree(&m); });
+  check(KINInit(mem, kin_res, u.v), "KINInit");
+  check(KINSetUserData(mem, &user), "KINSetUserData");
+  check(KINSetErrHandlerFn(mem, kin_err, &user), "KINSetErrHandlerFn");
+  check(KINSetFuncNormTol(mem, opt.ftol), "KINSetFuncNormTol");
+  check(KINSetNumMaxIters(mem, opt.max_iterations), "KINSetNumMaxIters");
+  check(KINSetMaxSetupCalls(mem, 1), "KINSetMaxSetupCalls");  // exact Newton: the Jacobian is cheap and exact
+  Mat A;
+  LinSol LS;
+  make_linear_solver(s.dense, *s.sys, u.v, C.ctx, A, LS);
+  check(KINSetLinearSolver(mem, LS.s, A.m), "KINSetLinearSolver");
+  check(KINSetJacFn(mem, kin_jac), "KINSetJacFn");
+  const int flag = KINSol(mem, u.v, KIN_LINESEARCH, su.v, sf.v);
+  long it = 0;
+  KINGetNumNonlinSolvIters(mem, &it);
+  KINGetFuncNorm(mem, norm);
+  *iterations += it;
+  if (flag >= 0)
+    y.assign(u.data(), u.data() + n);
+  else
+    y.assign(u.data(), u.data() + n);  // the last iterate, for the error message or continuation
+  return flag;
+}
+
+std::string kin_flag_text(int flag) {
+  char* name = KINGetReturnFlagName(flag);
+  std::string s = name ? name : "KINSOL error";
+  free(name);
+  return s;
+}
+
+}  // namespace
+
+SteadyResult solve_steady_state(Flowsheet& fs, const SteadyOptions& opt, const std::vector<double>* guess) {
+  opt.validate();
+  const auto wall0 = std::chrono::steady_clock::now();
+  if (!fs.finalized()) fs.finalize();
+  const bool dense = use_dense(fs, "auto", SimOptions().dense_limit);
+  DaeSystem sys(fs, dense);
+  const int n = sys.size();
+  if (n == 0) throw ConfigError("flowsheet '" + fs.name() + "' has no states to solve for");
+  sys.set_segment_start(opt.t);
+  SteadySystem s;
+  s.sys = &sys, s.t = opt.t, s.dense = dense, s.n = n;
+  s.zeros.assign(n, 0.0);
+  std::vector<double> y0;
+  sys.initial_values(y0);
+  if (guess) {
+    if (static_cast<int>(guess->size()) != n && static_cast<int>(guess->size()) != sys.full_size())
+      throw ConfigError("steady-state guess has " + std::to_string(guess->size()) + " values, the flowsheet " +
+                        std::to_string(sys.full_size()) + " states");
+    y0.assign(guess->begin(), guess->begin() + n);  // explicit states (last) follow from the others
+  } else {
+    consistent_initial_values(sys, dense, opt.t, y0);
+  }
+  s.y0 = y0;
+  SteadyResult r;
+  // Accumulators (UnitSpec::add_accumulator: what left a grid) have no steady state of their own.
+  for (int i = 0; i < n; ++i)
+    if (fs.state_spec(i).accumulator) s.held.push_back(i);
+  if (dense) analyse_structure(s, fs, r.conserved);
+  const auto sc = sys.scales();
+  std::vector<double> uscale(n), w(n);
+  for (int i = 0; i < n; ++i) uscale[i] = 1.0 / sc[i], w[i] = 1.0 / sc[i];
+
+  std::vector<double> y = y0;
+  int flag = newton(s, y, opt, uscale, &r.iterations, &r.residual_norm);
+  r.method = "newton";
+  if (flag < 0 && opt.max_pseudo_steps > 0) {
+    y = y0;
+    r.pseudo_steps = pseudo_transient(s, y, opt, 1e-6, w);
+    flag = newton(s, y, opt, uscale, &r.iterations, &r.residual_norm);
+    r.method = "pseudo-transient continuation, then newton";
+  }
+  if (flag < 0) {
+    std::string msg = "steady-state solve (KINSOL) failed after " + std::to_string(r.iterations) +
+                      " iterations: " + kin_flag_text(flag) + (s.last_error.empty() ? "" : " (" + s.last_error + ")");
+    if (r.pseudo_steps > 0) msg += ", after " + std::to_string(r.pseudo_steps) + " pseudo-transient steps";
+    // Name the unit with the largest residual at the last iterate (if the residual itself throws there, the
+    // solver failure is still what the caller gets).
+    std::vector<double> rr(n);
+    int iw = 0;
+    try {
+      s.residual(y.data(), s.zeros.data(), rr.data());
+      auto size = [&](int i) { return std::isfinite(rr[i]) ? std::abs(rr[i]) : HUGE_VAL; };
+      for (int i = 1; i < n; ++i)
+        if (size(i) > size(iw)) iw = i;
+    } catch (...) {
+      throw SolverError(msg, opt.t, "?", HUGE_VAL);
+    }
+    throw SolverError(msg + " at " + sys.describe_row(iw), opt.t, fs.units()[fs.state_unit(iw)].name, std::abs(rr[iw]));
+  }
+  // The trivial root: every differential state of a unit that started non-zero is zero now.
+  const auto id = sys.differential_id();
+  for (const auto& u : fs.units()) {
+    double a0 = 0, a1 = 0;
+    const int ns = static_cast<int>(u.spec.states().size());
+    for (int k = 0; k < ns; ++k) {
+      const int i = u.offset + k;
+      if (i >= n || id[i] == 0) continue;
+      a0 += std::abs(y0[i]) / sc[i], a1 += std::abs(y[i]) / sc[i];
+    }
+    if (a0 > 0 && a1 <= 1e-4 * a0)  // Newton approaches a degenerate root only linearly
+      r.warnings.push_back("the steady state found is the trivial one: every differential state of unit '" + u.name +
+                           "' is zero (e.g. a population that emptied)");
+  }
+  std::vector<double> yp_full(sys.full_size());
+  r.y.resize(sys.full_size());
+  sys.extend(opt.t, y.data(), s.zeros.data(), r.y.data(), yp_full.data());
+  r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  return r;
+}
+
+}  // namespace granuflow
