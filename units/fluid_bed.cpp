@@ -106,6 +106,17 @@ class FluidBed : public UnitBase<FluidBed> {
     sU0_ = s.add_state("u0", StateKind::Algebraic, "m/s", 1.0);
     sVap_ = s.add_state("m_vap", StateKind::Algebraic, "kg/s", 1e-3);
     sQ_ = s.add_state("Q", StateKind::Algebraic, "W", 1e3);
+    // Continuous operation: an optional solids feed, and a discharge of a fixed fraction of the hold-up per second
+    // (well mixed: every class alike) when the setting asks for one. A batch bed has neither and pays nothing.
+    const bool discharge = st.get_choice("discharge", "none", {"none", "unclassified"},
+                                         "solids leaving the bed: none (batch) or a fraction of the well-mixed "
+                                         "hold-up per second (continuous operation)") == "unclassified";
+    if (discharge) {
+      p_kdis_ = s.add_param({"k_discharge", "1/s", 1e-3, 0.0, 10.0,
+                             "discharge rate: fraction of the hold-up leaving per second", "operating input"});
+      sDM_ = s.add_states("discharge_mdot", n_, StateKind::Algebraic, "kg/s", 1e-2);
+      sDW_ = s.add_states("discharge_water", n_, StateKind::Algebraic, "kg/s", 1e-3);
+    }
 
     const std::vector<double>& d = grid_->diameter_pivots();
     wet_ = s.add_port("wetting", paper001::wetting_stream(), PortDir::In, n_, true);
@@ -116,6 +127,17 @@ class FluidBed : public UnitBase<FluidBed> {
     s.provide(vap, vapour::kMdot, sVap_);
     s.provide(vap, vapour::kT, sT_);
     s.provide(s.add_port("heat", streams::heat(), PortDir::In, 0, true), heat::kQ, sQ_);
+    feed_ = s.add_port("feed", streams::solids(), PortDir::In, n_, true);
+    s.set_port_grid(feed_, d);
+    if (discharge) {
+      const PortId out = s.add_port("discharge", streams::solids(), PortDir::Out, n_);
+      s.set_port_grid(out, d);
+      for (int i = 0; i < n_; ++i) {
+        s.provide(out, solids::mdot(i), sDM_ + i);
+        s.provide(out, solids::water(n_, i), sDW_ + i);
+      }
+      s.provide(out, solids::T(n_), sT_);
+    }
     const PortId probe = s.add_port("state", paper001::holdup_stream(), PortDir::Probe, n_);
     s.set_port_grid(probe, d);
     for (int i = 0; i < n_; ++i) {
@@ -127,13 +149,22 @@ class FluidBed : public UnitBase<FluidBed> {
 
     // Class structure for the Jacobian: class rows and columns M_i, W_i and the spray zone's per-class fields; the
     // bed-wide quantities read the classes through sums.
-    s.set_classes(
-        {n_, {sM_, sW_}, {{wet_, wetting::mdot(0)}, {wet_, wetting::fwet(n_, 0)}, {wet_, wetting::Xwet(n_, 0)}}});
+    ClassLayout layout{n_,
+                       {sM_, sW_},
+                       {{wet_, wetting::mdot(0)},
+                        {wet_, wetting::fwet(n_, 0)},
+                        {wet_, wetting::Xwet(n_, 0)},
+                        {feed_, solids::mdot(0)},
+                        {feed_, solids::water(n_, 0)}}};
+    if (discharge) layout.state_blocks.push_back(sDM_), layout.state_blocks.push_back(sDW_);
+    s.set_classes(layout);
     r_surface_ = s.add_reduction("particle surface");
     r_drying_ = s.add_reduction("drying");
     r_heat_ = s.add_reduction("gas-solid heat flow");
     r_deposit_ = s.add_reduction("deposited liquid");
     r_capacity_ = s.add_reduction("heat capacity");
+    r_feed_ = s.add_reduction("solids fed");
+    r_feed_water_ = s.add_reduction("water fed");
     s.set_analytic_part();  // the population balance's terms (engine)
 
     for (const char* o : {"d10", "d50", "d90", "d5", "d16", "d25", "d75", "d84", "d95"})
@@ -198,15 +229,31 @@ class FluidBed : public UnitBase<FluidBed> {
     const T dep = c.reduce(r_deposit_, n_, [&](int i) { return deposit(c, i, wet); });
     const T cp_s = c.sh(pp_.cp_s);
     const T capacity = c.reduce(r_capacity_, n_, [&](int i) { return M[i] * cp_s + W[i] * c.par(p_cpl_); });
+    const bool fed = c.connected(feed_);
+    const T m_fed = c.reduce(r_feed_, n_, [&](int i) { return fed ? c.port(feed_, solids::mdot(i)) : T(0.0); });
+    const T w_fed =
+        c.reduce(r_feed_water_, n_, [&](int i) { return fed ? c.port(feed_, solids::water(n_, i)) : T(0.0); });
+    const T k_out = sDM_ ? c.par(p_kdis_) : T(0.0);
     for (int i = 0; i < n_; ++i) {
-      c.res(sM_ + i) = c.xd(sM_ + i) - pm[i] * sc.dN[i];                             // Eq. (20), paper 001, in mass
-      c.res(sW_ + i) = c.xd(sW_ + i) - (deposit(c, i, wet) - sc.dry[i] + sc.dW[i]);  // Eq. (58), water per class
+      T in_m(0.0), in_w(0.0), out_m(0.0), out_w(0.0);
+      if (fed) in_m = c.port(feed_, solids::mdot(i)), in_w = c.port(feed_, solids::water(n_, i));
+      if (sDM_) {
+        out_m = c.x(sDM_ + i), out_w = c.x(sDW_ + i);
+        c.res(sDM_ + i) = c.x(sDM_ + i) - k_out * M[i];  // a well-mixed outlet: every class alike
+        c.res(sDW_ + i) = c.x(sDW_ + i) - k_out * W[i];
+      }
+      c.res(sM_ + i) = c.xd(sM_ + i) - (pm[i] * sc.dN[i] + in_m - out_m);  // Eq. (20), paper 001, in mass
+      c.res(sW_ + i) = c.xd(sW_ + i) - (deposit(c, i, wet) - sc.dry[i] + sc.dW[i] + in_w - out_w);  // Eq. (58)
     }
     const T t_liq = wet ? c.port(wet_, wetting::T(n_)) : T(props::kT0);
     // Eq. (59), paper 001, conservative: deposited liquid at its enthalpy, drying vapour leaves at h_v(T_S)
-    // (the particle supplies the latent heat), gas-solid heat transfer Q.
+    // (the particle supplies the latent heat), gas-solid heat transfer Q; fed solids bring their enthalpy, the
+    // discharge takes its share of the bed's.
+    T h_flow(0.0);
+    if (fed) h_flow += (m_fed * cp_s + w_fed * c.par(p_cpl_)) * (c.port(feed_, solids::T(n_)) - props::kT0);
+    if (sDM_) h_flow -= k_out * c.x(sH_);
     c.res(sH_) = c.xd(sH_) - (dep * props::liquid_water_enthalpy(t_liq, c.par(p_cpl_)) -
-                              c.x(sVap_) * props::vapour_enthalpy(t_s) + c.x(sQ_));
+                              c.x(sVap_) * props::vapour_enthalpy(t_s) + c.x(sQ_) + h_flow);
     c.res(sT_) = c.x(sH_) - capacity * (t_s - props::kT0);  // Eq. (60), paper 001
     c.res(sU0_) = c.x(sU0_) - inlet_velocity(c);
     c.res(sVap_) = c.x(sVap_) - m_vap;
@@ -262,6 +309,9 @@ class FluidBed : public UnitBase<FluidBed> {
     c.x(sU0_) = T(0.5);
     c.x(sVap_) = T(0.0);
     c.x(sQ_) = T(0.0);
+    if (sDM_)
+      for (int i = 0; i < n_; ++i)
+        c.x(sDM_ + i) = c.par(p_kdis_) * c.x(sM_ + i), c.x(sDW_ + i) = c.par(p_kdis_) * c.x(sW_ + i);
   }
 
   template <class T>
@@ -409,8 +459,10 @@ class FluidBed : public UnitBase<FluidBed> {
   kernels::Population pop_;
   ParamId p_mass_, p_x0_, p_d50_, p_sigma_, p_t0_, p_cpl_, p_abed_, p_xcr_, p_sh_, p_betmm_, p_betn_, p_dv_, p_lambda_;
   StateId sM_, sW_, sH_, sT_, sU0_, sVap_, sQ_;
-  PortId wet_, gas_, inlet_;
-  ReductionId r_surface_, r_drying_, r_heat_, r_deposit_, r_capacity_;
+  PortId wet_, gas_, inlet_, feed_;
+  ParamId p_kdis_;
+  StateId sDM_, sDW_;  // discharge flows, when the bed discharges
+  ReductionId r_surface_, r_drying_, r_heat_, r_deposit_, r_capacity_, r_feed_, r_feed_water_;
   std::vector<OutputId> o_quantiles_;
   OutputId o_moisture_, o_moisture_wet_, o_particles_, o_top_, o_reg_eta_, o_reg_a_, o_water_, o_solids_, o_energy_,
       o_psd_d_, o_psd_m_;

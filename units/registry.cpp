@@ -11,6 +11,8 @@
 #include "liquid_splitter.hpp"
 #include "particles.hpp"
 #include "pbm_batch.hpp"
+#include "solids_feed.hpp"
+#include "solids_product.hpp"
 #include "spray_nozzle.hpp"
 #include "spray_zone.hpp"
 #include "stirred_tank.hpp"
@@ -31,6 +33,8 @@ void register_all(Registry<Unit>& r) {
   register_fluid_bed(r);
   register_gas_inlet(r);
   register_gas_outlet(r);
+  register_solids_feed(r);
+  register_solids_product(r);
   register_spray_nozzle(r);
   register_spray_zone(r);
   register_wall_heat_loss(r);

@@ -237,11 +237,35 @@ double weighted_norm(const std::vector<double>& f, const std::vector<double>& w)
   return m;
 }
 
+// Residual rows carry their equations' units (a flow, an enthalpy, a temperature): each is weighted by the inverse
+// of its largest term |dF_r/dy_c| sc_c at the start, so a scaled residual reads as a change of the scaled states and
+// one tolerance serves every row (an enthalpy identity of 1e6 J is not held to 1e-10 J).
+std::vector<double> row_weights(SteadySystem& s, const std::vector<double>& y, const std::vector<double>& sc) {
+  const int n = s.n;
+  std::vector<double> big(n, 0.0);
+  if (s.dense) {
+    std::vector<double> J(size_t(n) * n);
+    s.jacobian_dense(y.data(), s.zeros.data(), 0.0, J.data());
+    for (int c = 0; c < n; ++c)
+      for (int r = 0; r < n; ++r) big[r] = std::max(big[r], std::abs(J[size_t(c) * n + r]) * sc[c]);
+  } else {
+    const auto& pat = s.sys->pattern();
+    std::vector<double> vals(pat.nnz());
+    s.jacobian_sparse(y.data(), s.zeros.data(), 0.0, vals.data());
+    for (int c = 0; c < n; ++c)
+      for (int i = pat.col_ptr[c]; i < pat.col_ptr[c + 1]; ++i)
+        big[pat.row_idx[i]] = std::max(big[pat.row_idx[i]], std::abs(vals[i]) * sc[c]);
+  }
+  std::vector<double> w(n);
+  for (int r = 0; r < n; ++r) w[r] = std::isfinite(big[r]) && big[r] > 0.0 ? 1.0 / big[r] : 1.0;
+  return w;
+}
+
 // Pseudo-transient continuation: backward-Euler steps y_{k+1} - y_k = dtau f(y_{k+1}) on the differential rows (the
-// others solved as they are), dtau grown by the fall of the residual (switched evolution relaxation). Returns the
-// number of steps; y holds where it led.
+// others solved as they are), dtau grown by the fall of the residual (switched evolution relaxation, at least doubled
+// while it falls). Returns the number of steps; y holds where it led.
 long pseudo_transient(SteadySystem& s, std::vector<double>& y, const SteadyOptions& opt, double ftol_w,
-                      const std::vector<double>& w) {
+                      const std::vector<double>& w, const std::vector<double>& wf) {
   const int n = s.n;
   const auto id = s.sys->differential_id();
   std::vector<char> free_row(n, 0);
@@ -260,7 +284,7 @@ long pseudo_transient(SteadySystem& s, std::vector<double>& y, const SteadyOptio
   std::vector<double> steady(n);
   auto steady_norm = [&](const std::vector<double>& yy) {
     if (s.residual(yy.data(), s.zeros.data(), steady.data()) != Status::kOk) return HUGE_VAL;
-    return weighted_norm(steady, w);
+    return weighted_norm(steady, wf);
   };
   double r_old = steady_norm(y);
   if (!std::isfinite(r_old)) return 0;
@@ -283,7 +307,7 @@ long pseudo_transient(SteadySystem& s, std::vector<double>& y, const SteadyOptio
       // Newton on F(y, (y - y_old) / dtau) = 0 with the exact Jacobian dF/dy + dF/dy' / dtau
       for (int it = 0; it < 8; ++it) {
         if (!residual_at(y, y_old, dtau)) break;
-        const double fn = weighted_norm(f, w);
+        const double fn = weighted_norm(f, wf);
         if (s.dense) {
           jac.resize(size_t(n) * n);
           s.jacobian_dense(y.data(), yp.data(), 1.0 / dtau, jac.data());
@@ -314,7 +338,11 @@ long pseudo_transient(SteadySystem& s, std::vector<double>& y, const SteadyOptio
       break;
     }
     const double r_new = steady_norm(y);
-    dtau *= std::min(10.0, std::max(0.1, r_old / std::max(r_new, 1e-300)));  // switched evolution relaxation
+    // Switched evolution relaxation, but at least doubling while the residual falls: when slow modes dominate the
+    // norm (a hold-up relaxing over 1000 s) the residual falls by only dtau / tau per step and plain SER would
+    // creep; backward Euler is stable at any step, so only Newton failures (above) hold the step back.
+    const double ratio = r_old / std::max(r_new, 1e-300);
+    dtau *= r_new < r_old ? std::min(10.0, std::max(2.0, ratio)) : std::max(0.1, ratio);
     r_old = r_new;
   }
   return steps;
@@ -322,13 +350,13 @@ long pseudo_transient(SteadySystem& s, std::vector<double>& y, const SteadyOptio
 
 // KINSOL from y; returns the flag (>= 0 converged) and fills iterations and the residual norm.
 int newton(SteadySystem& s, std::vector<double>& y, const SteadyOptions& opt, const std::vector<double>& uscale,
-           long* iterations, double* norm) {
+           const std::vector<double>& fscale, long* iterations, double* norm) {
   const int n = s.n;
   Context C;
   NVec u(n, C.ctx), su(n, C.ctx), sf(n, C.ctx);
   std::copy(y.begin(), y.end(), u.data());
   std::copy(uscale.begin(), uscale.end(), su.data());
-  N_VConst(1.0, sf.v);
+  std::copy(fscale.begin(), fscale.end(), sf.data());
   KinUser user{&s};
   void* mem = KINCreate(C.ctx);
   std::unique_ptr<void, void (*)(void*)> guard(mem, [](void* m) { KINFree(&m); });
@@ -395,14 +423,15 @@ SteadyResult solve_steady_state(Flowsheet& fs, const SteadyOptions& opt, const s
   const auto sc = sys.scales();
   std::vector<double> uscale(n), w(n);
   for (int i = 0; i < n; ++i) uscale[i] = 1.0 / sc[i], w[i] = 1.0 / sc[i];
+  const std::vector<double> wf = row_weights(s, y0, std::vector<double>(sc.begin(), sc.end()));
 
   std::vector<double> y = y0;
-  int flag = newton(s, y, opt, uscale, &r.iterations, &r.residual_norm);
+  int flag = newton(s, y, opt, uscale, wf, &r.iterations, &r.residual_norm);
   r.method = "newton";
   if (flag < 0 && opt.max_pseudo_steps > 0) {
     y = y0;
-    r.pseudo_steps = pseudo_transient(s, y, opt, 1e-6, w);
-    flag = newton(s, y, opt, uscale, &r.iterations, &r.residual_norm);
+    r.pseudo_steps = pseudo_transient(s, y, opt, 1e-6, w, wf);
+    flag = newton(s, y, opt, uscale, wf, &r.iterations, &r.residual_norm);
     r.method = "pseudo-transient continuation, then newton";
   }
   if (flag < 0) {

@@ -173,6 +173,73 @@ TEST(FluidBed, StructuredJacobianMatchesPlainAdAndFiniteDifferencesForEachMechan
   }
 }
 
+// The shipped continuous dryer: a log-normal feed, a well-mixed discharge at k = 1e-3 /s, no aggregation or breakage.
+Scene continuous_bed(const std::string& bed_settings = "aggregation: none") {
+  Scene s = scene_from_file("flowsheets/continuous_drying_bed.yaml");
+  s = scene_from_text(std::regex_replace(s.text, std::regex("aggregation: none"), bed_settings));
+  s.options.rtol = s.options.atol = 1e-10;
+  return s;
+}
+
+TEST(FluidBed, ContinuousHoldUpRelaxesToFeedOverDischargeRateWithTheFeedPsd) {
+  Scene s = continuous_bed();
+  const SimResult r = simulate(*s.flowsheet, s.options);
+  const Flowsheet& fs = *s.flowsheet;
+  const int n = 12;
+  const double k = 1e-3, feed = 36.0 / 3600.0;
+  double fsum = 0;
+  std::vector<double> f(n), m0(n);
+  for (int i = 0; i < n; ++i) {
+    f[i] = state(s, r, 0, "feed.mdot_" + std::to_string(i)) / feed;  // the feed's class fractions
+    m0[i] = state(s, r, 0, "bed.M_" + std::to_string(i));
+    fsum += f[i];
+  }
+  EXPECT_NEAR(fsum, 1.0, 1e-12);
+  // dM_i/dt = f_i F - k M_i, each class on its own: M_i(t) = f_i F / k + (M_i(0) - f_i F / k) exp(-k t)
+  for (size_t j = 0; j < r.t.size(); ++j) {
+    const double e = std::exp(-k * r.t[j]);
+    for (int i = 0; i < n; ++i) {
+      const double exact = f[i] * feed / k + (m0[i] - f[i] * feed / k) * e;
+      EXPECT_NEAR(state(s, r, j, "bed.M_" + std::to_string(i)), exact, 1e-8 * feed / k) << "class " << i;
+    }
+  }
+  // the discharge carries the bed's moisture and temperature
+  const size_t last = r.t.size() - 1;
+  const double m_out = output(r, last, "product.mdot");
+  double m_bed = 0, w_bed = 0;
+  for (int i = 0; i < n; ++i)
+    m_bed += state(s, r, last, "bed.M_" + std::to_string(i)), w_bed += state(s, r, last, "bed.W_" + std::to_string(i));
+  EXPECT_NEAR(m_out, k * m_bed, 1e-12);
+  EXPECT_NEAR(output(r, last, "bed.moisture"), w_bed / m_bed, 1e-12);
+  EXPECT_LT(output(r, last, "bed.moisture"), 0.08);  // dried on the way
+  for (const char* q : {"solids", "water", "energy"}) EXPECT_LT(closure(s, r, q), 1e-8) << q;
+
+  // the steady state: hold-up F / k with the feed's size distribution, found directly
+  const SteadyResult ss = solve_steady_state(*s.flowsheet, SteadyOptions{});
+  EXPECT_TRUE(ss.conserved.empty());  // feed and discharge: no hold-up is conserved
+  double m_ss = 0;
+  for (int i = 0; i < n; ++i) {
+    const double mi = ss.y[fs.state_id("bed.M_" + std::to_string(i))];
+    EXPECT_NEAR(mi, f[i] * feed / k, 1e-9 * feed / k) << "class " << i;
+    m_ss += mi;
+  }
+  EXPECT_NEAR(m_ss, feed / k, 1e-9 * feed / k);
+}
+
+TEST(FluidBed, DischargeAndFeedPortsKeepTheJacobianExact) {
+  Scene s = continuous_bed("aggregation: constant");
+  s.flowsheet->set_param("bed.beta0", 1e-13);
+  SimOptions o = s.options;
+  o.t_out = {0, 300};
+  const SimResult r = simulate(*s.flowsheet, o);
+  const int n = r.n_states();
+  std::vector<double> y(r.y.begin() + n, r.y.begin() + 2 * n), yp(r.yp.begin() + n, r.yp.begin() + 2 * n);
+  DaeSystem sys(*s.flowsheet);
+  testing::expect_jacobian_matches_fd(sys, 300.0, y, yp, 3.0, 2e-6);
+  DaeSystem full(*s.flowsheet, false);
+  testing::expect_jacobian_matches_reference(full, 300.0, y, yp, 3.0, 1e-12);
+}
+
 // ---------------------------------------------------------------- the headline scene
 
 Scene headline(int classes = 10, const std::string& bed_settings = "") {

@@ -38,6 +38,7 @@ std::vector<std::pair<std::string, Scene>> scenes() {
   std::vector<std::pair<std::string, Scene>> v;
   v.emplace_back("headline", scene_from_file("flowsheets/stoeckl_gf25_batch.yaml"));
   v.emplace_back("demo tanks", scene_from_file("flowsheets/demo_tanks.yaml"));
+  v.emplace_back("continuous dryer", scene_from_file("flowsheets/continuous_drying_bed.yaml"));
   v.emplace_back("pbm", scene_from_text(kPbmMechanisms));
   return v;
 }

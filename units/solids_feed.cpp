@@ -1,0 +1,94 @@
+#include "solids_feed.hpp"
+
+#include <cmath>
+
+#include "granuflow/flowsheet.hpp"
+#include "granuflow/properties.hpp"
+#include "kernels/paper001_defaults.hpp"
+#include "particles.hpp"
+
+namespace granuflow::units {
+namespace {
+
+// Explicit: the stream follows the parameters; what it feeds is integrated as quadratures.
+class SolidsFeed : public UnitBase<SolidsFeed> {
+ public:
+  std::string type() const override { return "solids_feed"; }
+  void declare(UnitSpec& s, Settings& st) override {
+    const ParticleSystem& ps = particle_system(s, st);
+    pp_ = ps.params();
+    grid_ = ps.grid();
+    n_ = grid_->size();
+    p_m_ = s.add_param({"mdot", "kg/s", 1e-3, 0.0, 1e3, "dry-solids mass flow", "operating input"});
+    p_d50_ =
+        s.add_param({"d50", "m", 300e-6, 1e-7, 1.0, "mass median diameter (log-normal in mass)", "operating input"});
+    p_sigma_ = s.add_param({"sigma", "-", 1.3, 1.01, 10.0, "geometric standard deviation", "operating input"});
+    p_x_ = s.add_param({"X", "kg/kg", 0.0, 0.0, 10.0, "moisture, dry basis", "operating input"});
+    p_t_ = s.add_param({"T", "K", 293.15, 200.0, 700.0, "temperature", "operating input"});
+    p_cpl_ = s.add_param({"cp_l", "J/(kg K)", kernels::paper001::defaults::kLiquidCp, 100.0, 1e4,
+                          "heat capacity of the water carried", "paper 001, Table 6"});
+    sM_ = s.add_states("mdot", n_, StateKind::Algebraic, "kg/s", 1e-3);
+    sW_ = s.add_states("water", n_, StateKind::Algebraic, "kg/s", 1e-4);
+    sT_ = s.add_state("T", StateKind::Algebraic, "K", 300.0);
+    s.set_explicit();
+    const PortId out = s.add_port("out", streams::solids(), PortDir::Out, n_);
+    s.set_port_grid(out, grid_->diameter_pivots());
+    s.provide_all(out, sM_);
+    s.set_classes({n_, {sM_, sW_}, {}});
+    q_solids_ = s.add_quadrature("balance_solids_in", "kg", 1.0, OutputRole::kBalanceIn, "solids");
+    q_water_ = s.add_quadrature("balance_water_in", "kg", 0.1, OutputRole::kBalanceIn, "water");
+    q_energy_ = s.add_quadrature("balance_energy_in", "J", 1e5, OutputRole::kBalanceIn, "energy");
+  }
+  // Mass fraction of class i of a log-normal mass distribution over the cells (tails in the end classes).
+  template <class T>
+  T fraction(int i, const T* p) const {
+    using std::erfc, std::log;
+    const auto& de = grid_->diameter_edges();
+    auto cdf = [&](int e) { return T(0.5 * erfc(-log(de[e] / p[p_d50_.i]) / (log(p[p_sigma_.i]) * std::sqrt(2.0)))); };
+    const T lo = i == 0 ? T(0.0) : cdf(i), hi = i == n_ - 1 ? T(1.0) : cdf(i + 1);
+    return hi - lo;
+  }
+  template <class T>
+  Status eval(const Ctx<T>& c) const {
+    for (int i = 0; i < n_; ++i) {
+      const T m = c.par(p_m_) * fraction(i, c.p);
+      c.res(sM_ + i) = c.x(sM_ + i) - m;
+      c.res(sW_ + i) = c.x(sW_ + i) - m * c.par(p_x_);
+    }
+    c.res(sT_) = c.x(sT_) - c.par(p_t_);
+    return Status::kOk;
+  }
+  template <class T>
+  void quad(const Ctx<T>& c) const {
+    T m(0.0), w(0.0);
+    for (int i = 0; i < n_; ++i) m += c.x(sM_ + i), w += c.x(sW_ + i);
+    c.r[q_solids_.i] = m;
+    c.r[q_water_.i] = w;
+    c.r[q_energy_.i] = (m * c.sh(pp_.cp_s) + w * c.par(p_cpl_)) * (c.x(sT_) - props::kT0);
+  }
+  template <class T>
+  void init(InitCtx<T>& c) const {
+    for (int i = 0; i < n_; ++i) {
+      c.x(sM_ + i) = c.par(p_m_) * fraction(i, c.p);
+      c.x(sW_ + i) = c.x(sM_ + i) * c.par(p_x_);
+    }
+    c.x(sT_) = c.par(p_t_);
+  }
+
+ private:
+  int n_ = 0;
+  ParticleParams pp_;
+  std::shared_ptr<const kernels::Grid> grid_;
+  ParamId p_m_, p_d50_, p_sigma_, p_x_, p_t_, p_cpl_;
+  StateId sM_, sW_, sT_;
+  QuadId q_solids_, q_water_, q_energy_;
+};
+
+}  // namespace
+
+void register_solids_feed(Registry<Unit>& r) {
+  r.add("solids_feed", "solids feed: mass flow with a log-normal size distribution, moisture, temperature",
+        [] { return std::make_unique<SolidsFeed>(); });
+}
+
+}  // namespace granuflow::units
