@@ -101,6 +101,7 @@ class FluidBed : public UnitBase<FluidBed> {
     // an emptied class needs no more absolute accuracy than the bed it belongs to.
     sM_ = s.add_states("M", n_, StateKind::Differential, "kg", 10.0);
     sW_ = s.add_states("W", n_, StateKind::Differential, "kg", 0.5);
+    s.set_nonnegative(sM_, n_), s.set_nonnegative(sW_, n_);
     sH_ = s.add_state("H", StateKind::Differential, "J", 1e6);
     sT_ = s.add_state("T", StateKind::Algebraic, "K", 300.0);
     sU0_ = s.add_state("u0", StateKind::Algebraic, "m/s", 1.0);

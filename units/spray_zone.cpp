@@ -23,7 +23,7 @@ struct Work : Workspace {
   template <class T>
   struct Flow {
     T tau, ws, t_cross;
-    bool ws_floored;
+    bool ws_floored, not_fluidized, tau_floored;
   };
   template <class T>
   struct Scratch {
@@ -88,6 +88,8 @@ class SprayZone : public UnitBase<SprayZone> {
     r_weights_ = s.add_reduction("split weights");
     o_ws_ = s.add_output("reg_ws_floor", "-", OutputRole::kRegularization);
     o_cap_ = s.add_output("reg_wet_volume_cap", "-", OutputRole::kRegularization);
+    o_nofl_ = s.add_output("reg_not_fluidized", "-", OutputRole::kRegularization);
+    o_tau0_ = s.add_output("reg_tau_floor", "-", OutputRole::kRegularization);
     o_fwet_ = s.add_output("fwet_mean", "-");
   }
 
@@ -121,6 +123,8 @@ class SprayZone : public UnitBase<SprayZone> {
     auto& sc = c.template ws<Work>().template scratch<T>();
     int a = 0, b = 0;
     closures(c, sc, &a, &b);
+    int not_fluidized = 0, tau_floored = 0;
+    for (int i = 0; i < n_; ++i) not_fluidized += sc.flow[i].not_fluidized, tau_floored += sc.flow[i].tau_floored;
     T mass(0.0), fm(0.0);
     for (int i = 0; i < n_; ++i) {
       mass += c.port(bed_, holdup::mass(i));
@@ -128,6 +132,8 @@ class SprayZone : public UnitBase<SprayZone> {
     }
     c.out(o_ws_) = T(a);
     c.out(o_cap_) = T(b);
+    c.out(o_nofl_) = T(not_fluidized);
+    c.out(o_tau0_) = T(tau_floored);
     c.out(o_fwet_) = mass > 0.0 ? T(fm / mass) : T(0.0);
   }
 
@@ -149,14 +155,22 @@ class SprayZone : public UnitBase<SprayZone> {
   Work::Flow<T> class_flow(const Ctx<T>& c, int i, const T& u0, const GasProps<T>& g) const {
     const T d(grid_->diameter_pivots()[i]);
     const T umf = kernels::transfer::wen_yu_umf(d, c.sh(pp_.rho_p), g.rho, g.mu);  // Eqs. (31)-(33)
-    const T re = kernels::transfer::excess_reynolds_number(u0, umf, d, g.nu);      // Eq. (30)
+    // Eq. (30). A class with u0 < u_mf is not fluidized, outside the range the DEM surrogates were fitted on: it is
+    // taken at incipient fluidization (Re = 0), where the fits give a positive velocity and residence time (a
+    // negative velocity would make its wetted fraction, and with it aggregation rates, negative).
+    const auto re = kernels::floor_at(kernels::transfer::excess_reynolds_number(u0, umf, d, g.nu), T(0.0));
     const auto w =
-        p1::spray_zone_solids_fraction(re, c.par(p_wsf_), c.par(p_ws1_), c.par(p_ws2_), c.par(p_ws3_));  // (47)
-    return {p1::dimensionless_residence_time(re, c.par(p_tau1_), c.par(p_tau2_)),                        // Eq. (29)
+        p1::spray_zone_solids_fraction(re.value, c.par(p_wsf_), c.par(p_ws1_), c.par(p_ws2_), c.par(p_ws3_));  // (47)
+    // Eq. (29) turns negative above Re = -c2 / c1 (77 with Table 8): no time in the spray zone, not a negative one
+    const auto tau =
+        kernels::floor_at(p1::dimensionless_residence_time(re.value, c.par(p_tau1_), c.par(p_tau2_)), T(0.0));
+    return {tau.value,
             w.value,
-            p1::spray_zone_crossing_time(p1::spray_zone_particle_velocity(re, c.par(p_v1_), c.par(p_v2_)),
+            p1::spray_zone_crossing_time(p1::spray_zone_particle_velocity(re.value, c.par(p_v1_), c.par(p_v2_)),
                                          c.par(p_zone_)),  // Eqs. (48), (49)
-            w.active};
+            w.active,
+            re.active,
+            tau.active};
   }
 
   template <class T>
@@ -229,7 +243,7 @@ class SprayZone : public UnitBase<SprayZone> {
   StateId sDep_, sFwet_, sXwet_, sT_;
   PortId liquid_, bed_;
   ReductionId r_weights_;
-  OutputId o_ws_, o_cap_, o_fwet_;
+  OutputId o_ws_, o_cap_, o_nofl_, o_tau0_, o_fwet_;
 };
 
 }  // namespace

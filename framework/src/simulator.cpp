@@ -97,6 +97,22 @@ int ida_quad_sens(int ns, realtype t, N_Vector y, N_Vector yp, N_Vector* yS, N_V
   }
 }
 
+// An inventory below zero by more than the solver can be blamed for (100 times its absolute tolerance) means a rate
+// that is not positivity-preserving at that state: stop and name it rather than return a negative mass.
+void check_nonnegative(const Flowsheet& fs, const SimOptions& opt, double t, const std::vector<double>& y) {
+  for (size_t i = 0; i < y.size(); ++i) {
+    const StateSpec& st = fs.state_spec(static_cast<int>(i));
+    if (!st.nonnegative || y[i] >= -100.0 * opt.atol * st.scale) continue;
+    const std::string unit = fs.units()[fs.state_unit(static_cast<int>(i))].name;
+    throw SolverError("unit '" + unit + "': inventory " + st.name + " = " + fmt_num(y[i]) + " " + st.unit +
+                          " at t = " + fmt_num(t) + " s is negative beyond the solver tolerance (" +
+                          fmt_num(100.0 * opt.atol * st.scale) + " " + st.unit +
+                          "): a rate moving it is not positivity-preserving there; check the size grid and the "
+                          "ranges the unit's closures hold for",
+                      t, unit, 0.0);
+  }
+}
+
 }  // namespace
 
 SimResult simulate(Flowsheet& fs, const SimOptions& opt) {
@@ -254,6 +270,7 @@ SimResult simulate(Flowsheet& fs, const SimOptions& opt) {
     realtype tret = t;
     if (nq > 0 && t > 0) IDAGetQuad(mem, &tret, q.v);
     sys.extend(t, y.data(), yp.data(), y_full.data(), yp_full.data());
+    check_nonnegative(fs, opt, t, y_full);
     res.t.push_back(t);
     res.y.insert(res.y.end(), y_full.begin(), y_full.end());
     res.yp.insert(res.yp.end(), yp_full.begin(), yp_full.end());

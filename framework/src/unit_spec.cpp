@@ -26,6 +26,10 @@ StateId UnitSpec::add_states(const std::string& name, int n, StateKind kind, con
   return first;
 }
 
+void UnitSpec::set_nonnegative(StateId first, int n) {
+  for (int i = 0; i < n; ++i) states_.at(first.i + i).nonnegative = true;
+}
+
 ParamId UnitSpec::add_param(ParamSpec spec) {
   if (param_index(spec.name) >= 0) throw std::logic_error("parameter '" + spec.name + "' declared twice");
   if (!is_known_si_unit(spec.unit))

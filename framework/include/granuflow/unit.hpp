@@ -68,6 +68,7 @@ struct StateSpec {
   std::string unit;
   double scale;              // typical magnitude: absolute tolerance = atol * scale
   bool accumulator = false;  // integrates a flow no equation reads (what left a grid): outside a steady state
+  bool nonnegative = false;  // an inventory (class mass, particle number): a run fails when it goes negative
 };
 
 struct PortSpec {
@@ -133,6 +134,10 @@ class UnitSpec {
   StateId add_accumulator(std::string name, std::string unit, double scale);
   // n consecutive states name_0 .. name_{n-1}; returns the first.
   StateId add_states(const std::string& name, int n, StateKind kind, const std::string& unit, double scale);
+  // Inventories that cannot be negative: a run whose solution takes one below zero by more than the solver's
+  // tolerance stops with a SolverError naming it (a rate that is not positivity-preserving there) instead of
+  // returning it.
+  void set_nonnegative(StateId first, int n = 1);
   ParamId add_param(ParamSpec spec);
   PortId add_port(std::string name, StreamKind kind, PortDir dir, int classes = 0, bool optional = false);
   // Declares the size grid (pivot diameters, m) a per-class port refers to.
