@@ -274,12 +274,13 @@ class Loader {
   }
   void load_solver(const YAML::Node& s, SimOptions& opt) const {
     if (!s.IsMap()) fail("solver", "expected a mapping");
-    check_keys(s, "solver", {"rtol", "atol", "max_steps", "max_step", "linear_solver", "dense_limit"});
+    check_keys(s, "solver", {"rtol", "atol", "max_steps", "max_step", "linear_solver", "dense_limit", "method"});
     if (s["rtol"]) opt.rtol = number(s["rtol"], "solver.rtol");
     if (s["atol"]) opt.atol = number(s["atol"], "solver.atol");
     if (s["max_steps"]) opt.max_steps = whole_number(s["max_steps"], "solver.max_steps");
     if (s["max_step"]) opt.max_step = quantity(s["max_step"], "solver.max_step", "s");
     if (s["linear_solver"]) opt.linear_solver = scalar(s["linear_solver"], "solver.linear_solver");
+    if (s["method"]) opt.method = scalar(s["method"], "solver.method");
     if (s["dense_limit"]) opt.dense_limit = whole_number(s["dense_limit"], "solver.dense_limit");
   }
   void load_inputs(const YAML::Node& in, Flowsheet& fs, std::map<std::string, std::string>& given) const {

@@ -15,6 +15,8 @@
 
 #include "consistent_sensitivities.hpp"
 #include "granuflow/errors.hpp"
+#include "ode_simulator.hpp"
+#include "run_common.hpp"
 #include "solver_setup.hpp"
 
 namespace granuflow {
@@ -39,6 +41,8 @@ void SimOptions::validate(bool scene_keys) const {
     if (i > 0 && !(t_out[i] > t_out[i - 1]))
       fail(field, key, t_out[i], scene_keys ? "s" : "", "t_out increasing (previous " + fmt_num(t_out[i - 1]) + " s)");
   }
+  if (method != "auto" && method != "ida" && method != "bdf" && method != "adams" && method != "erk")
+    throw ConfigError(name("method", "solver.method") + " = '" + method + "': not one of auto, ida, bdf, adams, erk");
   if (linear_solver != "auto" && linear_solver != "dense" && linear_solver != "sparse")
     throw ConfigError(name("linear_solver", "solver.linear_solver") + " = '" + linear_solver +
                       "': not one of auto, dense, sparse");
@@ -97,45 +101,43 @@ int ida_quad_sens(int ns, realtype t, N_Vector y, N_Vector yp, N_Vector* yS, N_V
   }
 }
 
-// An inventory below zero by more than the solver can be blamed for (100 times its absolute tolerance) means a rate
-// that is not positivity-preserving at that state: stop and name it rather than return a negative mass.
-void check_nonnegative(const Flowsheet& fs, const SimOptions& opt, double t, const std::vector<double>& y) {
-  for (size_t i = 0; i < y.size(); ++i) {
-    const StateSpec& st = fs.state_spec(static_cast<int>(i));
-    if (!st.nonnegative || y[i] >= -100.0 * opt.atol * st.scale) continue;
-    const std::string unit = fs.units()[fs.state_unit(static_cast<int>(i))].name;
-    throw SolverError("unit '" + unit + "': inventory " + st.name + " = " + fmt_num(y[i]) + " " + st.unit +
-                          " at t = " + fmt_num(t) + " s is negative beyond the solver tolerance (" +
-                          fmt_num(100.0 * opt.atol * st.scale) + " " + st.unit +
-                          "): a rate moving it is not positivity-preserving there; check the size grid and the "
-                          "ranges the unit's closures hold for",
-                      t, unit, 0.0);
-  }
-}
+SimResult simulate_ida(Flowsheet& fs, const SimOptions& opt, const std::string& reason);
 
 }  // namespace
 
 SimResult simulate(Flowsheet& fs, const SimOptions& opt) {
   opt.validate();
-  const auto wall0 = std::chrono::steady_clock::now();
   if (!fs.finalized()) fs.finalize();
+  if (opt.method == "ida") return simulate_ida(fs, opt, "asked for (solver.method)");
+  const std::string algebraic = detail::first_algebraic_state(fs);
+  if (!algebraic.empty()) {
+    if (opt.method == "adams" || opt.method == "erk")
+      throw ConfigError("solver.method = '" + opt.method + "' needs an ODE, but flowsheet '" + fs.name() +
+                        "' has algebraic states (" + algebraic + "): use auto, bdf or ida");
+    return simulate_ida(fs, opt, "a DAE (algebraic states, e.g. " + algebraic + "): IDAS");
+  }
+  try {
+    return detail::simulate_ode(fs, opt, opt.method);
+  } catch (const detail::NotAnOde& e) {
+    if (opt.method != "auto" && opt.method != "bdf")
+      throw ConfigError("solver.method = '" + opt.method + "': flowsheet '" + fs.name() + "' is not an explicit ODE (" +
+                        e.what() + "): use auto or ida");
+    return simulate_ida(fs, opt, std::string("an ODE, but ") + e.what() + ": IDAS");
+  }
+}
+
+namespace {
+
+SimResult simulate_ida(Flowsheet& fs, const SimOptions& opt, const std::string& reason) {
+  const auto wall0 = std::chrono::steady_clock::now();
   // Explicit units are inlined whenever the system is solved densely.
   const bool dense = use_dense(fs, opt.linear_solver, opt.dense_limit);
   DaeSystem sys(fs, dense);
   const int n = sys.size(), n_full = sys.full_size(), nq = sys.n_quadratures();
   if (n == 0) throw ConfigError("flowsheet '" + fs.name() + "' has no states to integrate");
 
-  std::vector<int> sens_ids;
-  for (const auto& name : opt.sensitivities) {
-    const int id = fs.param_id(name);
-    if (fs.has_input(id))
-      throw ConfigError("sensitivity parameter '" + name +
-                        "' is a time-dependent input; only constants can be differentiated");
-    sens_ids.push_back(id);
-  }
-  std::vector<double> t_out = opt.t_out;
-  if (t_out.empty())
-    for (int i = 0; i < opt.n_out; ++i) t_out.push_back(opt.t_end * i / (opt.n_out - 1));
+  const std::vector<int> sens_ids = sensitivity_ids(fs, opt);
+  const std::vector<double> t_out = output_times(opt);
 
   Context C;
   NVec y(n, C.ctx), yp(n, C.ctx), atol(n, C.ctx);
@@ -220,10 +222,7 @@ SimResult simulate(Flowsheet& fs, const SimOptions& opt) {
   } sens_guard{yS, ypS, qS, ns};
 
   SimResult res;
-  res.state_names = fs.state_names();
-  res.output_names = fs.output_names();
-  res.sens_params = opt.sensitivities;
-  const int no = static_cast<int>(res.output_names.size());
+  Recorder recorder(fs, sys, opt, sens_ids, res);
   res.stats.states = n;
   res.stats.explicit_states = n_full - n;
   res.stats.quadratures = nq;
@@ -263,41 +262,20 @@ SimResult simulate(Flowsheet& fs, const SimOptions& opt) {
     IDAGetNumNonlinSolvConvFails(mem, &v), res.stats.nonlinear_failures += v;
   };
 
-  std::vector<double> y_full(n_full), yp_full(n_full), out(no);
-  std::vector<std::vector<double>> s_full(ns, std::vector<double>(n_full)), qs_now(ns, std::vector<double>(nq)),
-      dout(ns, std::vector<double>(no));
+  std::vector<const double*> yS_now(ns), qS_now(ns);
   auto record = [&](double t) {
     realtype tret = t;
     if (nq > 0 && t > 0) IDAGetQuad(mem, &tret, q.v);
-    sys.extend(t, y.data(), yp.data(), y_full.data(), yp_full.data());
-    check_nonnegative(fs, opt, t, y_full);
-    res.t.push_back(t);
-    res.y.insert(res.y.end(), y_full.begin(), y_full.end());
-    res.yp.insert(res.yp.end(), yp_full.begin(), yp_full.end());
-    if (no > 0) sys.report(t, y_full.data(), yp_full.data(), q.data(), out.data());
-    for (double& v : out)
-      if (!std::isfinite(v)) v = std::nan("");
-    res.outputs.insert(res.outputs.end(), out.begin(), out.end());
     if (ns > 0) {
       if (t > 0) IDAGetSens(mem, &tret, yS);
       if (t > 0 && nq > 0) IDAGetQuadSens(mem, &tret, qS);
-      std::vector<const double*> src(ns), qsrc(ns);
-      std::vector<double*> dst(ns), dsto(ns);
       for (int k = 0; k < ns; ++k) {
-        src[k] = N_VGetArrayPointer(yS[k]), dst[k] = s_full[k].data(), dsto[k] = dout[k].data();
-        for (int i = 0; i < nq; ++i) qs_now[k][i] = t > 0 ? N_VGetArrayPointer(qS[k])[i] : 0.0;
-        qsrc[k] = qs_now[k].data();
-      }
-      sys.extend_sensitivities(t, y.data(), yp.data(), sens_ids, src.data(), dst.data());
-      for (int k = 0; k < ns; ++k) res.sens.insert(res.sens.end(), s_full[k].begin(), s_full[k].end());
-      if (no > 0) {
-        std::vector<const double*> sf(ns);
-        for (int k = 0; k < ns; ++k) sf[k] = s_full[k].data();
-        sys.report_sensitivities(t, y_full.data(), yp_full.data(), q.data(), sens_ids, sf.data(), qsrc.data(),
-                                 dsto.data());
-        for (int k = 0; k < ns; ++k) res.output_sens.insert(res.output_sens.end(), dout[k].begin(), dout[k].end());
+        yS_now[k] = N_VGetArrayPointer(yS[k]);
+        if (nq > 0) qS_now[k] = N_VGetArrayPointer(qS[k]);
       }
     }
+    recorder.record(t, y.data(), yp.data(), nq > 0 ? q.data() : nullptr, ns > 0 ? yS_now.data() : nullptr,
+                    ns > 0 && nq > 0 && t > 0 ? qS_now.data() : nullptr);
   };
 
   // Segments between breakpoints; each starts with consistent initialization.
@@ -367,8 +345,12 @@ SimResult simulate(Flowsheet& fs, const SimOptions& opt) {
   add_stats();
   res.stats.residuals = sys.residual_count();
   res.stats.jacobians = sys.jacobian_count();
+  res.stats.method = "bdf (IDAS)";
+  res.stats.method_reason = reason;
   res.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   return res;
 }
+
+}  // namespace
 
 }  // namespace granuflow

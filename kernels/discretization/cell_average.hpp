@@ -15,6 +15,17 @@ class CellAverageAggregation : public AggregationScheme {
   void setup(const Grid& g) override;
   int cell(size_t pair) const { return cell_[pair]; }  // n: beyond the top edge
   double volume(size_t pair) const { return vsum_[pair]; }
+  const double* volumes() const { return vsum_.data(); }
+  // For the engine's vectorized pair loop: the partners k of class j in [run_first(j), run_last(j)] (possibly empty)
+  // form aggregates that stay in cell k, as the pairs with a much smaller partner do.
+  int run_first(int j) const { return run_first_[j]; }
+  int run_last(int j) const { return run_last_[j]; }
+  // Pairs off the runs with near-equal partners: along diagonal d (pairs (k - d, k)) the aggregates fall into cell
+  // k + shift for k in [d, last] on a geometric grid (last < d: none; the rest goes through cell()).
+  struct Diagonal {
+    int shift, last;
+  };
+  const std::vector<Diagonal>& diagonals() const { return diagonals_; }
   // Lower extended pivot of the interval the packet of cell c is split over (Kumar et al. 2006, Eq. (15)).
   template <class T>
   int side(const Grid& g, int c, const T& b, const T& v) const {
@@ -22,7 +33,8 @@ class CellAverageAggregation : public AggregationScheme {
   }
 
  private:
-  std::vector<int> cell_;
+  std::vector<int> cell_, run_first_, run_last_;
+  std::vector<Diagonal> diagonals_;
   std::vector<double> vsum_;
 };
 

@@ -1,5 +1,7 @@
 #include "discretization/fixed_pivot.hpp"
 
+#include <cmath>
+
 namespace granuflow::kernels {
 
 void FixedPivotAggregation::setup(const Grid& g) {
@@ -20,7 +22,34 @@ void FixedPivotAggregation::setup(const Grid& g) {
       }
       targets_.push_back(t);
       vsum_.push_back(v);
+      w_lo_.push_back(t.w_lo), w_hi_.push_back(t.w_hi), f_lo_.push_back(t.f_lo), f_hi_.push_back(t.f_hi);
     }
+  // The longest run of partners k ending at n - 2 whose aggregates land on k and k + 1.
+  run_first_.assign(n, 0), run_last_.assign(n, -1);
+  size_t row = 0;
+  for (int j = 0; j < n; row += n - j, ++j) {
+    int k = n - 2;
+    while (k >= j && targets_[row + (k - j)].lo == k && targets_[row + (k - j)].hi == k + 1) --k;
+    if (k < n - 2) run_first_[j] = k + 1, run_last_[j] = n - 2;
+  }
+  // Diagonals below the runs: shift and weights of the first pair, kept while every pair along it agrees.
+  diagonals_.clear();
+  auto pair = [n](int j, int k) { return size_t(j) * n - size_t(j) * (j - 1) / 2 + (k - j); };
+  for (int d = 0; d < n; ++d) {
+    const Target& t0 = targets_[pair(0, d)];
+    if (run_first_[0] <= d && d <= run_last_[0]) break;  // the runs start here
+    Diagonal g{t0.lo - d, d - 1, t0.w_lo, t0.w_hi, t0.f_lo, t0.f_hi};
+    for (int k = d; k < n; ++k) {
+      const int j = k - d;
+      const Target& t = targets_[pair(j, k)];
+      const bool in_run = run_first_[j] <= k && k <= run_last_[j];
+      if (in_run || t.lo != k + g.shift || t.hi != k + g.shift + 1 || std::abs(t.w_lo - g.w_lo) > 1e-12 ||
+          std::abs(t.w_hi - g.w_hi) > 1e-12 || std::abs(t.f_lo - g.f_lo) > 1e-12 || std::abs(t.f_hi - g.f_hi) > 1e-12)
+        break;
+      g.last = k;
+    }
+    diagonals_.push_back(g);
+  }
 }
 
 }  // namespace granuflow::kernels

@@ -22,10 +22,28 @@ class FixedPivotAggregation : public AggregationScheme {
   void setup(const Grid& g) override;
   const Target& target(size_t pair) const { return targets_[pair]; }
   double volume(size_t pair) const { return vsum_[pair]; }
+  // For the engine's vectorized pair loop: the partners k of class j in [run_first(j), run_last(j)] (possibly empty)
+  // place their aggregates on k and k + 1, as most pairs do on any grid; the weights as arrays over the pairs.
+  int run_first(int j) const { return run_first_[j]; }
+  int run_last(int j) const { return run_last_[j]; }
+  const double* w_lo() const { return w_lo_.data(); }
+  const double* w_hi() const { return w_hi_.data(); }
+  const double* f_lo() const { return f_lo_.data(); }
+  const double* f_hi() const { return f_hi_.data(); }
+  // Pairs off the runs with near-equal partners (k - j = d small): on a geometric grid each diagonal d places all its
+  // aggregates with one shift and one set of weights, so the engine sums them as vector loops over k. Diagonal d
+  // covers the pairs (k - d, k) for k in [d, last] (last < d: none; the rest goes through target()).
+  struct Diagonal {
+    int shift, last;  // aggregates of pair (k - d, k) land on k + shift and k + shift + 1
+    double w_lo, w_hi, f_lo, f_hi;
+  };
+  const std::vector<Diagonal>& diagonals() const { return diagonals_; }
 
  private:
   std::vector<Target> targets_;
-  std::vector<double> vsum_;
+  std::vector<double> vsum_, w_lo_, w_hi_, f_lo_, f_hi_;
+  std::vector<int> run_first_, run_last_;
+  std::vector<Diagonal> diagonals_;
 };
 
 }  // namespace granuflow::kernels

@@ -150,6 +150,7 @@ class Population {
   template <class T>
   bool fresh_tables(const Work& w, const T* p, int first, int count) const;
   void refresh(Work& w, const double* p) const;
+  void pair_matrices(Work& w) const;
   void analytic_jacobian(Work& w, const State<double>& s, std::vector<double>& D) const;
   void ad_jacobian(Work& w, const State<double>& s, std::vector<double>& D) const;
   void fold_rows(double* D, int cols) const;

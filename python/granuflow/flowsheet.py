@@ -151,8 +151,12 @@ class Flowsheet:
     def simulate(self, t_end: float | None = None, *, t_out: Iterable[float] | None = None,
                  n_out: int | None = None, rtol: float | None = None, atol: float | None = None,
                  sensitivities: Sequence[str] = (), linear_solver: str | None = None,
-                 max_steps: int | None = None) -> Result:
+                 max_steps: int | None = None, method: str | None = None) -> Result:
         """Integrate the flowsheet; the GIL is released during the solve.
+
+        ``method``: ``auto`` (default: IDAS for a DAE, for an ODE chosen by its stiffness), ``ida``, ``bdf``,
+        ``adams`` or ``erk`` (the last three for ODE flowsheets); ``result.stats["method"]`` and
+        ``["method_reason"]`` say what ran and why.
 
         Raises ``SolverError`` (with ``.t``, ``.unit``, ``.worst_residual``) if the integrator fails and
         ``ConfigError`` for invalid options.
@@ -161,7 +165,7 @@ class Flowsheet:
             t_end=None if t_end is None else float(t_end),
             t_out=None if t_out is None else [float(x) for x in np.asarray(list(t_out), dtype=float)],
             n_out=n_out, rtol=rtol, atol=atol, sensitivities=list(sensitivities),
-            linear_solver=linear_solver, max_steps=max_steps)
+            linear_solver=linear_solver, max_steps=max_steps, method=method)
         return Result(raw, scene_name=self.name, summary_map=dict(self._scene.summary_map), units=self.units())
 
     def output_sensitivities(self, params: Sequence[str], *, t_end: float | None = None,

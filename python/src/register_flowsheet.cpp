@@ -55,7 +55,7 @@ py::list output_roles(const Flowsheet& fs) {
 py::dict simulate(Scene& s, std::optional<double> t_end, std::optional<std::vector<double>> t_out,
                   std::optional<int> n_out, std::optional<double> rtol, std::optional<double> atol,
                   std::vector<std::string> sensitivities, std::optional<std::string> linear_solver,
-                  std::optional<long> max_steps) {
+                  std::optional<long> max_steps, std::optional<std::string> method) {
   SimOptions o = s.options;
   if (t_end) {
     o.t_end = *t_end;
@@ -67,6 +67,7 @@ py::dict simulate(Scene& s, std::optional<double> t_end, std::optional<std::vect
   if (atol) o.atol = *atol;
   if (linear_solver) o.linear_solver = *linear_solver;
   if (max_steps) o.max_steps = *max_steps;
+  if (method) o.method = *method;
   o.sensitivities = std::move(sensitivities);
   SimResult r;
   {
@@ -82,7 +83,8 @@ py::dict simulate(Scene& s, std::optional<double> t_end, std::optional<std::vect
                  "error_test_failures"_a = r.stats.error_test_failures,
                  "nonlinear_failures"_a = r.stats.nonlinear_failures, "reinits"_a = r.stats.reinits,
                  "states"_a = r.stats.states, "explicit_states"_a = r.stats.explicit_states,
-                 "quadratures"_a = r.stats.quadratures, "linear_solver"_a = r.stats.linear_solver);
+                 "quadratures"_a = r.stats.quadratures, "linear_solver"_a = r.stats.linear_solver,
+                 "method"_a = r.stats.method, "method_reason"_a = r.stats.method_reason);
   return py::dict("t"_a = as_array(r.t, {nt}), "y"_a = as_array(r.y, {nt, ns}), "yp"_a = as_array(r.yp, {nt, ns}),
                   "state_names"_a = r.state_names, "outputs"_a = as_array(r.outputs, {nt, no}),
                   "output_names"_a = r.output_names, "output_roles"_a = output_roles(*s.flowsheet),
@@ -230,7 +232,7 @@ void register_flowsheet(py::module_& m) {
           py::kw_only(), "t"_a = 0.0, "ftol"_a = 1e-10, "max_iterations"_a = 200, "max_pseudo_steps"_a = 2000)
       .def("simulate", &simulate, py::kw_only(), "t_end"_a = py::none(), "t_out"_a = py::none(), "n_out"_a = py::none(),
            "rtol"_a = py::none(), "atol"_a = py::none(), "sensitivities"_a = std::vector<std::string>{},
-           "linear_solver"_a = py::none(), "max_steps"_a = py::none());
+           "linear_solver"_a = py::none(), "max_steps"_a = py::none(), "method"_a = py::none());
 
   m.def(
       "load_scene", [&reg](const std::string& path) { return load_scene(path, reg); }, "path"_a);

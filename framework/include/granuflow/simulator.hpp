@@ -24,6 +24,10 @@ struct SimOptions {
   // half the steps, and accurate to roughly the states' tolerance on smooth problems (calibration Jacobians).
   bool sens_error_control = true;
   std::string linear_solver = "auto";  // auto | dense | sparse (auto: dense up to dense_limit states)
+  // Integrator: ida (IDAS, BDF: any flowsheet), bdf or adams (CVODES) and erk (ARKODE, Dormand-Prince 5(4)) for
+  // flowsheets that are ODEs (every state differential once explicit units are inlined), or auto: IDAS for a DAE,
+  // for an ODE by its stiffness (ode_simulator.hpp). SolverStats::method says what ran.
+  std::string method = "auto";
   int dense_limit = 400;
   // Throws ConfigError naming the value and the rule, and the field as SimOptions.<field> or, with scene_keys, as the
   // scene file's key.
@@ -43,6 +47,8 @@ struct SolverStats {
   long explicit_states = 0;  // states of explicit units, evaluated inline
   long quadratures = 0;      // integrals of flows, outside the Newton system
   std::string linear_solver;
+  std::string method;         // the integrator that ran (and, if auto switched mid-run, both)
+  std::string method_reason;  // why: asked for, or what auto saw
 };
 
 struct SimResult {
