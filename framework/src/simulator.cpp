@@ -32,6 +32,11 @@ void SimOptions::validate(bool scene_keys) const {
   if (max_steps < 1) fail("max_steps", "solver.max_steps", double(max_steps), "", "max_steps >= 1");
   if (!(max_step >= 0)) fail("max_step", "solver.max_step", max_step, scene_keys ? "s" : "", "max_step >= 0");
   if (t_out.empty() && n_out < 2) fail("n_out", "output.n", n_out, "", "n_out >= 2");
+  // The results hold every state at every output time: beyond this a request is a typo, not a plan.
+  if (t_out.empty() && n_out > kMaxOutputTimes)
+    fail("n_out", "output.n", n_out, "", "n_out <= " + std::to_string(kMaxOutputTimes));
+  if (t_out.size() > size_t(kMaxOutputTimes))
+    fail("t_out", "output.times", double(t_out.size()), "", "at most " + std::to_string(kMaxOutputTimes) + " times");
   for (size_t i = 0; i < t_out.size(); ++i) {
     const std::string field = "t_out[" + std::to_string(i) + "]", key = "output.times[" + std::to_string(i) + "]";
     if (!(t_out[i] >= 0 && t_out[i] <= t_end * (1 + 1e-12)))

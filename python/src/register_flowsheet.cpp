@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <tuple>
 
 #include "granuflow/dae_system.hpp"
 #include "granuflow/errors.hpp"
@@ -28,6 +29,10 @@ py::array_t<double> as_array(const std::vector<double>& v, std::vector<py::ssize
 double value_for(const Scene& s, const std::string& name, const py::handle& v) {
   if (py::isinstance<py::str>(v))
     return parse_param_value(*s.flowsheet, name, v.cast<std::string>(), "parameter " + name);
+  // True would silently become 1.0: a flag is never a parameter value.
+  if (py::isinstance<py::bool_>(v))
+    throw ConfigError("parameter " + name + " = " + std::string(py::str(v)) +
+                      ": expected a number (SI) or a string with a unit, e.g. '60 degC', not a bool");
   try {
     return v.cast<double>();
   } catch (const py::cast_error&) {
@@ -179,7 +184,10 @@ void register_flowsheet(py::module_& m) {
           "spec",
           [](const Scene& s, const std::string& name) {
             const int id = s.flowsheet->param_id(name);
-            return spec_dict(s.flowsheet->param_spec(id), s.flowsheet->param_value(id), s.flowsheet->has_input(id));
+            // lower/upper: the range the parameter may take (narrowed by parameters that follow it by a link).
+            ParamSpec p = s.flowsheet->param_spec(id);
+            std::tie(p.lower, p.upper) = s.flowsheet->bounds(id);
+            return spec_dict(p, s.flowsheet->param_value(id), s.flowsheet->has_input(id));
           },
           "name"_a)
       .def(
@@ -196,6 +204,9 @@ void register_flowsheet(py::module_& m) {
             s.flowsheet->set_input(name, PiecewiseLinear(std::move(times), std::move(v), i, "input " + name));
           },
           "name"_a, "times"_a, "values"_a, "interp"_a = "linear")
+      .def(
+          "clear_input", [](Scene& s, const std::string& name) { s.flowsheet->clear_input(name); }, "name"_a,
+          "Makes a parameter driven by a time-dependent input a constant again (its value before the input).")
       .def("unit_settings",
            [](const Scene& s) {
              py::dict d;

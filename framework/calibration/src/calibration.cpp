@@ -166,11 +166,16 @@ Space make_space(const Flowsheet& fs, const Stage& stage) {
     if (!seen.insert(f.name).second) throw ConfigError(where + " is listed twice");
     if (fs.has_input(id)) throw ConfigError(where + " is a time-dependent input; only constants can be calibrated");
     const ParamSpec& spec = fs.param_spec(id);
-    const double lo = f.lower.value_or(spec.lower), hi = f.upper.value_or(spec.upper);
+    const auto [allowed_lo, allowed_hi] = fs.bounds(id);  // declared, narrowed by linked followers
+    const double lo = f.lower.value_or(allowed_lo), hi = f.upper.value_or(allowed_hi);
     if (std::isnan(lo)) throw ConfigError(violation(where + ".lower", lo, spec.unit, "lower is a number"));
     if (std::isnan(hi)) throw ConfigError(violation(where + ".upper", hi, spec.unit, "upper is a number"));
-    if (lo < spec.lower) throw ConfigError(violation(where + ".lower", lo, spec.unit, "lower >= declared lower bound"));
-    if (hi > spec.upper) throw ConfigError(violation(where + ".upper", hi, spec.unit, "upper <= declared upper bound"));
+    if (lo < allowed_lo)
+      throw ConfigError(
+          violation(where + ".lower", lo, spec.unit, "lower >= allowed lower bound " + fmt_num(allowed_lo)));
+    if (hi > allowed_hi)
+      throw ConfigError(
+          violation(where + ".upper", hi, spec.unit, "upper <= allowed upper bound " + fmt_num(allowed_hi)));
     if (!(hi > lo)) throw ConfigError(violation(where + ".upper", hi, spec.unit, "upper > lower"));
     if (f.transform == Transform::kLog && !(lo > 0))
       throw ConfigError(violation(where + ".lower", lo, spec.unit, "lower > 0 for transform log"));
