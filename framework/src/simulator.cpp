@@ -15,6 +15,7 @@
 
 #include "consistent_sensitivities.hpp"
 #include "granuflow/errors.hpp"
+#include "granuflow/structure.hpp"
 #include "solver_setup.hpp"
 
 namespace granuflow {
@@ -129,6 +130,7 @@ SimResult simulate(Flowsheet& fs, const SimOptions& opt) {
   DaeSystem sys(fs, dense);
   const int n = sys.size(), n_full = sys.full_size(), nq = sys.n_quadratures();
   if (n == 0) throw ConfigError("flowsheet '" + fs.name() + "' has no states to integrate");
+  check_algebraic_structure(sys);  // names an unsolvable algebraic part before IDACalcIC fails on it
 
   std::vector<int> sens_ids;
   for (const auto& name : opt.sensitivities) {
