@@ -436,6 +436,12 @@ void Flowsheet::link(const std::string& target, const std::string& source) {
                       fmt_num(ts.lower) + ", " + fmt_num(ts.upper) + "] " + ts.unit + ", " + source + " in [" +
                       fmt_num(lo) + ", " + fmt_num(hi) + "] " + ss.unit + ")");
   links_.push_back({t, s});
+  // The source's value (at t = 0) must be one its new follower can take.
+  if (const double v = linked_value(s); !(v >= ts.lower && v <= ts.upper)) {
+    const std::string rule = bound_rule(*this, s);  // names the new link
+    links_.pop_back();
+    throw ConfigError(violation(has_input(s) ? "input " + source + " at t = 0 s" : source, v, ss.unit, rule));
+  }
 }
 
 std::vector<double> Flowsheet::run_params(int u) const {

@@ -62,6 +62,9 @@ py::dict simulate(Scene& s, std::optional<double> t_end, std::optional<std::vect
                   std::vector<std::string> sensitivities, std::optional<std::string> linear_solver,
                   std::optional<long> max_steps) {
   SimOptions o = s.options;
+  // An empty list would silently mean "the scene's output times"; the scene file refuses `times: []` too.
+  if (t_out && t_out->empty())
+    throw ConfigError("simulate(): t_out = []: expected a non-empty list of times in [0, t_end] (or n_out)");
   if (t_end) {
     o.t_end = *t_end;
     if (!t_out) o.t_out.clear();
@@ -73,10 +76,21 @@ py::dict simulate(Scene& s, std::optional<double> t_end, std::optional<std::vect
   if (linear_solver) o.linear_solver = *linear_solver;
   if (max_steps) o.max_steps = *max_steps;
   o.sensitivities = std::move(sensitivities);
+  try {  // named as the keywords of simulate(), not as the C++ struct
+    o.validate();
+  } catch (const ConfigError& e) {
+    std::string m = e.what();
+    if (m.rfind("SimOptions.", 0) == 0) m = "simulate(): " + m.substr(11);
+    throw ConfigError(m);
+  }
   SimResult r;
-  {
+  try {
     py::gil_scoped_release release;
     r = granuflow::simulate(*s.flowsheet, o);
+  } catch (const ConfigError& e) {  // found at run time (unit checks, structure): name the scene file as well
+    const std::string m = e.what();
+    if (s.path.empty() || m.rfind(s.path, 0) == 0) throw;
+    throw ConfigError(s.path + ": " + m);
   }
   const auto nt = static_cast<py::ssize_t>(r.t.size());
   const auto ns = static_cast<py::ssize_t>(r.state_names.size());
@@ -161,7 +175,7 @@ void register_flowsheet(py::module_& m) {
              SimOptions o = s.options;
              o.t_end = t;
              o.t_out.clear();
-             o.validate();
+             o.validate(true);  // "t_end = 0 s: violates t_end > 0", as the scene key
              s.options = o;
            })
       .def("clone", [&reg](const Scene& s) { return clone_scene(s, reg); })
@@ -247,8 +261,17 @@ void register_flowsheet(py::module_& m) {
       "load_scene", [&reg](const std::string& path) { return load_scene(path, reg); }, "path"_a);
   m.def(
       "load_scene_text",
-      [&reg](const std::string& text, const std::string& label) { return load_scene_text(text, label, reg); }, "text"_a,
-      "label"_a = "<text>");
+      [&reg](const py::object& text, const std::string& label) {
+        // Lone surrogates (from a file read with errors="surrogateescape") reach the loader as the bytes they
+        // stand for, which it refuses naming line and column, instead of failing pybind's conversion.
+        if (py::isinstance<py::bytes>(text)) return load_scene_text(text.cast<std::string>(), label, reg);
+        if (!py::isinstance<py::str>(text))
+          throw ConfigError(label + ": the scene must be given as text (str), got " +
+                            std::string(py::str(text.get_type().attr("__name__"))));
+        const py::bytes b = text.attr("encode")("utf-8", "surrogatepass");
+        return load_scene_text(b.cast<std::string>(), label, reg);
+      },
+      "text"_a, "label"_a = "<text>");
 }
 
 }  // namespace granuflow::python

@@ -807,11 +807,46 @@ Profile profile_parameter(const Scene& scene, const Registry<Unit>& reg, const s
 
 // ---------------------------------------------------------------- public API
 
+void check_experiments(const Flowsheet& fs, const std::vector<Experiment>& exps) {
+  validate_experiments(exps);
+  std::set<std::string> names;
+  for (const auto& e : exps) {
+    const std::string w = "experiment '" + e.name + "'";
+    if (!names.insert(e.name).second) throw ConfigError(w + " is given twice");
+    for (const auto& [k, v] : e.settings) {
+      int id;
+      try {
+        id = fs.param_id(k);
+      } catch (const ConfigError& x) {
+        throw ConfigError(w + ": setting " + x.what());
+      }
+      const ParamSpec& spec = fs.param_spec(id);
+      const auto [lo, hi] = fs.bounds(id);
+      if (const int src = fs.link_source(id); src >= 0)
+        throw ConfigError(w + ": setting " + k + ": it follows " + fs.qualified_name(src) +
+                          " by a link of the scene; set " + fs.qualified_name(src) + " instead");
+      if (fs.has_input(id))
+        throw ConfigError(w + ": setting " + k + ": it is driven by a time-dependent input of the scene (inputs: " + k +
+                          "), which would replace the value; remove the input from the scene");
+      if (!(v >= lo && v <= hi))
+        throw ConfigError(
+            violation(w + ": setting " + k, v, spec.unit, fmt_num(lo) + " <= " + spec.name + " <= " + fmt_num(hi)));
+    }
+    for (const auto& o : e.observations) {
+      try {
+        observable_unit(fs, o.name);
+      } catch (const ConfigError& x) {
+        throw ConfigError(w + ": observation " + x.what());
+      }
+    }
+  }
+}
+
 CalibrationResult calibrate(const Scene& scene, const Registry<Unit>& reg, const std::vector<Experiment>& exps,
                             const std::vector<Stage>& stages, const CalibrationOptions& opt,
                             const std::map<std::string, double>& start) {
   opt.validate();
-  validate_experiments(exps);
+  check_experiments(*scene.flowsheet, exps);
   const auto t0 = Clock::now();
   if (stages.empty()) throw ConfigError("calibrate: no stages");
   if (exps.empty()) throw ConfigError("calibrate: no experiments");
@@ -926,7 +961,7 @@ std::string CalibrationResult::full_report() const {
 std::vector<Prediction> predict(const Scene& scene, const Registry<Unit>& reg, const std::vector<Experiment>& exps,
                                 const std::map<std::string, double>& params, const CalibrationOptions& opt) {
   opt.validate();
-  validate_experiments(exps);
+  check_experiments(*scene.flowsheet, exps);
   std::vector<std::vector<Prediction>> per(exps.size());
   parallel_for(static_cast<int>(exps.size()), opt.num_threads, [&](int i) {
     const Experiment& e = exps[i];
