@@ -2,7 +2,7 @@
 # granuflow's two entry points for a fresh Debian 12 / Ubuntu machine (see README.md):
 #   ./run.sh main   install what is missing (apt-get), build (CMake, Release), run the main job into out/main
 #   ./run.sh test   same setup, then lint (clang-format-14, flake8) and every test: GoogleTest (ctest), pytest,
-#                   notebooks
+#                   notebooks, and the sanitizer build (./run.sh sanitize)
 # Also: ./run.sh setup | build | lint | bench | sanitize | fuzz scene|experiments [seconds]
 set -euo pipefail
 cd "$(dirname "$0")"
@@ -49,6 +49,7 @@ run_tests() {
   lint
   (cd build && ctest --output-on-failure -j "$(nproc)" -L fast)
   PYTHONPATH="$PWD/build/python" /usr/bin/python3 -m pytest -q tests/python
+  sanitize  # ~5 min on 2 cores: ASan+UBSan C++ tests, headline scene, bounded fuzzing (tests/fuzz/README.md)
 }
 
 # AddressSanitizer + UndefinedBehaviorSanitizer build with the libFuzzer targets (clang, -O1, assertions on) in
