@@ -467,3 +467,16 @@ def test_launcher_on_a_fifo_does_not_block(tmp_path):
     p = cli("run", path, "--out", tmp_path / "out", timeout=60)
     assert_one_line_exit_2(p.returncode, p.stderr, "not a regular file", path=path)
     assert stat.S_ISFIFO(os.stat(path).st_mode)
+
+
+REGRESSIONS = os.path.join(ROOT, "tests", "fuzz", "regressions", "scene")
+
+
+@pytest.mark.parametrize("name", sorted(os.listdir(REGRESSIONS)))
+def test_fuzz_regression_scene_exits_2(tmp_path, capsys, name):
+    """Every saved scene finding of the fuzz target (tests/fuzz/README.md) is bad input on the command line."""
+    path = os.path.join(REGRESSIONS, name)
+    before = sha256(path)
+    code, err = run_main(capsys, "run", path, "--out", tmp_path / "out")
+    assert_one_line_exit_2(code, err, path=path)
+    assert sha256(path) == before
