@@ -125,6 +125,7 @@ SimResult simulate(Flowsheet& fs, const SimOptions& opt) {
   opt.validate();
   const auto wall0 = std::chrono::steady_clock::now();
   if (!fs.finalized()) fs.finalize();
+  fs.check_units();  // every unit at the values of the run, inputs at each of their knots
   // Explicit units are inlined whenever the system is solved densely.
   const bool dense = use_dense(fs, opt.linear_solver, opt.dense_limit);
   DaeSystem sys(fs, dense);

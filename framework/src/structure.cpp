@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <queue>
 #include <set>
 
@@ -140,7 +141,10 @@ std::pair<std::string, std::string> names(const Flowsheet& fs, const std::vector
 
 }  // namespace
 
-void check_algebraic_structure(DaeSystem& sys) {
+namespace {
+
+// The message for `sys`, or nothing if its algebraic equations can be solved at the initial state.
+std::optional<std::string> diagnose(DaeSystem& sys) {
   const Flowsheet& fs = sys.flowsheet();
   const int n = sys.size();
   const auto id = sys.differential_id();
@@ -148,7 +152,7 @@ void check_algebraic_structure(DaeSystem& sys) {
   for (int i = 0; i < n; ++i)
     if (id[i] == 0.0) local[i] = static_cast<int>(alg.size()), alg.push_back(i);
   const int na = static_cast<int>(alg.size());
-  if (na == 0) return;
+  if (na == 0) return std::nullopt;
 
   // dF_a/dy_a at the initial state, with cj = 0 (algebraic rows hold no y'). Rows and columns are indexed
   // alike: the residual of a state is its equation. An inlined system (explicit units eliminated) is solved
@@ -182,21 +186,23 @@ void check_algebraic_structure(DaeSystem& sys) {
     }
   }
   const Matching m = maximum_matching(na, adj);
-  if (m.size < na) {
+  // Only a true pattern proves a structural defect; the inlined system's stands for one point.
+  if (m.size < na && !sys.inlined()) {
     const Deficiency d = structural_deficiency(na, adj, m);
     std::vector<int> cols, rows;
     for (int c : d.cols) cols.push_back(alg[c]);
     for (int r : d.rows) rows.push_back(alg[r]);
     const auto [cs, cu] = names(fs, cols);
     const auto [rs, ru] = names(fs, rows);
-    throw ConfigError("flowsheet '" + fs.name() + "' is structurally singular: its algebraic equations can determine " +
-                      std::to_string(m.size) + " of its " + std::to_string(na) +
-                      " algebraic states whatever the parameters; no equation is left for " + cs + " (units " + cu +
-                      "), and the equations of " + rs + " (units " + ru +
-                      ") over-determine theirs. Check the connections of these units");
+    return "flowsheet '" + fs.name() + "' is structurally singular: its algebraic equations can determine " +
+           std::to_string(m.size) + " of its " + std::to_string(na) +
+           " algebraic states whatever the parameters; no equation is left for " + cs + " (units " + cu +
+           "), and the equations of " + rs + " (units " + ru +
+           ") over-determine theirs. Check the connections of "
+           "these units";
   }
-  if (na > kMaxNumericalCheck) return;
-  if (!a.allFinite()) return;  // a failing residual is the integrator's to report, with its time and unit
+  if (na > kMaxNumericalCheck) return std::nullopt;
+  if (!a.allFinite()) return std::nullopt;  // a failing residual is the integrator's to report, with its time and unit
   // Equilibrate rows, then columns, so that the rank does not depend on the states' units.
   for (int r = 0; r < na; ++r)
     if (const double s = a.row(r).cwiseAbs().maxCoeff(); s > 0) a.row(r) /= s;
@@ -204,7 +210,7 @@ void check_algebraic_structure(DaeSystem& sys) {
     if (const double s = a.col(c).cwiseAbs().maxCoeff(); s > 0) a.col(c) /= s;
   Eigen::FullPivLU<Eigen::MatrixXd> lu(a);
   lu.setThreshold(1e-10);
-  if (lu.rank() == na) return;
+  if (lu.rank() == na) return std::nullopt;
   // The states of the loop: those that move in some direction the equations do not see.
   const Eigen::MatrixXd ker = lu.kernel();
   std::vector<int> loop;
@@ -215,11 +221,28 @@ void check_algebraic_structure(DaeSystem& sys) {
         break;
       }
   const auto [ls, lu_names] = names(fs, loop);
-  throw ConfigError("flowsheet '" + fs.name() + "': the algebraic equations cannot be solved for " + ls +
-                    " at the initial state (units " + lu_names + "; their Jacobian is singular, rank " +
-                    std::to_string(lu.rank()) + " of " + std::to_string(na) +
-                    "): an algebraic loop without hold-up, such as a recycle of mixers and splitters? Put a unit "
-                    "with hold-up (e.g. a stirred_tank) into the loop");
+  return "flowsheet '" + fs.name() + "': the algebraic equations cannot be solved for " + ls +
+         " at the initial state (units " + lu_names + "; their Jacobian is singular, rank " +
+         std::to_string(lu.rank()) + " of " + std::to_string(na) +
+         "): an algebraic loop without hold-up, such as a recycle of mixers and splitters that returns all of its "
+         "flow? Check the split fractions, or put a unit with hold-up (e.g. a stirred_tank) into the loop" +
+         (!sys.inlined() && fs.n_explicit_states() > 0
+              ? std::string("; solver: {linear_solver: dense} evaluates explicit units inside the loop instead of "
+                            "guessing their states")
+              : std::string());
+}
+
+}  // namespace
+
+void check_algebraic_structure(DaeSystem& sys) {
+  auto message = diagnose(sys);
+  if (!message) return;
+  // Explicit units are eliminated from an inlined system; the full one names their states too.
+  if (sys.inlined()) {
+    DaeSystem full(sys.flowsheet(), false);
+    if (auto named = diagnose(full)) message = named;
+  }
+  throw ConfigError(*message);
 }
 
 }  // namespace granuflow

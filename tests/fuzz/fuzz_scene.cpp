@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <string>
 
+#include "granuflow/dae_system.hpp"
 #include "granuflow/errors.hpp"
 #include "granuflow/scene.hpp"
 #include "units/registry.hpp"
@@ -15,7 +16,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);
   try {
     Scene s = load_scene_text(text, "fuzz.yaml", units::builtin());
-    s.flowsheet->configure_units();  // what the first run does with the values the loader accepted
+    DaeSystem sys(*s.flowsheet);  // configures every unit, as the first run does, with the accepted values
     clone_scene(s, units::builtin());
   } catch (const ConfigError& e) {
     const std::string m = e.what();

@@ -149,7 +149,7 @@ SCENE_FILES = {
     "unknown_setting": (tanks("{type: liquid_product}", "{type: liquid_product, settings: {size: 3}}"),
                         ["units.product.settings.size: unknown setting"]),
     "classes_too_many": (headline("settings: {classes: 10, d_min", "settings: {classes: 100000, d_min"),
-                         ["units.bed.settings.classes = 100000", "<= 200"]),
+                         ["particles.settings.classes = 100000", "<= 200"]),
     "setting_is_a_list": (tanks("{type: liquid_product}", "{type: liquid_product, settings: {a: [1]}}"),
                           ["units.product.settings.a", "expected a single value, got a list"]),
     "unknown_parameter": (tanks("{mass: 10 kg}", "{mass: 10 kg, volume: 1 m3}"),
@@ -159,7 +159,8 @@ SCENE_FILES = {
     "parameter_unknown_unit": (tanks("{mass: 10 kg}", "{mass: 10 stone}"), ["unknown unit 'stone'", "kg, g"]),
     "parameter_not_a_number": (tanks("{mass: 10 kg}", "{mass: heavy}"), ["units.tank.params.mass = 'heavy'"]),
     "parameter_long_text": (tanks("{mass: 10 kg}", "{mass: " + "9" * 5000 + "x}"), ["units.tank.params.mass", "..."]),
-    "parameter_multiline": (tanks("{mass: 10 kg}", '{mass: "10\\nkg"}'), ["units.tank.params.mass", "unknown unit '\\nkg'"]),
+    "parameter_multiline": (tanks("{mass: 10 kg}", '{mass: "10\\nkg"}'),
+                            ["units.tank.params.mass", "unknown unit '\\nkg'"]),
     "parameter_twice": (tanks("{mass: 10 kg}", "{mass: 10 kg, mass: 20 kg}"), ["units.tank.params.mass: given twice"]),
     "nozzle_off_before_on": (headline("t_on: 0 s, t_off: 60 min", "t_on: 30 min, t_off: 10 min"),
                              ["units.nozzle.params.t_off = 600 s", "t_off >= t_on"]),
@@ -191,7 +192,7 @@ SCENE_FILES = {
     "link_to_itself": (headline("gas.Y0: inlet.Y", "gas.Y0: gas.Y0"), ["links.gas.Y0", "cannot follow itself"]),
     "link_source_above_follower_bound": (headline("T: 60 degC, Y", "T: 550 K, Y"),
                                          ["links.bed.T0", "inlet.T = 550 K",
-                                                                          "bed.T0 in [250, 500] follows it by a link"]),
+                                          "bed.T0 in [250, 500] follows it by a link"]),
     # connections and summary
     "connection_without_arrow": (tanks("tank.out -> product.in", "tank.out => product.in"),
                                  ["connections[1]", "expected \"unit.port -> unit.port\""]),
@@ -209,10 +210,15 @@ SCENE_FILES = {
                                  ["units.inlet.params.Y = 0.005 kg/kg", "saturation humidity", "at T = 250 K"]),
 }
 
+TOTAL_RECYCLE = sub(LOOP, "split: 0.6", "split: 0.0")
+
 # Scenes that load but cannot run: refused before integration, still exit 2.
 RUN_REFUSALS = {
-    "recycle_without_holdup": (LOOP, ["flowsheet 'loop'", "mixer.T", "splitter.T", "units mixer, splitter",
-                                      "hold-up"]),
+    "total_recycle_without_holdup": (TOTAL_RECYCLE, ["flowsheet 'loop'", "mixer.mdot", "splitter.mdot2",
+                                                     "units mixer, splitter", "hold-up"]),
+    "recycle_singular_at_the_start": (sub(LOOP, "t_end: 100 s", "t_end: 100 s\nsolver: {linear_solver: sparse}"),
+                                      ["flowsheet 'loop'", "mixer.T", "at the initial state",
+                                       "linear_solver: dense"]),
 }
 
 
@@ -304,8 +310,8 @@ def test_not_a_scene_file_exits_2(tmp_path, capsys, case):
 BAD_SETS = {
     "set_input_driven": (DEMO, ["--set", "feed.T=310 K"], ["feed.T = 310 K", "driven by the time-dependent input",
                                                            "inputs: feed.T"]),
-    "set_above_follower_bound": (SCENE, ["--set", "inlet.T=550 K"], ["inlet.T = 550 K",
-                                                                      "bed.T0 in [250, 500] follows it by a link"]),
+    "set_above_follower_bound": (SCENE, ["--set", "inlet.T=550 K"],
+                                 ["inlet.T = 550 K", "bed.T0 in [250, 500] follows it by a link"]),
     "set_supersaturated": (SCENE, ["--set", "inlet.T=250 K"], ["Y = 0.005 kg/kg", "saturation humidity"]),
     "set_link_target": (SCENE, ["--set", "bed.T0=300 K"], ["bed.T0 = 300 K", "follows inlet.T by a link"]),
     "set_unknown_parameter": (SCENE, ["--set", "inlet.Tx=300 K"], ["inlet.Tx", "unknown parameter"]),
@@ -327,7 +333,7 @@ def test_bad_set_exits_2(tmp_path, capsys, case):
 
 
 def _loop_simulate():
-    gf.load_text(LOOP, "loop.yaml").simulate()
+    gf.load_text(TOTAL_RECYCLE, "loop.yaml").simulate()
 
 
 def _demo():
@@ -370,7 +376,8 @@ API_CASES = {
     "set_list": (lambda: _demo().set("tank1.T0", [300]), ["tank1.T0 = [300]", "expected a number"]),
     "set_none": (lambda: _demo().set("tank1.T0", None), ["tank1.T0 = None", "expected a number"]),
     "set_input_driven": (lambda: _demo().set("feed.T", 320.0), ["feed.T = 320 K", "driven by the time-dependent"]),
-    "set_above_follower_bound": (lambda: _headline().set("inlet.T", 560.0), ["inlet.T = 560 K", "bed.T0 in [250, 500]"]),
+    "set_above_follower_bound": (lambda: _headline().set("inlet.T", 560.0),
+                                 ["inlet.T = 560 K", "bed.T0 in [250, 500]"]),
     "set_input_out_of_bounds": (lambda: _demo().set_input("feed.T", [0, 10], [300, 900]),
                                 ["input feed.T.values[1] = 900 K"]),
     "set_input_not_increasing": (lambda: _demo().set_input("feed.T", [10, 0], [300, 310]),
@@ -384,7 +391,7 @@ API_CASES = {
     "simulate_empty_t_out": (lambda: _demo().simulate(t_out=[]), ["simulate(): t_out = []", "non-empty list"]),
     "simulate_zero_t_end": (lambda: _demo().simulate(t_end=0.0), ["simulate(): t_end = 0", "t_end > 0"]),
     "simulate_bad_rtol": (lambda: _demo().simulate(rtol=-1.0), ["simulate(): rtol = -1", "0 < rtol < 1"]),
-    "simulate_recycle_without_holdup": (_loop_simulate, ["mixer.T", "splitter.T", "hold-up"]),
+    "simulate_total_recycle": (_loop_simulate, ["loop.yaml: flowsheet 'loop'", "mixer.mdot", "splitter.mdot2"]),
     "set_t_end_zero": (lambda: _demo().set_t_end(0.0), ["t_end = 0 s", "t_end > 0"]),
 }
 
@@ -441,7 +448,9 @@ def test_bad_experiment_is_refused_before_any_run(case):
 
 
 def test_clear_input_is_the_explicit_way_to_replace_an_input():
-    fs = _demo()
+    fs = gf.load_text(TANKS + "inputs: {feed.T: {times: [0 s, 10 s], values: [300 K, 350 K]}}\n", "t.yaml")
+    with pytest.raises(ValueError, match="driven by the time-dependent input feed.T"):
+        fs.set("feed.T", 320.0)
     fs._scene.clear_input("feed.T")
     fs.set("feed.T", 320.0)
     r = fs.simulate(t_end=10.0, n_out=3)
