@@ -53,7 +53,7 @@ run_tests() {
 }
 
 # AddressSanitizer + UndefinedBehaviorSanitizer build with the libFuzzer targets (clang, -O1, assertions on) in
-# build-asan: every C++ test, the demo and headline scenes, a bounded run of each fuzz target and the replay of
+# build-asan: every C++ test, the headline scene, a bounded run of each fuzz target and the replay of
 # saved findings (tests/fuzz/README.md). Any sanitizer report fails its test.
 sanitize_build() {
   CC=clang-14 CXX=clang++-14 cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug \
