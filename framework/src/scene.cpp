@@ -93,13 +93,14 @@ size_t invalid_utf8(const std::string& s) {
 // kMaxDepth, and tags other than YAML's standard ones (a scene holds plain values, lists and mappings).
 class ShapeCheck : public YAML::EventHandler {
  public:
-  explicit ShapeCheck(std::string label) : label_(std::move(label)) {}
+  ShapeCheck(std::string label, std::string kind) : label_(std::move(label)), kind_(std::move(kind)) {}
   void OnDocumentStart(const YAML::Mark&) override {}
   void OnDocumentEnd() override {}
   void OnNull(const YAML::Mark& m, YAML::anchor_t a) override { leaf(m, a, ""); }
   void OnAlias(const YAML::Mark& m, YAML::anchor_t a) override {
     const auto it = size_.find(a);
-    if (it == size_.end()) fail(m, "an alias refers to a node that contains it (a cycle); a scene cannot be recursive");
+    if (it == size_.end())
+      fail(m, "an alias refers to a node that contains it (a cycle); a " + kind_ + " cannot be recursive");
     add(m, it->second);
   }
   void OnScalar(const YAML::Mark& m, const std::string& tag, YAML::anchor_t a, const std::string&) override {
@@ -138,15 +139,16 @@ class ShapeCheck : public YAML::EventHandler {
                                                    "tag:yaml.org,2002:seq"};
     if (!standard.count(tag))
       fail(m, "YAML tag '" + shown(tag.rfind("tag:yaml.org,2002:", 0) == 0 ? "!!" + tag.substr(18) : tag) +
-                  "' is not allowed (a scene holds plain values, lists and mappings; "
+                  "' is not allowed (a " + kind_ +
+                  " holds plain values, lists and mappings; "
                   "allowed tags: !!str, !!int, !!float, !!bool, !!null, !!map, !!seq)");
   }
   void add(const YAML::Mark& m, uint64_t n) {
     uint64_t& to = stack_.empty() ? total_ : stack_.back().nodes;
     to = std::min(to + n, kMaxNodes + 1);
     if (to > kMaxNodes)
-      fail(m, "more than " + std::to_string(kMaxNodes) +
-                  " values once YAML aliases (*name) are expanded; a scene is far smaller (an alias bomb?)");
+      fail(m, "more than " + std::to_string(kMaxNodes) + " values once YAML aliases (*name) are expanded; a " + kind_ +
+                  " is far smaller (an alias bomb?)");
   }
   void leaf(const YAML::Mark& m, YAML::anchor_t a, const std::string& tag) {
     check_tag(m, tag);
@@ -165,43 +167,46 @@ class ShapeCheck : public YAML::EventHandler {
     if (o.anchor) size_[o.anchor] = o.nodes;
     add(o.mark, o.nodes);
   }
-  std::string label_;
+  std::string label_, kind_;
   std::vector<Open> stack_;
   std::map<YAML::anchor_t, uint64_t> size_;
   uint64_t total_ = 0;
 };
 
-// Everything about the bytes of a scene that YAML::Load would either accept silently or choke on.
-void check_text(const std::string& text, const std::string& label) {
+}  // namespace
+
+void check_yaml_text(const std::string& text, const std::string& label, const std::string& kind) {
   if (text.size() > kMaxSceneBytes)
-    throw ConfigError(label + ": " + std::to_string(text.size()) + " bytes; a scene file is at most " +
+    throw ConfigError(label + ": " + std::to_string(text.size()) + " bytes; a " + kind + " file is at most " +
                       std::to_string(kMaxSceneBytes) + " bytes");
   for (size_t i = 0; i < text.size(); ++i) {
     const unsigned char c = text[i];
     if ((c < 0x20 && c != '\n' && c != '\r' && c != '\t') || c == 0x7f) {
       char b[8];
       std::snprintf(b, sizeof b, "0x%02x", c);
-      throw ConfigError(label + ": " + position(text, i) + ": control byte " + b +
-                        ": not a text file (a scene is YAML text in UTF-8)");
+      throw ConfigError(label + ": " + position(text, i) + ": control byte " + b + ": not a text file (a " + kind +
+                        " is YAML text in UTF-8)");
     }
   }
   if (const size_t bad = invalid_utf8(text); bad != std::string::npos) {
     char b[8];
     std::snprintf(b, sizeof b, "0x%02x", static_cast<unsigned char>(text[bad]));
-    throw ConfigError(label + ": " + position(text, bad) + ": byte " + b +
-                      " is not UTF-8 (a scene is YAML text in UTF-8; re-save the file as UTF-8)");
+    throw ConfigError(label + ": " + position(text, bad) + ": byte " + b + " is not UTF-8 (a " + kind +
+                      " is YAML text in UTF-8; re-save the file as UTF-8)");
   }
   std::istringstream in(text);
   YAML::Parser parser(in);
-  ShapeCheck check(label);
+  ShapeCheck check(label, kind);
   int documents = 0;
   try {
     while (parser.HandleNextDocument(check))
-      if (++documents > 1) throw ConfigError(label + ": more than one YAML document (---); a scene is one");
+      if (++documents > 1) throw ConfigError(label + ": more than one YAML document (---); a " + kind + " is one");
   } catch (const YAML::Exception& e) {
     throw ConfigError(label + ": not valid YAML: " + e.what());
   }
 }
+
+namespace {
 
 // Messages end up on one terminal line (exit 2 prints one line): escape what would break it, and keep a very
 // long one readable.
@@ -557,7 +562,7 @@ double parse_param_value(const Flowsheet& fs, const std::string& qualified, cons
 
 Scene load_scene_text(const std::string& text, const std::string& label, const Registry<Unit>& units) {
   try {
-    check_text(text, label);
+    check_yaml_text(text, label, "scene");
     YAML::Node root;
     try {
       root = YAML::Load(text);

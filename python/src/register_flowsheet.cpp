@@ -260,6 +260,19 @@ void register_flowsheet(py::module_& m) {
   m.def(
       "load_scene", [&reg](const std::string& path) { return load_scene(path, reg); }, "path"_a);
   m.def(
+      "check_yaml_text",
+      [](const py::object& text, const std::string& label, const std::string& kind) {
+        if (py::isinstance<py::bytes>(text)) return check_yaml_text(text.cast<std::string>(), label, kind);
+        if (!py::isinstance<py::str>(text))
+          throw ConfigError(label + ": expected the file's text (str or bytes), got " +
+                            std::string(py::str(text.get_type().attr("__name__"))));
+        const py::bytes b = text.attr("encode")("utf-8", "surrogatepass");
+        check_yaml_text(b.cast<std::string>(), label, kind);
+      },
+      "text"_a, "label"_a, "kind"_a = "YAML file",
+      "ConfigError (one line: file, line, column, what) unless the text is YAML granuflow can read safely: at most "
+      "1 MiB of UTF-8, one document, at most 200000 values with aliases expanded, nesting at most 64, standard tags.");
+  m.def(
       "load_scene_text",
       [&reg](const py::object& text, const std::string& label) {
         // Lone surrogates (from a file read with errors="surrogateescape") reach the loader as the bytes they

@@ -393,6 +393,15 @@ API_CASES = {
     "simulate_bad_rtol": (lambda: _demo().simulate(rtol=-1.0), ["simulate(): rtol = -1", "0 < rtol < 1"]),
     "simulate_total_recycle": (_loop_simulate, ["loop.yaml: flowsheet 'loop'", "mixer.mdot", "splitter.mdot2"]),
     "set_t_end_zero": (lambda: _demo().set_t_end(0.0), ["t_end = 0 s", "t_end > 0"]),
+    # the same limits for the YAML files the Python layer reads (sweep, contour, calibration, experiments)
+    "check_yaml_alias_bomb": (lambda: _core.check_yaml_text(alias_bomb(), "sweep.yaml", "sweep file"),
+                              ["sweep.yaml: line 14", "a sweep file is far smaller (an alias bomb?)"]),
+    "check_yaml_python_tag": (lambda: _core.check_yaml_text("a: !!python/name:os.system x\n", "exp.yaml"),
+                              ["exp.yaml: line 1, column 4", "YAML tag '!!python/name:os.system'"]),
+    "check_yaml_latin1_bytes": (lambda: _core.check_yaml_text(b"runs: [caf\xe9]\n", "stages.yaml", "stage file"),
+                                ["stages.yaml: line 1, column 11", "a stage file is YAML text in UTF-8"]),
+    "check_yaml_deep": (lambda: _core.check_yaml_text("a: " + "[" * 500 + "]" * 500, "c.yaml"),
+                        ["c.yaml", "deeper than 64 levels"]),
 }
 
 # The calibration core's experiments (as the Python layer hands them over): (experiments, words).
