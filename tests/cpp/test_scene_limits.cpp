@@ -42,7 +42,8 @@ std::string refusal(const std::string& text) {
 void expect_refused(const std::string& text, std::initializer_list<const char*> words) {
   const auto t0 = std::chrono::steady_clock::now();
   const std::string m = refusal(text);
-  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 2.0) << m;
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 20.0)
+      << m;  // a hang, not a slow parse (sanitizers)
   ASSERT_FALSE(m.empty()) << "accepted: " << text.substr(0, 200);
   for (const char* w : words) EXPECT_NE(m.find(w), std::string::npos) << w << " not in: " << m;
 }
