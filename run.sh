@@ -2,8 +2,8 @@
 # granuflow's two entry points for a fresh Debian 12 / Ubuntu machine (see README.md):
 #   ./run.sh main   install what is missing (apt-get), build (CMake, Release), run the main job into out/main
 #   ./run.sh test   same setup, then lint (clang-format-14, flake8) and every test: GoogleTest (ctest), pytest,
-#                   notebooks
-# Also: ./run.sh setup | build | lint | bench
+#                   notebooks, and the sanitizer build (./run.sh sanitize)
+# Also: ./run.sh setup | build | lint | bench | sanitize | fuzz scene|experiments [seconds]
 set -euo pipefail
 cd "$(dirname "$0")"
 
@@ -13,6 +13,8 @@ PACKAGES=(cmake ninja-build g++ pkg-config
   python3-dev python3-numpy python3-scipy python3-matplotlib python3-pandas python3-yaml python3-pytest
   python3-nbclient python3-nbformat python3-ipykernel jupyter-nbconvert python3-distributed python3-tqdm
   python3-nlopt clang-format-14 flake8)
+# Checking builds (./run.sh sanitize, fuzz): Debian's clang and its libFuzzer/sanitizer runtimes.
+PACKAGES+=(clang-14 libclang-rt-14-dev)
 MAIN_SCENE=flowsheets/stoeckl_gf25_batch.yaml
 
 setup() {
@@ -47,6 +49,36 @@ run_tests() {
   lint
   (cd build && ctest --output-on-failure -j "$(nproc)" -L fast)
   PYTHONPATH="$PWD/build/python" /usr/bin/python3 -m pytest -q tests/python
+  sanitize  # ~5 min on 2 cores: ASan+UBSan C++ tests, headline scene, bounded fuzzing (tests/fuzz/README.md)
+}
+
+# AddressSanitizer + UndefinedBehaviorSanitizer build with the libFuzzer targets (clang, -O1, assertions on) in
+# build-asan: every C++ test, the headline scene, a bounded run of each fuzz target and the replay of
+# saved findings (tests/fuzz/README.md). Any sanitizer report fails its test.
+sanitize_build() {
+  CC=clang-14 CXX=clang++-14 cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug \
+    -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g" -DGRANUFLOW_BUILD_PYTHON=OFF -DGRANUFLOW_SANITIZE=ON -DGRANUFLOW_FUZZ=ON \
+    -DGRANUFLOW_FUZZ_SECONDS="${GRANUFLOW_FUZZ_SECONDS:-5}" >/dev/null
+  cmake --build build-asan -j "$(nproc)"
+}
+sanitize() {
+  sanitize_build
+  (cd build-asan && ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
+    ctest --output-on-failure -j "$(nproc)" -L 'fast|scene|fuzz')
+}
+# A longer fuzz run of one target: ./run.sh fuzz scene|experiments [seconds] (default 600).
+fuzz() {
+  local target="${1:-scene}" seconds="${2:-600}" seeds
+  case "$target" in
+    scene) seeds="flowsheets tests/fuzz/regressions/scene" ;;
+    experiments) seeds="tests/fuzz/seeds/experiments tests/fuzz/regressions/experiments" ;;
+    *) echo "usage: ./run.sh fuzz scene|experiments [seconds]" >&2; exit 2 ;;
+  esac
+  sanitize_build
+  mkdir -p "build-asan/tests/fuzz/corpus/$target" build-asan/tests/fuzz/findings
+  # shellcheck disable=SC2086
+  "build-asan/tests/fuzz/fuzz_$target" -rss_limit_mb=2048 -timeout=20 -max_len=16384 -max_total_time="$seconds" \
+    -artifact_prefix=build-asan/tests/fuzz/findings/ "build-asan/tests/fuzz/corpus/$target" $seeds
 }
 
 case "${1:-}" in
@@ -56,5 +88,7 @@ case "${1:-}" in
   main) setup && build && ./build/granuflow run "$MAIN_SCENE" --out out/main ;;
   test) setup && build && run_tests ;;
   bench) setup && build && ./build/granuflow bench core && ./build/granuflow bench pbm ;;
-  *) echo "usage: ./run.sh main|test|setup|build|lint|bench" >&2; exit 2 ;;
+  sanitize) setup && sanitize ;;
+  fuzz) setup && fuzz "${2:-scene}" "${3:-600}" ;;
+  *) echo "usage: ./run.sh main|test|setup|build|lint|bench|sanitize|fuzz" >&2; exit 2 ;;
 esac

@@ -1,5 +1,6 @@
 #include "gas_inlet.hpp"
 
+#include "granuflow/errors.hpp"
 #include "granuflow/flowsheet.hpp"
 #include "granuflow/properties.hpp"
 
@@ -37,6 +38,19 @@ class GasInlet : public UnitBase<GasInlet> {
     const T t_basis = normal_basis_ ? T(props::kT0) : p[p_t_.i];
     const T p_basis = normal_basis_ ? T(props::kPressureAtm) : p[p_p_.i];
     return p[p_vdot_.i] * props::dry_air_partial_density(t_basis, p_basis, p[p_y_.i]);
+  }
+  // Air holding more water than saturation would condense at once, which no unit models: the integrator would
+  // grind on it until it gives up. Antoine, Eq. (69) of paper 001, gives the saturation humidity, Eq. (68).
+  void check(const UnitSpec&, const double* p) const override {
+    // Above the boiling point (p_sat >= p) no humidity saturates the air.
+    if (props::saturation_pressure(p[p_t_.i]) >= p[p_p_.i]) return;
+    const double y_sat = props::equilibrium_humidity(p[p_t_.i], p[p_p_.i]);
+    if (!(p[p_y_.i] <= y_sat))
+      throw ConfigError(violation("Y", p[p_y_.i], "kg/kg",
+                                  "Y <= saturation humidity " + fmt_num(y_sat) + " kg/kg (relative humidity " +
+                                      fmt_num(100.0 * props::relative_humidity(p[p_y_.i], p[p_t_.i], p[p_p_.i])) +
+                                      " %) at T = " + fmt_num(p[p_t_.i]) + " K and p = " + fmt_num(p[p_p_.i]) +
+                                      " Pa: the inlet air must not be supersaturated"));
   }
   template <class T>
   Status eval(const Ctx<T>& c) const {

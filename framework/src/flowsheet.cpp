@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <set>
+#include <sstream>
 
 #include "granuflow/errors.hpp"
 
@@ -327,7 +328,46 @@ void Flowsheet::set_param_value(int id, double v) {
                       ": cannot be set, it follows " + source + " by a link (links: " + target + ": " + source +
                       "); set " + source + " instead, or remove the link");
   }
+  // The input would replace the value in every run: refused, never dropped silently.
+  if (has_input(id)) {
+    const ParamSpec& s = param_spec(id);
+    const std::string q = qualified_name(id);
+    throw ConfigError(q + " = " + fmt_num(v) + (s.unit.empty() || s.unit == "-" ? "" : " " + s.unit) +
+                      ": cannot be set, it is driven by the time-dependent input " + q + " (inputs: " + q +
+                      "); change the input's values, or remove the input to make " + q + " a constant");
+  }
   store_param(id, v);
+}
+
+std::pair<double, double> Flowsheet::bounds(int id) const {
+  const ParamSpec& s = param_spec(id);
+  double lo = s.lower, hi = s.upper;
+  for (int t : linked_targets(id)) {
+    lo = std::max(lo, param_spec(t).lower);
+    hi = std::min(hi, param_spec(t).upper);
+  }
+  return {lo, hi};
+}
+
+// Names the link that narrows a source's bounds, if one does, for a message.
+static std::string bound_rule(const Flowsheet& fs, int id) {
+  const ParamSpec& s = fs.param_spec(id);
+  const auto [lo, hi] = fs.bounds(id);
+  std::ostringstream rule;
+  rule.precision(10);
+  rule << lo << " <= " << s.name << " <= " << hi;
+  std::string why;
+  for (int t : fs.linked_targets(id)) {
+    const ParamSpec& ts = fs.param_spec(t);
+    if (ts.lower > s.lower || ts.upper < s.upper)
+      why += (why.empty() ? "" : ", ") + fs.qualified_name(t) + " in [" + fmt_num(ts.lower) + ", " + fmt_num(ts.upper) +
+             "] follows it by a link";
+  }
+  if (!why.empty())
+    rule << " (" << why << ")";
+  else if (!s.source.empty())
+    rule << " (" << s.source << ")";
+  return rule.str();
 }
 
 void Flowsheet::store_param(int id, double v) {
@@ -335,12 +375,8 @@ void Flowsheet::store_param(int id, double v) {
   const ParamSpec& s = units_[u].spec.params()[k];
   const std::string where = units_[u].name + "." + s.name;
   if (!std::isfinite(v)) throw ConfigError(violation(where, v, s.unit, "a finite value"));
-  if (!(v >= s.lower && v <= s.upper)) {
-    std::ostringstream rule;
-    rule.precision(10);
-    rule << s.lower << " <= " << s.name << " <= " << s.upper << (s.source.empty() ? "" : " (" + s.source + ")");
-    throw ConfigError(violation(where, v, s.unit, rule.str()));
-  }
+  const auto [lo, hi] = bounds(id);
+  if (!(v >= lo && v <= hi)) throw ConfigError(violation(where, v, s.unit, bound_rule(*this, id)));
   units_[u].params[k] = v;
 }
 
@@ -364,7 +400,15 @@ void Flowsheet::set_input(const std::string& qualified, PiecewiseLinear input) {
       throw ConfigError(violation("input " + qualified + ".values[" + std::to_string(i) + "]", v, s.unit, rule.str()));
     }
   }
+  // Parameters that follow this one by a link take only its value at t = 0.
+  if (const auto [lo, hi] = bounds(id); !(input(0.0) >= lo && input(0.0) <= hi))
+    throw ConfigError(violation("input " + qualified + " at t = 0 s", input(0.0), s.unit, bound_rule(*this, id)));
   units_[u].inputs[k] = std::move(input);
+}
+
+void Flowsheet::clear_input(const std::string& qualified) {
+  auto [u, k] = param_location(param_id(qualified));
+  units_[u].inputs[k].reset();
 }
 
 void Flowsheet::link(const std::string& target, const std::string& source) {
@@ -384,7 +428,20 @@ void Flowsheet::link(const std::string& target, const std::string& source) {
   if (has_input(t))
     throw ConfigError("link " + target + " -> " + source + ": " + target +
                       " has a time-dependent input, which the link would override; remove one of them");
+  // The source may take only values its follower can start from.
+  const ParamSpec &ts = param_spec(t), &ss = param_spec(s);
+  const auto [lo, hi] = bounds(s);
+  if (std::max(lo, ts.lower) > std::min(hi, ts.upper))
+    throw ConfigError("link " + target + " -> " + source + ": no value is allowed for both (" + target + " in [" +
+                      fmt_num(ts.lower) + ", " + fmt_num(ts.upper) + "] " + ts.unit + ", " + source + " in [" +
+                      fmt_num(lo) + ", " + fmt_num(hi) + "] " + ss.unit + ")");
   links_.push_back({t, s});
+  // The source's value (at t = 0) must be one its new follower can take.
+  if (const double v = linked_value(s); !(v >= ts.lower && v <= ts.upper)) {
+    const std::string rule = bound_rule(*this, s);  // names the new link
+    links_.pop_back();
+    throw ConfigError(violation(has_input(s) ? "input " + source + " at t = 0 s" : source, v, ss.unit, rule));
+  }
 }
 
 std::vector<double> Flowsheet::run_params(int u) const {
@@ -408,11 +465,33 @@ std::vector<double> Flowsheet::run_params(int u) const {
 
 void Flowsheet::check_units() const {
   for (size_t u = 0; u < units_.size(); ++u) {
-    const std::vector<double> p = run_params(static_cast<int>(u));
-    try {
-      units_[u].unit->check(units_[u].spec, p.data());
-    } catch (const ConfigError& e) {
-      throw ConfigError(qualify_unit_message(static_cast<int>(u), e.what()));
+    const int ui = static_cast<int>(u);
+    const UnitInstance& inst = units_[u];
+    const std::vector<double> p0 = run_params(ui);
+    std::set<double> knots;
+    for (const auto& in : inst.inputs)
+      if (in) knots.insert(in->times().begin(), in->times().end());
+    if (knots.empty()) {
+      try {
+        inst.unit->check(inst.spec, p0.data());
+      } catch (const ConfigError& e) {
+        throw ConfigError(qualify_unit_message(ui, e.what()));
+      }
+      continue;
+    }
+    // With inputs, the values a run sees: at every knot (the constant stored under an input is never used).
+    std::vector<double> p = p0;
+    for (double t : knots) {
+      for (size_t k = 0; k < p.size(); ++k) p[k] = inst.inputs[k] ? (*inst.inputs[k])(t) : p0[k];
+      try {
+        inst.unit->check(inst.spec, p.data());
+      } catch (const ConfigError& e) {
+        std::string driven;
+        for (size_t k = 0; k < p.size(); ++k)
+          if (inst.inputs[k]) driven += (driven.empty() ? "" : ", ") + inst.name + "." + inst.spec.params()[k].name;
+        throw ConfigError(qualify_unit_message(ui, e.what()) + " (at t = " + fmt_num(t) + " s of the inputs " + driven +
+                          ")");
+      }
     }
   }
 }

@@ -1,8 +1,12 @@
 #include "granuflow/scene.hpp"
 
+#include <sys/stat.h>
+#include <yaml-cpp/eventhandler.h>
 #include <yaml-cpp/yaml.h>
 
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <limits>
 #include <set>
@@ -14,6 +18,214 @@
 namespace granuflow {
 namespace {
 
+// Limits that keep a hostile or mistaken file from hanging the loader or filling memory: a scene is a few
+// kilobytes (an input table of 10^4 knots about 200 kB); YAML aliases can make a few hundred bytes stand for
+// 10^9 values, so nodes are counted with aliases expanded before anything walks the tree.
+constexpr size_t kMaxSceneBytes = 1 << 20;
+constexpr uint64_t kMaxNodes = 200000;
+constexpr int kMaxDepth = 64;
+
+// User text inside a message: one line, at most 60 characters shown.
+std::string shown(const std::string& text) {
+  std::string out;
+  for (unsigned char c : text) {
+    if (out.size() >= 60) return out + "...";
+    if (c == '\n')
+      out += "\\n";
+    else if (c < 0x20 || c == 0x7f) {
+      char b[8];
+      std::snprintf(b, sizeof b, "\\x%02x", c);
+      out += b;
+    } else
+      out += static_cast<char>(c);
+  }
+  return out;
+}
+
+// Line and column (1-based) of byte `pos` of `text`.
+std::string position(const std::string& text, size_t pos) {
+  size_t line = 1, col = 1;
+  for (size_t i = 0; i < pos && i < text.size(); ++i) {
+    if (text[i] == '\n')
+      ++line, col = 1;
+    else
+      ++col;
+  }
+  return "line " + std::to_string(line) + ", column " + std::to_string(col);
+}
+
+// The offset of the first byte that is not part of well-formed UTF-8 (RFC 3629: no overlong forms, no
+// surrogates, at most U+10FFFF), or npos.
+size_t invalid_utf8(const std::string& s) {
+  const auto* b = reinterpret_cast<const unsigned char*>(s.data());
+  const size_t n = s.size();
+  for (size_t i = 0; i < n;) {
+    const unsigned c = b[i];
+    size_t len;
+    unsigned lo = 0x80, hi = 0xbf;
+    if (c < 0x80) {
+      ++i;
+      continue;
+    } else if (c >= 0xc2 && c <= 0xdf) {
+      len = 2;
+    } else if (c >= 0xe0 && c <= 0xef) {
+      len = 3;
+      if (c == 0xe0) lo = 0xa0;
+      if (c == 0xed) hi = 0x9f;
+    } else if (c >= 0xf0 && c <= 0xf4) {
+      len = 4;
+      if (c == 0xf0) lo = 0x90;
+      if (c == 0xf4) hi = 0x8f;
+    } else {
+      return i;
+    }
+    if (i + len > n) return i;
+    if (b[i + 1] < lo || b[i + 1] > hi) return i;
+    for (size_t k = 2; k < len; ++k)
+      if (b[i + k] < 0x80 || b[i + k] > 0xbf) return i;
+    i += len;
+  }
+  return std::string::npos;
+}
+
+// Walks the parser's events (no tree is built) and refuses what a scene never needs: more nodes than
+// kMaxNodes once aliases are expanded, an alias inside the node it names (a cycle), nesting deeper than
+// kMaxDepth, and tags other than YAML's standard ones (a scene holds plain values, lists and mappings).
+class ShapeCheck : public YAML::EventHandler {
+ public:
+  ShapeCheck(std::string label, std::string kind) : label_(std::move(label)), kind_(std::move(kind)) {}
+  void OnDocumentStart(const YAML::Mark&) override {}
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark& m, YAML::anchor_t a) override { leaf(m, a, ""); }
+  void OnAlias(const YAML::Mark& m, YAML::anchor_t a) override {
+    const auto it = size_.find(a);
+    if (it == size_.end())
+      fail(m, "an alias refers to a node that contains it (a cycle); a " + kind_ + " cannot be recursive");
+    add(m, it->second);
+  }
+  void OnScalar(const YAML::Mark& m, const std::string& tag, YAML::anchor_t a, const std::string&) override {
+    leaf(m, a, tag);
+  }
+  void OnSequenceStart(const YAML::Mark& m, const std::string& tag, YAML::anchor_t a,
+                       YAML::EmitterStyle::value) override {
+    open(m, tag, a);
+  }
+  void OnSequenceEnd() override { close(); }
+  void OnMapStart(const YAML::Mark& m, const std::string& tag, YAML::anchor_t a, YAML::EmitterStyle::value) override {
+    open(m, tag, a);
+  }
+  void OnMapEnd() override { close(); }
+
+ private:
+  struct Open {
+    YAML::anchor_t anchor;
+    uint64_t nodes;
+    YAML::Mark mark;
+  };
+  [[noreturn]] void fail(const YAML::Mark& m, const std::string& what) const {
+    throw ConfigError(label_ + ": line " + std::to_string(m.line + 1) + ", column " + std::to_string(m.column + 1) +
+                      ": " + what);
+  }
+  void check_tag(const YAML::Mark& m, const std::string& tag) const {
+    static const std::set<std::string> standard = {"",
+                                                   "?",
+                                                   "!",
+                                                   "tag:yaml.org,2002:str",
+                                                   "tag:yaml.org,2002:int",
+                                                   "tag:yaml.org,2002:float",
+                                                   "tag:yaml.org,2002:bool",
+                                                   "tag:yaml.org,2002:null",
+                                                   "tag:yaml.org,2002:map",
+                                                   "tag:yaml.org,2002:seq"};
+    if (!standard.count(tag))
+      fail(m, "YAML tag '" + shown(tag.rfind("tag:yaml.org,2002:", 0) == 0 ? "!!" + tag.substr(18) : tag) +
+                  "' is not allowed (a " + kind_ +
+                  " holds plain values, lists and mappings; "
+                  "allowed tags: !!str, !!int, !!float, !!bool, !!null, !!map, !!seq)");
+  }
+  void add(const YAML::Mark& m, uint64_t n) {
+    uint64_t& to = stack_.empty() ? total_ : stack_.back().nodes;
+    to = std::min(to + n, kMaxNodes + 1);
+    if (to > kMaxNodes)
+      fail(m, "more than " + std::to_string(kMaxNodes) + " values once YAML aliases (*name) are expanded; a " + kind_ +
+                  " is far smaller (an alias bomb?)");
+  }
+  void leaf(const YAML::Mark& m, YAML::anchor_t a, const std::string& tag) {
+    check_tag(m, tag);
+    if (a) size_[a] = 1;
+    add(m, 1);
+  }
+  void open(const YAML::Mark& m, const std::string& tag, YAML::anchor_t a) {
+    check_tag(m, tag);
+    if (stack_.size() >= size_t(kMaxDepth))
+      fail(m, "lists and mappings nested deeper than " + std::to_string(kMaxDepth) + " levels");
+    stack_.push_back({a, 1, m});
+  }
+  void close() {
+    const Open o = stack_.back();
+    stack_.pop_back();
+    if (o.anchor) size_[o.anchor] = o.nodes;
+    add(o.mark, o.nodes);
+  }
+  std::string label_, kind_;
+  std::vector<Open> stack_;
+  std::map<YAML::anchor_t, uint64_t> size_;
+  uint64_t total_ = 0;
+};
+
+}  // namespace
+
+void check_yaml_text(const std::string& text, const std::string& label, const std::string& kind) {
+  if (text.size() > kMaxSceneBytes)
+    throw ConfigError(label + ": " + std::to_string(text.size()) + " bytes; a " + kind + " file is at most " +
+                      std::to_string(kMaxSceneBytes) + " bytes");
+  for (size_t i = 0; i < text.size(); ++i) {
+    const unsigned char c = text[i];
+    if ((c < 0x20 && c != '\n' && c != '\r' && c != '\t') || c == 0x7f) {
+      char b[8];
+      std::snprintf(b, sizeof b, "0x%02x", c);
+      throw ConfigError(label + ": " + position(text, i) + ": control byte " + b + ": not a text file (a " + kind +
+                        " is YAML text in UTF-8)");
+    }
+  }
+  if (const size_t bad = invalid_utf8(text); bad != std::string::npos) {
+    char b[8];
+    std::snprintf(b, sizeof b, "0x%02x", static_cast<unsigned char>(text[bad]));
+    throw ConfigError(label + ": " + position(text, bad) + ": byte " + b + " is not UTF-8 (a " + kind +
+                      " is YAML text in UTF-8; re-save the file as UTF-8)");
+  }
+  std::istringstream in(text);
+  YAML::Parser parser(in);
+  ShapeCheck check(label, kind);
+  int documents = 0;
+  try {
+    while (parser.HandleNextDocument(check))
+      if (++documents > 1) throw ConfigError(label + ": more than one YAML document (---); a " + kind + " is one");
+  } catch (const YAML::Exception& e) {
+    throw ConfigError(label + ": not valid YAML: " + e.what());
+  }
+}
+
+namespace {
+
+// Messages end up on one terminal line (exit 2 prints one line): escape what would break it, and keep a very
+// long one readable.
+std::string one_line(const std::string& m) {
+  std::string out;
+  for (unsigned char c : m) {
+    if (c == '\n')
+      out += "\\n";
+    else if (c == '\r' || c == '\t')
+      out += ' ';
+    else if (c < 0x20 || c == 0x7f)
+      out += '?';
+    else
+      out += static_cast<char>(c);
+  }
+  if (out.size() > 1200) out = out.substr(0, 800) + " ... " + out.substr(out.size() - 300);
+  return out;
+}
+
 std::string kind_name(const YAML::Node& n) {
   switch (n.Type()) {
     case YAML::NodeType::Map:
@@ -21,7 +233,7 @@ std::string kind_name(const YAML::Node& n) {
     case YAML::NodeType::Sequence:
       return "a list";
     case YAML::NodeType::Scalar:
-      return "'" + n.Scalar() + "'";
+      return "'" + shown(n.Scalar()) + "'";
     case YAML::NodeType::Null:
       return "empty";
     default:
@@ -66,7 +278,8 @@ class Loader {
         if (!u["settings"].IsMap()) fail(at + ".settings", "expected a mapping, got " + kind_name(u["settings"]));
         check_unique(u["settings"], at + ".settings");
         for (const auto& st : u["settings"])
-          settings[st.first.as<std::string>()] = scalar(st.second, at + ".settings." + st.first.as<std::string>());
+          settings[key_of(st.first, at + ".settings")] =
+              scalar(st.second, at + ".settings." + key_of(st.first, at + ".settings"));
       }
       try {
         fs.add_unit(name, units_.create(type, label_ + ": " + at + ".type"),
@@ -81,7 +294,7 @@ class Loader {
       add("particles", "particles", root["particles"], "particles");
     }
     for (const auto& kv : units) {
-      const std::string name = kv.first.as<std::string>();
+      const std::string name = key_of(kv.first, "units");
       add(name, "units." + name, kv.second, "");
     }
 
@@ -92,7 +305,7 @@ class Loader {
         const std::string at = "connections[" + std::to_string(i) + "]";
         const std::string text = scalar(c[i], at);
         const auto arrow = text.find("->");
-        if (arrow == std::string::npos) fail(at, "'" + text + "': expected \"unit.port -> unit.port\"");
+        if (arrow == std::string::npos) fail(at, "'" + shown(text) + "': expected \"unit.port -> unit.port\"");
         try {
           fs.connect(trim(text.substr(0, arrow)), trim(text.substr(arrow + 2)));
         } catch (const ConfigError& e) {
@@ -111,7 +324,7 @@ class Loader {
       if (!node.IsMap()) fail(at, "expected a mapping of parameter -> value, got " + kind_name(node));
       check_unique(node, at);
       for (const auto& p : node) {
-        const std::string key = p.first.as<std::string>();
+        const std::string key = key_of(p.first, at);
         const std::string q = unit + "." + key;
         try {
           fs.param_id(q);
@@ -134,7 +347,7 @@ class Loader {
       if (!l.IsMap()) fail("links", "expected a mapping of unit.param -> unit.param it follows");
       check_unique(l, "links");
       for (const auto& kv : l) {
-        const std::string target = kv.first.as<std::string>();
+        const std::string target = key_of(kv.first, "links");
         const std::string source = scalar(kv.second, "links." + target);
         // A value given for a parameter that follows another would be overwritten at the start of every run.
         if (auto g = given.find(target); g != given.end())
@@ -178,10 +391,10 @@ class Loader {
       const auto states = fs.state_names();
       const auto outputs = fs.output_names();
       for (const auto& kv : sm) {
-        const std::string key = kv.first.as<std::string>(), src = scalar(kv.second, "summary." + key);
+        const std::string key = key_of(kv.first, "summary"), src = scalar(kv.second, "summary." + key);
         if (std::find(states.begin(), states.end(), src) == states.end() &&
             std::find(outputs.begin(), outputs.end(), src) == outputs.end())
-          fail("summary." + key, "'" + src + "' is neither a state nor a reported output of the flowsheet");
+          fail("summary." + key, "'" + shown(src) + "' is neither a state nor a reported output of the flowsheet");
         s.summary[key] = src;
       }
     }
@@ -210,7 +423,7 @@ class Loader {
   void check_keys(const YAML::Node& m, const std::string& at, const std::set<std::string>& allowed) const {
     check_unique(m, at);
     for (const auto& kv : m) {
-      const std::string k = kv.first.as<std::string>();
+      const std::string k = key_of(kv.first, at);
       if (!allowed.count(k)) {
         std::string list;
         for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
@@ -218,11 +431,17 @@ class Loader {
       }
     }
   }
+  // A key is a plain name: yaml-cpp would convert a list or mapping key with "bad conversion", naming nothing.
+  std::string key_of(const YAML::Node& k, const std::string& at) const {
+    if (!k.IsScalar() || k.Scalar().empty())
+      fail(at, "a key must be a plain name, got " + (k.IsScalar() ? std::string("an empty key") : kind_name(k)));
+    return k.Scalar();
+  }
   // YAML parsers keep the last of two equal keys; a scene must say each thing once.
   void check_unique(const YAML::Node& m, const std::string& at) const {
     std::set<std::string> seen;
     for (const auto& kv : m) {
-      const std::string k = kv.first.as<std::string>();
+      const std::string k = key_of(kv.first, at);
       if (!seen.insert(k).second) fail(at.empty() ? k : at + "." + k, "given twice");
     }
   }
@@ -239,7 +458,7 @@ class Loader {
     std::string unit;
     const std::string text = scalar(n, at);
     if (!parse_quantity(text, &v, &unit) || !std::isfinite(v))
-      fail(at, "'" + text + "' is not a number with an optional unit (e.g. \"60 degC\")");
+      fail(at, "'" + shown(text) + "' is not a number with an optional unit (e.g. \"60 degC\")");
     return to_si(v, unit, si, label_ + ": " + at);
   }
   void load_output(const YAML::Node& o, SimOptions& opt) const {
@@ -259,7 +478,7 @@ class Loader {
     const std::string text = scalar(n, at);
     char* end = nullptr;
     const double v = std::strtod(text.c_str(), &end);
-    if (end == text.c_str() || *end != '\0' || !std::isfinite(v)) fail(at, "'" + text + "' is not a number");
+    if (end == text.c_str() || *end != '\0' || !std::isfinite(v)) fail(at, "'" + shown(text) + "' is not a number");
     return v;
   }
   // A count. Its range is SimOptions::validate()'s to check, but a fraction or a number beyond int cannot be
@@ -268,7 +487,7 @@ class Loader {
     constexpr int kMax = std::numeric_limits<int>::max();
     const double v = number(n, at);
     if (v != std::floor(v) || std::abs(v) > kMax)
-      fail(at, "'" + n.Scalar() + "' is not a whole number between -" + std::to_string(kMax) + " and " +
+      fail(at, "'" + shown(n.Scalar()) + "' is not a whole number between -" + std::to_string(kMax) + " and " +
                    std::to_string(kMax));
     return static_cast<int>(v);
   }
@@ -287,12 +506,16 @@ class Loader {
     if (!in.IsMap()) fail("inputs", "expected a mapping of unit.param -> {times, values, interp}");
     check_unique(in, "inputs");
     for (const auto& kv : in) {
-      const std::string q = kv.first.as<std::string>(), at = "inputs." + q;
+      const std::string q = key_of(kv.first, "inputs"), at = "inputs." + q;
       try {
         fs.param_id(q);
       } catch (const ConfigError& e) {
         fail(at, e.what());
       }
+      // The input would replace the constant in every run, so the constant would be ignored.
+      if (auto g = given.find(q); g != given.end())
+        fail(at, q + " is given both as " + g->second + " and as " + at +
+                     "; an input replaces the constant value in every run: remove one of them");
       const YAML::Node n = kv.second;
       if (!n.IsMap()) fail(at, "expected a mapping with times and values");
       check_keys(n, at, {"times", "values", "interp"});
@@ -310,7 +533,7 @@ class Loader {
         if (s == "step")
           interp = PiecewiseLinear::Interp::kStep;
         else if (s != "linear")
-          fail(at + ".interp", "'" + s + "': not one of linear, step");
+          fail(at + ".interp", "'" + shown(s) + "': not one of linear, step");
       }
       try {
         fs.set_input(q, PiecewiseLinear(t, v, interp, label_ + ": " + at));
@@ -333,24 +556,29 @@ double parse_param_value(const Flowsheet& fs, const std::string& qualified, cons
   double v;
   std::string unit;
   if (!parse_quantity(text, &v, &unit) || !std::isfinite(v))
-    throw ConfigError(where + " = '" + text + "': expected a number with an optional unit (SI unit: " + spec.unit +
-                      ")");
+    throw ConfigError(where + " = '" + shown(text) +
+                      "': expected a number with an optional unit (SI unit: " + spec.unit + ")");
   return to_si(v, unit, spec.unit, where);
 }
 
 Scene load_scene_text(const std::string& text, const std::string& label, const Registry<Unit>& units) {
-  YAML::Node root;
   try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    throw ConfigError(label + ": not valid YAML: " + e.what());
-  }
-  try {
-    Scene s = Loader(label, units).load(root);
-    s.text = text;
-    return s;
-  } catch (const YAML::Exception& e) {  // e.g. a key that is a list: valid YAML, but no scene
-    throw ConfigError(label + ": " + e.what());
+    check_yaml_text(text, label, "scene");
+    YAML::Node root;
+    try {
+      root = YAML::Load(text);
+    } catch (const YAML::Exception& e) {
+      throw ConfigError(label + ": not valid YAML: " + e.what());
+    }
+    try {
+      Scene s = Loader(label, units).load(root);
+      s.text = text;
+      return s;
+    } catch (const YAML::Exception& e) {  // valid YAML, but no scene; the loader names keys before converting
+      throw ConfigError(label + ": " + e.what());
+    }
+  } catch (const ConfigError& e) {
+    throw ConfigError(one_line(e.what()));
   }
 }
 
@@ -366,12 +594,29 @@ Scene clone_scene(const Scene& src, const Registry<Unit>& units) {
   return s;
 }
 
+// Only a regular file is read: a directory "opens" as an empty stream on some systems, and a fifo or a device
+// would block or never end.
+static std::string read_scene_file(const std::string& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0)
+    throw ConfigError(path + ": cannot read the scene file (" + std::strerror(errno) + ")");
+  if (S_ISDIR(st.st_mode)) throw ConfigError(path + ": is a directory; expected a scene file (.yaml)");
+  if (!S_ISREG(st.st_mode)) throw ConfigError(path + ": not a regular file; expected a scene file (.yaml)");
+  if (static_cast<uint64_t>(st.st_size) > kMaxSceneBytes)
+    throw ConfigError(path + ": " + std::to_string(st.st_size) + " bytes; a scene file is at most " +
+                      std::to_string(kMaxSceneBytes) + " bytes");
+  errno = 0;
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw ConfigError(path + ": cannot read the scene file (" + std::strerror(errno ? errno : EACCES) + ")");
+  std::string text(kMaxSceneBytes + 1, '\0');
+  f.read(&text[0], static_cast<std::streamsize>(text.size()));
+  if (f.bad()) throw ConfigError(path + ": cannot read the scene file (read error)");
+  text.resize(static_cast<size_t>(f.gcount()));
+  return text;
+}
+
 Scene load_scene(const std::string& path, const Registry<Unit>& units) {
-  std::ifstream f(path);
-  if (!f) throw ConfigError(path + ": cannot open the scene file");
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return load_scene_text(ss.str(), path, units);
+  return load_scene_text(read_scene_file(path), path, units);
 }
 
 }  // namespace granuflow

@@ -15,6 +15,7 @@
 
 #include "consistent_sensitivities.hpp"
 #include "granuflow/errors.hpp"
+#include "granuflow/structure.hpp"
 #include "ode_simulator.hpp"
 #include "run_common.hpp"
 #include "solver_setup.hpp"
@@ -34,6 +35,11 @@ void SimOptions::validate(bool scene_keys) const {
   if (max_steps < 1) fail("max_steps", "solver.max_steps", double(max_steps), "", "max_steps >= 1");
   if (!(max_step >= 0)) fail("max_step", "solver.max_step", max_step, scene_keys ? "s" : "", "max_step >= 0");
   if (t_out.empty() && n_out < 2) fail("n_out", "output.n", n_out, "", "n_out >= 2");
+  // The results hold every state at every output time: beyond this a request is a typo, not a plan.
+  if (t_out.empty() && n_out > kMaxOutputTimes)
+    fail("n_out", "output.n", n_out, "", "n_out <= " + std::to_string(kMaxOutputTimes));
+  if (t_out.size() > size_t(kMaxOutputTimes))
+    fail("t_out", "output.times", double(t_out.size()), "", "at most " + std::to_string(kMaxOutputTimes) + " times");
   for (size_t i = 0; i < t_out.size(); ++i) {
     const std::string field = "t_out[" + std::to_string(i) + "]", key = "output.times[" + std::to_string(i) + "]";
     if (!(t_out[i] >= 0 && t_out[i] <= t_end * (1 + 1e-12)))
@@ -108,6 +114,7 @@ SimResult simulate_ida(Flowsheet& fs, const SimOptions& opt, const std::string& 
 SimResult simulate(Flowsheet& fs, const SimOptions& opt) {
   opt.validate();
   if (!fs.finalized()) fs.finalize();
+  fs.check_units();  // every unit at the values of the run, inputs at each of their knots
   if (opt.method == "ida") return simulate_ida(fs, opt, "asked for (solver.method)");
   const std::string algebraic = detail::first_algebraic_state(fs);
   if (!algebraic.empty()) {
@@ -135,6 +142,7 @@ SimResult simulate_ida(Flowsheet& fs, const SimOptions& opt, const std::string& 
   DaeSystem sys(fs, dense);
   const int n = sys.size(), n_full = sys.full_size(), nq = sys.n_quadratures();
   if (n == 0) throw ConfigError("flowsheet '" + fs.name() + "' has no states to integrate");
+  check_algebraic_structure(sys);  // names an unsolvable algebraic part before IDACalcIC fails on it
 
   const std::vector<int> sens_ids = sensitivity_ids(fs, opt);
   const std::vector<double> t_out = output_times(opt);

@@ -34,30 +34,56 @@ void check_keys(const py::dict& d, const std::set<std::string>& allowed, const s
   }
 }
 
+// A value converted for the core, or a ConfigError naming where it was and what it should have been (pybind's
+// cast_error names neither).
+template <class T>
+T as(const py::handle& v, const std::string& where, const char* expected) {
+  bool convertible = true;  // True is no number, and a str no list of numbers
+  if constexpr (std::is_same_v<T, double> || std::is_same_v<T, std::vector<double>>)
+    convertible = !py::isinstance<py::bool_>(v) && !py::isinstance<py::str>(v);
+  if (convertible) {
+    try {
+      return v.cast<T>();
+    } catch (const py::cast_error&) {
+    }
+  }
+  std::string shown = py::repr(v).cast<std::string>();
+  if (shown.size() > 60) shown = shown.substr(0, 60) + "...";
+  throw ConfigError(where + " = " + shown + ": expected " + expected);
+}
+
+template <class T>
+T required(const py::dict& d, const char* key, const std::string& where, const char* expected) {
+  if (!d.contains(key)) throw ConfigError(where + ": missing required key '" + key + "'");
+  return as<T>(d[key], where + "." + key, expected);
+}
+
 // Reads d[key] into out where present and not None.
 template <class T>
-void read_optional(const py::dict& d, const char* key, T& out) {
-  if (d.contains(key) && !d[key].is_none()) out = d[key].cast<T>();
+void read_optional(const py::dict& d, const char* key, T& out, const std::string& where = "value") {
+  if (d.contains(key) && !d[key].is_none()) out = as<T>(d[key], where + "." + key, "a number");
 }
 
 Experiment to_experiment(const py::dict& d) {
   check_keys(d, {"name", "settings", "t_end", "observations"}, "experiment");
   Experiment e;
-  e.name = d["name"].cast<std::string>();
+  e.name = required<std::string>(d, "name", "experiment", "a name (str)");
+  const std::string w = "experiment '" + e.name + "'";
   if (d.contains("settings"))
-    for (const auto& [k, v] : d["settings"].cast<py::dict>())
-      e.settings.emplace_back(k.cast<std::string>(), v.cast<double>());
-  read_optional(d, "t_end", e.t_end);
-  for (const auto& o : d["observations"].cast<py::list>()) {
-    const auto od = o.cast<py::dict>();
-    const std::string where = "experiment '" + e.name + "': observation";
+    for (const auto& [k, v] : as<py::dict>(d["settings"], w + ".settings", "a dict of unit.param -> SI value"))
+      e.settings.emplace_back(as<std::string>(k, w + ".settings", "unit.param names (str)"),
+                              as<double>(v, w + ".settings." + py::str(k).cast<std::string>(), "a number (SI)"));
+  read_optional(d, "t_end", e.t_end, w);
+  for (const auto& o : required<py::list>(d, "observations", w, "a list of observations")) {
+    const auto od = as<py::dict>(o, w + ".observations[]", "a dict with name, t, value, sigma_abs or sigma_rel");
+    const std::string where = w + ": observation";
     check_keys(od, {"name", "t", "value", "sigma_abs", "sigma_rel"}, where);
     Observation ob;
-    ob.name = od["name"].cast<std::string>();
-    ob.t = od["t"].cast<std::vector<double>>();
-    ob.value = od["value"].cast<std::vector<double>>();
-    read_optional(od, "sigma_abs", ob.sigma_abs);
-    read_optional(od, "sigma_rel", ob.sigma_rel);
+    ob.name = required<std::string>(od, "name", where, "a state or output name (str)");
+    ob.t = required<std::vector<double>>(od, "t", where + " " + ob.name, "a list of times (s)");
+    ob.value = required<std::vector<double>>(od, "value", where + " " + ob.name, "a list of numbers (SI)");
+    read_optional(od, "sigma_abs", ob.sigma_abs, where + " " + ob.name);
+    read_optional(od, "sigma_rel", ob.sigma_rel, where + " " + ob.name);
     // sizes, sigmas, times and values are checked in one place: the core's validate_experiments (calibrate,
     // predict, StageProblem), with the experiment and observation named
     e.observations.push_back(std::move(ob));

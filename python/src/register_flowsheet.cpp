@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <tuple>
 
 #include "granuflow/dae_system.hpp"
 #include "granuflow/errors.hpp"
@@ -28,6 +29,10 @@ py::array_t<double> as_array(const std::vector<double>& v, std::vector<py::ssize
 double value_for(const Scene& s, const std::string& name, const py::handle& v) {
   if (py::isinstance<py::str>(v))
     return parse_param_value(*s.flowsheet, name, v.cast<std::string>(), "parameter " + name);
+  // True would silently become 1.0: a flag is never a parameter value.
+  if (py::isinstance<py::bool_>(v))
+    throw ConfigError("parameter " + name + " = " + std::string(py::str(v)) +
+                      ": expected a number (SI) or a string with a unit, e.g. '60 degC', not a bool");
   try {
     return v.cast<double>();
   } catch (const py::cast_error&) {
@@ -57,6 +62,9 @@ py::dict simulate(Scene& s, std::optional<double> t_end, std::optional<std::vect
                   std::vector<std::string> sensitivities, std::optional<std::string> linear_solver,
                   std::optional<long> max_steps, std::optional<std::string> method) {
   SimOptions o = s.options;
+  // An empty list would silently mean "the scene's output times"; the scene file refuses `times: []` too.
+  if (t_out && t_out->empty())
+    throw ConfigError("simulate(): t_out = []: expected a non-empty list of times in [0, t_end] (or n_out)");
   if (t_end) {
     o.t_end = *t_end;
     if (!t_out) o.t_out.clear();
@@ -69,10 +77,21 @@ py::dict simulate(Scene& s, std::optional<double> t_end, std::optional<std::vect
   if (max_steps) o.max_steps = *max_steps;
   if (method) o.method = *method;
   o.sensitivities = std::move(sensitivities);
+  try {  // named as the keywords of simulate(), not as the C++ struct
+    o.validate();
+  } catch (const ConfigError& e) {
+    std::string m = e.what();
+    if (m.rfind("SimOptions.", 0) == 0) m = "simulate(): " + m.substr(11);
+    throw ConfigError(m);
+  }
   SimResult r;
-  {
+  try {
     py::gil_scoped_release release;
     r = granuflow::simulate(*s.flowsheet, o);
+  } catch (const ConfigError& e) {  // found at run time (unit checks, structure): name the scene file as well
+    const std::string m = e.what();
+    if (s.path.empty() || m.rfind(s.path, 0) == 0) throw;
+    throw ConfigError(s.path + ": " + m);
   }
   const auto nt = static_cast<py::ssize_t>(r.t.size());
   const auto ns = static_cast<py::ssize_t>(r.state_names.size());
@@ -158,7 +177,7 @@ void register_flowsheet(py::module_& m) {
              SimOptions o = s.options;
              o.t_end = t;
              o.t_out.clear();
-             o.validate();
+             o.validate(true);  // "t_end = 0 s: violates t_end > 0", as the scene key
              s.options = o;
            })
       .def("clone", [&reg](const Scene& s) { return clone_scene(s, reg); })
@@ -181,7 +200,10 @@ void register_flowsheet(py::module_& m) {
           "spec",
           [](const Scene& s, const std::string& name) {
             const int id = s.flowsheet->param_id(name);
-            return spec_dict(s.flowsheet->param_spec(id), s.flowsheet->param_value(id), s.flowsheet->has_input(id));
+            // lower/upper: the range the parameter may take (narrowed by parameters that follow it by a link).
+            ParamSpec p = s.flowsheet->param_spec(id);
+            std::tie(p.lower, p.upper) = s.flowsheet->bounds(id);
+            return spec_dict(p, s.flowsheet->param_value(id), s.flowsheet->has_input(id));
           },
           "name"_a)
       .def(
@@ -198,6 +220,9 @@ void register_flowsheet(py::module_& m) {
             s.flowsheet->set_input(name, PiecewiseLinear(std::move(times), std::move(v), i, "input " + name));
           },
           "name"_a, "times"_a, "values"_a, "interp"_a = "linear")
+      .def(
+          "clear_input", [](Scene& s, const std::string& name) { s.flowsheet->clear_input(name); }, "name"_a,
+          "Makes a parameter driven by a time-dependent input a constant again (its value before the input).")
       .def("unit_settings",
            [](const Scene& s) {
              py::dict d;
@@ -237,9 +262,31 @@ void register_flowsheet(py::module_& m) {
   m.def(
       "load_scene", [&reg](const std::string& path) { return load_scene(path, reg); }, "path"_a);
   m.def(
+      "check_yaml_text",
+      [](const py::object& text, const std::string& label, const std::string& kind) {
+        if (py::isinstance<py::bytes>(text)) return check_yaml_text(text.cast<std::string>(), label, kind);
+        if (!py::isinstance<py::str>(text))
+          throw ConfigError(label + ": expected the file's text (str or bytes), got " +
+                            std::string(py::str(text.get_type().attr("__name__"))));
+        const py::bytes b = text.attr("encode")("utf-8", "surrogatepass");
+        check_yaml_text(b.cast<std::string>(), label, kind);
+      },
+      "text"_a, "label"_a, "kind"_a = "YAML file",
+      "ConfigError (one line: file, line, column, what) unless the text is YAML granuflow can read safely: at most "
+      "1 MiB of UTF-8, one document, at most 200000 values with aliases expanded, nesting at most 64, standard tags.");
+  m.def(
       "load_scene_text",
-      [&reg](const std::string& text, const std::string& label) { return load_scene_text(text, label, reg); }, "text"_a,
-      "label"_a = "<text>");
+      [&reg](const py::object& text, const std::string& label) {
+        // Lone surrogates (from a file read with errors="surrogateescape") reach the loader as the bytes they
+        // stand for, which it refuses naming line and column, instead of failing pybind's conversion.
+        if (py::isinstance<py::bytes>(text)) return load_scene_text(text.cast<std::string>(), label, reg);
+        if (!py::isinstance<py::str>(text))
+          throw ConfigError(label + ": the scene must be given as text (str), got " +
+                            std::string(py::str(text.get_type().attr("__name__"))));
+        const py::bytes b = text.attr("encode")("utf-8", "surrogatepass");
+        return load_scene_text(b.cast<std::string>(), label, reg);
+      },
+      "text"_a, "label"_a = "<text>");
 }
 
 }  // namespace granuflow::python

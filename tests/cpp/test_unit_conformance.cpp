@@ -102,9 +102,10 @@ TEST(UnitConformance, OneFlowsheetFromFourThreadsGivesTheSerialAnswer) {
     const SimResult ref = simulate(*s.flowsheet, o);
     std::vector<SimResult> got(4);
     std::vector<std::thread> threads;
+    Flowsheet& fs = *s.flowsheet;  // a lambda cannot capture a structured binding before C++20 (clang)
     for (int k = 0; k < 4; ++k)
       threads.emplace_back([&, k] {
-        for (int rep = 0; rep < 3; ++rep) got[k] = simulate(*s.flowsheet, o);
+        for (int rep = 0; rep < 3; ++rep) got[k] = simulate(fs, o);
       });
     for (auto& t : threads) t.join();
     for (const auto& g : got) {

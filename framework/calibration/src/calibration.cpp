@@ -166,11 +166,16 @@ Space make_space(const Flowsheet& fs, const Stage& stage) {
     if (!seen.insert(f.name).second) throw ConfigError(where + " is listed twice");
     if (fs.has_input(id)) throw ConfigError(where + " is a time-dependent input; only constants can be calibrated");
     const ParamSpec& spec = fs.param_spec(id);
-    const double lo = f.lower.value_or(spec.lower), hi = f.upper.value_or(spec.upper);
+    const auto [allowed_lo, allowed_hi] = fs.bounds(id);  // declared, narrowed by linked followers
+    const double lo = f.lower.value_or(allowed_lo), hi = f.upper.value_or(allowed_hi);
     if (std::isnan(lo)) throw ConfigError(violation(where + ".lower", lo, spec.unit, "lower is a number"));
     if (std::isnan(hi)) throw ConfigError(violation(where + ".upper", hi, spec.unit, "upper is a number"));
-    if (lo < spec.lower) throw ConfigError(violation(where + ".lower", lo, spec.unit, "lower >= declared lower bound"));
-    if (hi > spec.upper) throw ConfigError(violation(where + ".upper", hi, spec.unit, "upper <= declared upper bound"));
+    if (lo < allowed_lo)
+      throw ConfigError(
+          violation(where + ".lower", lo, spec.unit, "lower >= allowed lower bound " + fmt_num(allowed_lo)));
+    if (hi > allowed_hi)
+      throw ConfigError(
+          violation(where + ".upper", hi, spec.unit, "upper <= allowed upper bound " + fmt_num(allowed_hi)));
     if (!(hi > lo)) throw ConfigError(violation(where + ".upper", hi, spec.unit, "upper > lower"));
     if (f.transform == Transform::kLog && !(lo > 0))
       throw ConfigError(violation(where + ".lower", lo, spec.unit, "lower > 0 for transform log"));
@@ -802,11 +807,46 @@ Profile profile_parameter(const Scene& scene, const Registry<Unit>& reg, const s
 
 // ---------------------------------------------------------------- public API
 
+void check_experiments(const Flowsheet& fs, const std::vector<Experiment>& exps) {
+  validate_experiments(exps);
+  std::set<std::string> names;
+  for (const auto& e : exps) {
+    const std::string w = "experiment '" + e.name + "'";
+    if (!names.insert(e.name).second) throw ConfigError(w + " is given twice");
+    for (const auto& [k, v] : e.settings) {
+      int id;
+      try {
+        id = fs.param_id(k);
+      } catch (const ConfigError& x) {
+        throw ConfigError(w + ": setting " + x.what());
+      }
+      const ParamSpec& spec = fs.param_spec(id);
+      const auto [lo, hi] = fs.bounds(id);
+      if (const int src = fs.link_source(id); src >= 0)
+        throw ConfigError(w + ": setting " + k + ": it follows " + fs.qualified_name(src) +
+                          " by a link of the scene; set " + fs.qualified_name(src) + " instead");
+      if (fs.has_input(id))
+        throw ConfigError(w + ": setting " + k + ": it is driven by a time-dependent input of the scene (inputs: " + k +
+                          "), which would replace the value; remove the input from the scene");
+      if (!(v >= lo && v <= hi))
+        throw ConfigError(
+            violation(w + ": setting " + k, v, spec.unit, fmt_num(lo) + " <= " + spec.name + " <= " + fmt_num(hi)));
+    }
+    for (const auto& o : e.observations) {
+      try {
+        observable_unit(fs, o.name);
+      } catch (const ConfigError& x) {
+        throw ConfigError(w + ": observation " + x.what());
+      }
+    }
+  }
+}
+
 CalibrationResult calibrate(const Scene& scene, const Registry<Unit>& reg, const std::vector<Experiment>& exps,
                             const std::vector<Stage>& stages, const CalibrationOptions& opt,
                             const std::map<std::string, double>& start) {
   opt.validate();
-  validate_experiments(exps);
+  check_experiments(*scene.flowsheet, exps);
   const auto t0 = Clock::now();
   if (stages.empty()) throw ConfigError("calibrate: no stages");
   if (exps.empty()) throw ConfigError("calibrate: no experiments");
@@ -921,7 +961,7 @@ std::string CalibrationResult::full_report() const {
 std::vector<Prediction> predict(const Scene& scene, const Registry<Unit>& reg, const std::vector<Experiment>& exps,
                                 const std::map<std::string, double>& params, const CalibrationOptions& opt) {
   opt.validate();
-  validate_experiments(exps);
+  check_experiments(*scene.flowsheet, exps);
   std::vector<std::vector<Prediction>> per(exps.size());
   parallel_for(static_cast<int>(exps.size()), opt.num_threads, [&](int i) {
     const Experiment& e = exps[i];

@@ -86,11 +86,20 @@ class Flowsheet {
   double param_value(int id) const;
   void set_param_value(int id, double value_si);
   std::pair<int, int> param_location(int id) const;  // (unit index, local param index)
+  // A parameter driven by a time-dependent input takes its values from the input in every run, so
+  // set_param / set_param_value on it are a ConfigError naming the input (a value set there would be ignored);
+  // clear_input() first makes it a constant again (its last constant value), explicitly.
   void set_input(const std::string& qualified, PiecewiseLinear input);
+  void clear_input(const std::string& qualified);
   bool has_input(int id) const;
+  // The range a parameter may take: its declared bounds, narrowed by the declared bounds of every parameter
+  // that follows it by a link (inlet.T may go no higher than the bed.T0 it sets). set_param, set_input and
+  // calibration use these.
+  std::pair<double, double> bounds(int id) const;
   // Links: parameter `target` takes the value of `source` (its value at t = 0 if `source` is an input) in every
   // run, e.g. the initial bed temperature follows the inlet temperature; a sensitivity with respect to `source`
-  // includes the path through `target`.
+  // includes the path through `target`. link() refuses a pair whose bounds do not overlap or a source whose
+  // value the target cannot take, and narrows the source's bounds() to the overlap.
   // Setting a link target (set_param, set_input) to anything but the value it follows is a ConfigError that
   // names the link; param() of a link target is its source's value.
   void link(const std::string& target, const std::string& source);
@@ -99,7 +108,9 @@ class Flowsheet {
   // The parameter values unit `u` runs with at t = 0: its own, link targets at their sources' values (checked
   // against the targets' bounds: a ConfigError names the link). Reading only: runs never change the flowsheet.
   std::vector<double> run_params(int u) const;
-  // Every unit's check() on run_params(); a ConfigError from a unit names the unit instance.
+  // Every unit's check() on run_params(); a ConfigError from a unit names the unit instance. A unit with
+  // time-dependent inputs is checked with the values a run sees at every knot of its inputs instead (a ramp of
+  // the inlet temperature must not pass through states the model cannot represent), the message saying when.
   void check_units() const;
   // "unit NAME (TYPE): message" for a ConfigError a unit threw relative to itself.
   std::string qualify_unit_message(int u, const std::string& message) const;

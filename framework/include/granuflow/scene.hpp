@@ -44,6 +44,13 @@ Scene clone_scene(const Scene& s, const Registry<Unit>& units);
 Scene load_scene(const std::string& path, const Registry<Unit>& units);
 Scene load_scene_text(const std::string& yaml_text, const std::string& label, const Registry<Unit>& units);
 
+// What every YAML file of granuflow must pass before a parser builds it (load_scene_text applies it; the Python
+// layer can for sweep, contour, calibration and experiment files through _core.check_yaml_text): at most 1 MiB,
+// UTF-8 text without control bytes, one document, at most 200000 values once aliases are expanded, no alias
+// inside the node it names, nesting at most 64 deep, only YAML's standard tags. Throws ConfigError
+// "label: line L, column C: ..." naming the file as a `kind` ("scene", "sweep file" ...).
+void check_yaml_text(const std::string& text, const std::string& label, const std::string& kind = "scene");
+
 // Parses "60 degC", "0.5", "700 m3/h" for parameter `qualified` and converts to its SI unit. Throws
 // ConfigError naming `where`.
 double parse_param_value(const Flowsheet& fs, const std::string& qualified, const std::string& text,

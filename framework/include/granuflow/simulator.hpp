@@ -10,6 +10,9 @@
 
 namespace granuflow {
 
+// Output times per run (output.n, the length of output.times): validate() refuses more.
+inline constexpr int kMaxOutputTimes = 100000;
+
 struct SimOptions {
   double t_end = 0.0;                      // s, > 0
   std::vector<double> t_out;               // output times in [0, t_end], increasing; empty: n_out equispaced

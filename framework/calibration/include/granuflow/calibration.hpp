@@ -185,6 +185,12 @@ struct CalibrationResult {
 // ConfigError naming the valid names.
 std::string observable_unit(const Flowsheet& fs, const std::string& name);
 
+// What experiments promise before any simulation: sizes, sigmas, increasing finite sample times within t_end,
+// unique names, settings that name constant parameters of `fs` (not inputs, not link targets) within their
+// bounds, observations that name a state or reported output. Throws ConfigError naming the experiment, the key
+// and the value. calibrate() calls it.
+void check_experiments(const Flowsheet& fs, const std::vector<Experiment>& experiments);
+
 // Runs the stages in order on clones of `scene`; each starts from the estimates of the previous one and the
 // first from the scene's current parameter values (override them with `start`). `registry` builds the clones.
 CalibrationResult calibrate(const Scene& scene, const Registry<Unit>& registry,
