@@ -750,8 +750,13 @@ std::vector<double> DaeSystem::differential_id() const {
 }
 
 std::vector<double> DaeSystem::scales() const {
-  std::vector<double> s(n_);
-  for (int i = 0; i < n_; ++i) s[i] = fs_.state_spec(i).scale;
+  std::vector<double> s(n_ext_);
+  for (int i = 0; i < n_ext_; ++i) s[i] = fs_.state_spec(i).scale;
+  const auto& units = fs_.units();
+  for (size_t u = 0; u < units.size(); ++u)
+    units[u].unit->tolerance_scales(pvals_[u].data(), units[u].shared >= 0 ? pvals_[units[u].shared].data() : nullptr,
+                                    s.data() + units[u].offset);
+  s.resize(n_);
   return s;
 }
 

@@ -495,6 +495,7 @@ SimResult simulate_ode(Flowsheet& fs, const SimOptions& opt, const std::string& 
     std::vector<std::vector<double>> yS0;
     sys.initial_sensitivities(sens_ids, yS0);
     for (int k = 0; k < ns; ++k) std::copy(yS0[k].begin(), yS0[k].begin() + n, yS[k].begin());
+    stepper->restart(0.0, y.data(), q.data(), yS, qS);  // the initial state's own sensitivities (d N0 / d v0 ...)
   }
   auto fail = [&](int flag, double t) {
     std::ostringstream os;

@@ -354,6 +354,10 @@ class Unit {
   // the simulator stops and re-initializes there. Inside eval(), use Ctx::t_seg (the start of the current
   // segment) to decide which side of such a time the solver is on.
   virtual std::vector<double> breakpoints(const double* /*params*/) const { return {}; }
+  // Each state's scale for this run (absolute tolerance = atol * scale), `scales` arriving filled with the declared
+  // ones: a unit whose states span orders of magnitude in what they carry (particle numbers of classes whose
+  // volumes differ by 10^9) weights them here with its parameters.
+  virtual void tolerance_scales(const double* /*params*/, const double* /*shared*/, double* /*scales*/) const {}
   // Reported outputs (declared with add_output), written to c.out(); for Jets, their sensitivities.
   virtual void report(const Ctx<double>& /*c*/) const {}
   virtual void report(const Ctx<Jet>& /*c*/) const {}
