@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <type_traits>
+#if defined(__SSE__) || defined(__x86_64__)
+#include <xmmintrin.h>
+#endif
 
 #include "discretization/cell_average.hpp"
 #include "discretization/fixed_pivot.hpp"
@@ -15,6 +18,21 @@ namespace granuflow::kernels {
 
 namespace {
 constexpr const char* kNone = "none";
+
+// The far tails of a size distribution (classes thousands of times the start volume) hold numbers like 1e-310, and
+// products of them are subnormal: arithmetic on subnormals costs a hundred cycles, which doubled the cost of an
+// aggregation right-hand side. While the engine evaluates, they count as zero (flush-to-zero, denormals-are-zero):
+// a change below 2.2e-308 in any number, restored on leaving.
+class FlushDenormals {
+ public:
+#if defined(__SSE__) || defined(__x86_64__)
+  FlushDenormals() : saved_(_mm_getcsr()) { _mm_setcsr(saved_ | 0x8040); }
+  ~FlushDenormals() { _mm_setcsr(saved_); }
+
+ private:
+  unsigned saved_;
+#endif
+};
 
 std::vector<std::string> with_none(std::vector<std::string> names) {
   names.insert(names.begin(), kNone);
@@ -105,7 +123,8 @@ struct Population::Work {
   std::vector<double> snapshot;  // kernel parameter values of the tables
   bool fresh = false;            // the tables were computed for `snapshot`
   std::vector<double> K, S, A;   // beta factors (n x n), selection rates (n), breakage matrix ((n + 3) x n)
-  std::vector<Jet> K_jet, S_jet, A_jet;
+  std::vector<Jet> A_jet;
+  bool jets = false;  // the *_jet copies match the tables (made when a Jet evaluation first needs them)
   // Per pair j <= k (row-major upper triangle) h K_jk, h = 1/2 for like pairs: the event rate is Kh E N_j N_k.
   std::vector<double> Kh;
   std::vector<Jet> Kh_jet;
@@ -115,6 +134,7 @@ struct Population::Work {
   // k), Bm (w_hi h K, births on k + 1), F, G (the same with the volume fractions, for carried properties); cell
   // average C (h K, events into cell k) and Vc ((x_j + x_k) h K, their volume). Empty when not used.
   bool matrices = false;
+  bool folded = false;  // fixed pivot, no properties: Am holds A - K (births on k less all deaths), Km unused
   std::vector<double> Km, Am, Bm, Fm, Gm, Cm, Vc;
   std::vector<double> Kd;  // h K of the pairs (k - d, k) at [d n + k], for the scheme's diagonals
   std::vector<std::pair<size_t, std::pair<int, int>>> rest;  // pairs on neither a run nor a diagonal: (pair, (j, k))
@@ -158,8 +178,15 @@ void aggregate_by_matrices(const Population::Work& w, Scratch& sc, const double*
   sc.mv.resize(size_t(5) * n);
   Vec kN(sc.mv.data(), n), u(sc.mv.data() + n, n), v(sc.mv.data() + 2 * n, n), r(sc.mv.data() + 3 * n, n);
   double* rt = sc.mv.data() + 4 * n;
-  kN.noalias() = matrix(w.Km) * Nv;  // the full symmetric K: a plain product beats the symmetric one
-  for (int k = 0; k < n; ++k) dN[k] -= N[k] * kN[k];
+  if (w.folded) {  // fixed pivot without properties: births on k and deaths in one product, (A - K) N
+    u.noalias() = matrix(w.Am) * Nv;
+    v.noalias() = matrix(w.Bm).template triangularView<Eigen::Lower>() * Nv;
+    for (int k = 0; k < n; ++k) dN[k] += N[k] * u[k];
+    for (int k = 0; k + 1 < n; ++k) dN[k + 1] += N[k] * v[k];
+  } else {
+    kN.noalias() = matrix(w.Km) * Nv;  // the full symmetric K: a plain product beats the symmetric one
+    for (int k = 0; k < n; ++k) dN[k] -= N[k] * kN[k];
+  }
   const double* pi = sc.pi.data();
   for (int p = 0; p < P; ++p)
     for (int k = 0; k < n; ++k) dq[size_t(p) * n + k] -= pi[size_t(p) * n + k] * N[k] * kN[k];
@@ -168,7 +195,7 @@ void aggregate_by_matrices(const Population::Work& w, Scratch& sc, const double*
   auto lower = [&](const std::vector<double>& m, const auto& x, Vec& y) {
     y.noalias() = matrix(m).template triangularView<Eigen::Lower>() * x;
   };
-  if (fp) {
+  if (fp && !w.folded) {
     lower(w.Am, Nv, u);
     lower(w.Bm, Nv, v);
     for (int k = 0; k < n; ++k) dN[k] += N[k] * u[k];
@@ -182,7 +209,7 @@ void aggregate_by_matrices(const Population::Work& w, Scratch& sc, const double*
         for (int k = 0; k + shift < n; ++k) dq[size_t(p) * n + k + shift] += carried(p, k);
       }
     }
-  } else {
+  } else if (!fp) {
     lower(w.Cm, Nv, u);
     lower(w.Vc, Nv, v);
     for (int k = 0; k < n; ++k) sc.B[k] += N[k] * u[k], sc.V[k] += N[k] * v[k];
@@ -236,6 +263,13 @@ void aggregate_by_matrices(const Population::Work& w, Scratch& sc, const double*
     const int j = jk.first, k = jk.second;
     if (N[j] != 0.0 && N[k] != 0.0) place(pr, j, k, w.Kh[pr] * N[j] * N[k]);
   }
+}
+
+// The Jet copies of the tables, for evaluations that carry derivatives (sensitivities, AD Jacobians).
+void make_jets(Population::Work& w) {
+  if (w.jets) return;
+  to_jets(w.Kh, w.Kh_jet), to_jets(w.A, w.A_jet), to_jets(w.BN, w.BN_jet), to_jets(w.BQ, w.BQ_jet);
+  w.jets = true;
 }
 
 Population::Population() = default;
@@ -364,6 +398,11 @@ void Population::pair_matrices(Work& w) const {
       }
     }
   }
+  w.folded = fp && properties() == 0;
+  if (w.folded) {
+    for (size_t i = 0; i < nn; ++i) w.Am[i] -= w.Km[i];
+    w.Km.clear();
+  }
   const size_t nd = fp ? fp->diagonals().size() : ca->diagonals().size();
   w.rest.clear();
   p0 = 0;
@@ -392,6 +431,7 @@ void Population::refresh(Work& w, const double* p) const {
   w.snapshot.resize(kernel_params_.size());
   for (size_t k = 0; k < kernel_params_.size(); ++k) w.snapshot[k] = p[kernel_params_[k]];
   w.fresh = true;
+  w.jets = false;
   ClassState<double> cs;
   cs.n = n_;
   cs.volume = grid_->pivots().data();
@@ -399,22 +439,16 @@ void Population::refresh(Work& w, const double* p) const {
   if (agg_.kernel) {
     w.K.resize(size_t(n_) * n_);
     agg_.kernel->factor(cs, p + agg_.first, w.K.data());
-    to_jets(w.K, w.K_jet);
     pack_pairs(w.K, n_, w.Kh);
-    to_jets(w.Kh, w.Kh_jet);
     pair_matrices(w);
   }
   if (sel_.kernel) {
     w.A.resize(size_t(n_ + kOutsideRows) * n_);
     fragment_matrix(p + frag_.first, w.A);
-    to_jets(w.A, w.A_jet);
     if (!sel_.kernel->state_dependent()) {
       w.S.resize(n_);
       sel_.kernel->evaluate(cs, p + sel_.first, w.S.data());
-      to_jets(w.S, w.S_jet);
       breakage_tables(*grid_, w.A.data(), w.S.data(), w.BN, w.BQ);
-      to_jets(w.BN, w.BN_jet);
-      to_jets(w.BQ, w.BQ_jet);
     }
   }
 }
@@ -443,6 +477,7 @@ bool Population::fresh_tables(const Work&, const T* p, int first, int count) con
 }
 
 void Population::rates(Work& w, const State<double>& s, const Rates<double>& r) const {
+  const FlushDenormals ftz;
   refresh(w, s.p);
   rates_t(w, s, r, true);
 }
@@ -454,6 +489,7 @@ void Population::rates(Work& w, const State<Jet>& s, const Rates<Jet>& r) const 
   v.resize(np);
   for (int k : kernel_params_) v[k] = s.p[k].a;
   refresh(w, v.data());
+  make_jets(w);
   rates_t(w, s, r, true);
 }
 
@@ -756,6 +792,7 @@ void Population::fold_rows(double* D, int cols) const {
 }
 
 void Population::jacobian(Work& w, const State<double>& s, const Map& m, JacobianSink& sink) const {
+  const FlushDenormals ftz;
   refresh(w, s.p);
   const int n = n_, P = properties(), no = outside_rows(), C = input_cols();
   const int R = n * (1 + P) + no + 1;  // the last row: the volume growth creates
@@ -1069,6 +1106,7 @@ void Population::analytic_jacobian(Work& w, const State<double>& s, std::vector<
 
 // Forward AD over the engine's inputs (N, q, fields), kAdChunk at a time: for kernels that read N.
 void Population::ad_jacobian(Work& w, const State<double>& s, std::vector<double>& D) const {
+  make_jets(w);
   const int n = n_, P = properties(), no = outside_rows(), C = input_cols(),
             nfr = static_cast<int>(field_index_.size());
   int np = 0;

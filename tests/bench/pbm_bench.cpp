@@ -2,9 +2,11 @@
 // (N0 = v0 = 1, n(v, 0) = exp(-v)), through the full framework (Flowsheet + pbm_batch + simulate() on IDAS).
 //
 //   granuflow_bench_pbm [--json] [--repeats R] [--quick] [--case constant|sum|product|growth|breakage]
+//                       [--integrators auto,ida,bdf,adams,erk]
 //   (wired as `granuflow bench pbm --json`; baseline: /usr/bin/python3 tests/bench/scipy_fixed_pivot.py --json)
 //
-// One record per (case, method, q, rtol) with keys case, method, q, classes, rtol, tau, err_M0, err_M2, err_L1
+// One record per (case, method, integrator, q, rtol) with keys case, method (the scheme), integrator (solver.method
+// asked for), integrator_ran (what ran: auto's choice), q, classes, rtol, tau, err_M0, err_M2, err_L1
 // (relative L1 error of the mass density; null where no density is known), mass_drift (relative closure of
 // the volume book-keeping), solve_ms (median wall time of simulate() over R repeats, one process), plus the
 // solver counters and where the time goes: est_residual_ms / est_jacobian_ms / est_lu_ms are the counts times
@@ -42,7 +44,7 @@ struct Case {
 };
 
 struct Record {
-  std::string case_name, method;
+  std::string case_name, method, integrator, ran;
   int q = 0, classes = 0;
   double rtol = 0, tau = 0, err_m0 = 0, err_m2 = 0, err_l1 = NAN, drift = 0, solve_ms = 0;
   long steps = 0, jacobians = 0, residuals = 0, setups = 0;
@@ -117,9 +119,9 @@ void profile(Flowsheet& fs, const std::vector<double>& y, Record& rec) {
   rec.lu_ms = fact * rec.setups;
 }
 
-Record run(const Case& c, const std::string& method, int q, double rtol, int repeats) {
+Record run(const Case& c, const std::string& method, const std::string& integrator, int q, double rtol, int repeats) {
   Record rec;
-  rec.case_name = c.name, rec.method = method, rec.q = q, rec.rtol = rtol, rec.tau = c.tau;
+  rec.case_name = c.name, rec.method = method, rec.integrator = integrator, rec.q = q, rec.rtol = rtol, rec.tau = c.tau;
   const auto g = pbm_test::grid(q, c.doublings);
   rec.classes = g.size();
   std::vector<double> times, setups;
@@ -131,7 +133,7 @@ Record run(const Case& c, const std::string& method, int q, double rtol, int rep
     setups.push_back(ms_since(t0));
     fs = pbm_test::flowsheet(settings(c, method, q), params(c));
     t0 = clk::now();
-    r = pbm_test::run(*fs, {0, c.tau}, rtol, 1e-3 * rtol);
+    r = pbm_test::run(*fs, {0, c.tau}, rtol, 1e-3 * rtol, integrator);
     times.push_back(ms_since(t0));
   }
   std::sort(times.begin(), times.end());
@@ -140,6 +142,8 @@ Record run(const Case& c, const std::string& method, int q, double rtol, int rep
   rec.setup_ms = setups[setups.size() / 2];
   const auto& st = r.result.stats;
   rec.steps = st.steps, rec.jacobians = st.jacobians, rec.residuals = st.residuals, rec.setups = st.linear_setups;
+  rec.ran = st.method.substr(0, st.method.find(' ')) + (st.method.find("IDAS") != std::string::npos ? "-idas" : "");
+  if (st.method.find(", then ") != std::string::npos) rec.ran += "+bdf";
   double m0, m2;
   std::vector<double> cells;
   analytic(c, g, m0, m2, cells);
@@ -190,20 +194,21 @@ std::string num(double v) {
 void print(const Record& r, bool json, int repeats, const std::string& meta) {
   if (json) {
     std::printf(
-        "{\"case\": \"%s\", \"method\": \"%s\", \"q\": %d, \"classes\": %d, \"rtol\": %s, \"tau\": %s, \"err_M0\": %s, "
+        "{\"case\": \"%s\", \"method\": \"%s\", \"integrator\": \"%s\", \"integrator_ran\": \"%s\", \"q\": %d, "
+        "\"classes\": %d, \"rtol\": %s, \"tau\": %s, \"err_M0\": %s, "
         "\"err_M2\": %s, \"err_L1\": %s, \"mass_drift\": %s, \"solve_ms\": %s, \"repeats\": %d, \"steps\": %ld, "
         "\"jacobians\": %ld, \"residuals\": %ld, \"linear_setups\": %ld, \"setup_ms\": %s, \"est_residual_ms\": %s, "
         "\"est_jacobian_ms\": %s, \"est_lu_ms\": %s, %s}\n",
-        r.case_name.c_str(), r.method.c_str(), r.q, r.classes, num(r.rtol).c_str(), num(r.tau).c_str(),
-        num(r.err_m0).c_str(), num(r.err_m2).c_str(), num(r.err_l1).c_str(), num(r.drift).c_str(),
+        r.case_name.c_str(), r.method.c_str(), r.integrator.c_str(), r.ran.c_str(), r.q, r.classes, num(r.rtol).c_str(),
+        num(r.tau).c_str(), num(r.err_m0).c_str(), num(r.err_m2).c_str(), num(r.err_l1).c_str(), num(r.drift).c_str(),
         num(r.solve_ms).c_str(), repeats, r.steps, r.jacobians, r.residuals, r.setups, num(r.setup_ms).c_str(),
         num(r.res_ms).c_str(), num(r.jac_ms).c_str(), num(r.lu_ms).c_str(), meta.c_str());
   } else {
     std::printf(
-        "%-9s %-13s q=%d n=%3d rtol=%.0e  M0 %+.2e  M2 %+.3e  L1 %.2e  drift %+.1e  %8.3f ms  (setup %.2f, "
-        "res %.2f, jac %.2f, LU %.2f; %ld steps)\n",
-        r.case_name.c_str(), r.method.c_str(), r.q, r.classes, r.rtol, r.err_m0, r.err_m2, r.err_l1, r.drift,
-        r.solve_ms, r.setup_ms, r.res_ms, r.jac_ms, r.lu_ms, r.steps);
+        "%-9s %-13s %-5s(%-9s) q=%d n=%3d rtol=%.0e  M0 %+.2e  M2 %+.3e  L1 %.2e  drift %+.1e  %8.3f ms  (setup "
+        "%.2f, res %.2f, jac %.2f, LU %.2f; %ld steps)\n",
+        r.case_name.c_str(), r.method.c_str(), r.integrator.c_str(), r.ran.c_str(), r.q, r.classes, r.rtol, r.err_m0,
+        r.err_m2, r.err_l1, r.drift, r.solve_ms, r.setup_ms, r.res_ms, r.jac_ms, r.lu_ms, r.steps);
   }
   std::fflush(stdout);
 }
@@ -216,6 +221,7 @@ int main(int argc, char** argv) {
   bool json = false, quick = false;
   int repeats = 5;
   std::string only;
+  std::vector<std::string> integrators;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--json")
@@ -226,8 +232,18 @@ int main(int argc, char** argv) {
       repeats = std::max(1, std::atoi(argv[++i]));
     else if (a == "--case" && i + 1 < argc)
       only = argv[++i];
-    else {
-      std::fprintf(stderr, "usage: granuflow_bench_pbm [--json] [--repeats R] [--quick] [--case NAME]\n");
+    else if (a == "--integrators" && i + 1 < argc) {
+      integrators.clear();
+      std::string list = argv[++i];
+      for (size_t p = 0; p <= list.size();) {
+        const size_t e = std::min(list.find(',', p), list.size());
+        if (e > p) integrators.push_back(list.substr(p, e - p));
+        p = e + 1;
+      }
+    } else {
+      std::fprintf(stderr,
+                   "usage: granuflow_bench_pbm [--json] [--repeats R] [--quick] [--case NAME] "
+                   "[--integrators auto,ida,bdf,adams,erk]\n");
       return 2;
     }
   }
@@ -239,13 +255,17 @@ int main(int argc, char** argv) {
                                 {"breakage", 10.0, 27, agg}};
   const std::vector<int> qs = quick ? std::vector<int>{1, 2, 4} : std::vector<int>{1, 2, 3, 4, 6, 8};
   const std::vector<double> rtols =
-      quick ? std::vector<double>{1e-4, 1e-6} : std::vector<double>{1e-4, 1e-5, 1e-6, 1e-7, 1e-8};
+      quick ? std::vector<double>{1e-2, 1e-4, 1e-6} : std::vector<double>{1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8};
+  if (integrators.empty())
+    integrators = quick ? std::vector<std::string>{"auto", "ida", "adams", "erk"}
+                        : std::vector<std::string>{"auto", "ida", "bdf", "adams", "erk"};
   const std::string meta = meta_json();
   for (const auto& c : cases) {
     if (!only.empty() && c.name != only) continue;
     for (const auto& m : c.methods)
-      for (int q : qs)
-        for (double rtol : rtols) print(run(c, m, q, rtol, repeats), json, repeats, meta);
+      for (const auto& integrator : integrators)
+        for (int q : qs)
+          for (double rtol : rtols) print(run(c, m, integrator, q, rtol, repeats), json, repeats, meta);
   }
   return 0;
 }
