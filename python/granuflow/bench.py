@@ -186,7 +186,8 @@ def scene_summary(records) -> list[str]:
 
 
 # ---------------------------------------------------------------------------------------------------------- pbm
-PBM_KEYS = ("case", "method", "q", "classes", "rtol", "tau", "err_M0", "err_M2", "err_L1", "mass_drift", "solve_ms")
+PBM_KEYS = ("case", "method", "integrator", "q", "classes", "rtol", "tau", "err_M0", "err_M2", "err_L1", "mass_drift",
+            "solve_ms")
 PBM_LEVELS = (0.05, 0.01, 0.001)
 
 
@@ -233,8 +234,9 @@ def bench_pbm(*, quick: bool = False, repeats: int = 5, scipy: bool = True, case
     """Population-balance work-precision records: granuflow_bench_pbm (granuflow's schemes through the full
     framework) and, with ``scipy``, the NumPy/SciPy fixed-pivot baseline tests/bench/scipy_fixed_pivot.py on the
     same cases, grids and tolerances. One dict per run with the keys PBM_KEYS plus ``code`` ("granuflow" or
-    "scipy"), solver counters and machine metadata. ``quick``: q in {1, 2, 4}, rtol in {1e-4, 1e-6}.
-    Times are medians of ``repeats`` solves; nothing here asserts on time."""
+    "scipy"), solver counters and machine metadata. granuflow runs each scheme with the integrators ``auto``, ``ida``,
+    ``bdf``, ``adams`` and ``erk`` (quick: auto, ida, adams, erk). ``quick``: q in {1, 2, 4}, rtol in {1e-2, 1e-4,
+    1e-6}. Times are medians of ``repeats`` solves; nothing here asserts on time."""
     flags = (["--quick"] if quick else []) + ["--repeats", str(int(repeats))] + (["--case", case] if case else [])
     exe = pbm_executable()
     if progress:
@@ -257,6 +259,11 @@ def load_records(paths) -> list[dict]:
     return recs
 
 
+def label(r: dict) -> str:
+    """A run's scheme and, for granuflow, its integrator: ``fixed_pivot/erk``, ``scipy_fp_LSODA``."""
+    return f"{r['method']}/{r['integrator']}" if r.get("integrator") else r["method"]
+
+
 def _usable(r: dict) -> bool:
     return r.get("err_M2") is not None and r.get("solve_ms") is not None and r.get("success", True)
 
@@ -273,10 +280,10 @@ def envelope(recs, improvement: float = 0.0) -> list[dict]:
     """The work-precision curve of each (code, case, method): the runs that no faster run beats in |err_M2|
     (by more than the relative ``improvement``), in order of solve time."""
     out = []
-    groups = sorted({(r.get("code", ""), r["case"], r["method"]) for r in recs if _usable(r)})
+    groups = sorted({(r.get("code", ""), r["case"], label(r)) for r in recs if _usable(r)})
     for code, case, method in groups:
         best = math.inf
-        for r in sorted((r for r in recs if (r.get("code", ""), r["case"], r["method"]) == (code, case, method)
+        for r in sorted((r for r in recs if (r.get("code", ""), r["case"], label(r)) == (code, case, method)
                          and _usable(r)), key=lambda r: (r["solve_ms"], abs(r["err_M2"]))):
             if abs(r["err_M2"]) < best * (1.0 - improvement):
                 best = abs(r["err_M2"])
@@ -298,7 +305,7 @@ def speed_ratios(recs, levels=PBM_LEVELS) -> list[dict]:
                 s = fastest(recs, case, "scipy", level, m)
                 row = {"case": case, "level": level, "baseline": m}
                 for tag, r in (("granuflow", g), ("baseline", s)):
-                    row.update({f"{tag}_method": r and r["method"], f"{tag}_q": r and r["q"],
+                    row.update({f"{tag}_method": r and label(r), f"{tag}_q": r and r["q"],
                                 f"{tag}_rtol": r and r["rtol"], f"{tag}_err_M2": r and r["err_M2"],
                                 f"{tag}_ms": r and r["solve_ms"]})
                 row["ratio"] = s["solve_ms"] / g["solve_ms"] if g and s else None
@@ -330,21 +337,55 @@ def format_speed_ratios(rows) -> list[str]:
 
 def same_scheme_ratios(recs) -> list[dict]:
     """The same discretization in both codes (granuflow's fixed_pivot against scipy_fp_*, fv_upwind against
-    scipy_upwind_*) at the same q and rtol: SciPy time / granuflow time per pair, which isolates the cost of the
-    implementation and integrator from the accuracy of the scheme."""
+    scipy_upwind_*) at the same q and rtol, per granuflow integrator: SciPy time / granuflow time per pair, which
+    isolates the cost of the implementation and integrator from the accuracy of the scheme."""
     pairs = {"scipy_fp_": "fixed_pivot", "scipy_upwind_": "fv_upwind"}
-    mine = {(r["case"], r["method"], r["q"], r["rtol"]): r for r in recs
-            if r.get("code") == "granuflow" and r.get("solve_ms")}
+    mine = {}
+    for r in recs:
+        if r.get("code") == "granuflow" and r.get("solve_ms"):
+            mine.setdefault((r["case"], r["method"], r["q"], r["rtol"]), []).append(r)
     rows = []
     for s in recs:
         if s.get("code") != "scipy" or not s.get("solve_ms") or not s.get("success", True):
             continue
         prefix = next((p for p in pairs if s["method"].startswith(p)), None)
-        g = prefix and mine.get((s["case"], pairs[prefix], s["q"], s["rtol"]))
-        if g:
-            rows.append({"case": s["case"], "baseline": s["method"], "method": g["method"], "q": s["q"],
+        for g in (mine.get((s["case"], pairs[prefix], s["q"], s["rtol"]), []) if prefix else []):
+            rows.append({"case": s["case"], "baseline": s["method"], "method": label(g), "q": s["q"],
                          "rtol": s["rtol"], "granuflow_ms": g["solve_ms"], "baseline_ms": s["solve_ms"],
                          "ratio": s["solve_ms"] / g["solve_ms"]})
+    return rows
+
+
+def auto_choices(recs) -> dict:
+    """What ``auto`` ran, per case: {case: {integrator_ran: count}}."""
+    out: dict = {}
+    for r in recs:
+        if r.get("integrator") == "auto":
+            d = out.setdefault(r["case"], {})
+            d[r.get("integrator_ran", "?")] = d.get(r.get("integrator_ran", "?"), 0) + 1
+    return out
+
+
+def targets(recs) -> list[dict]:
+    """The speed targets of the integrator work (SciPy measured in the same run), one row each with the granuflow
+    and SciPy runs compared, the ratio and the target: the constant kernel on the same discretization (fixed
+    pivot q = 4) at each tolerance against LSODA; the constant kernel at |err_M2| <= 1 % and 0.1 % against the
+    fastest SciPy setting; the sum kernel at <= 5 % against LSODA."""
+    rows = []
+    for rtol in sorted({r["rtol"] for r in recs if r["case"] == "constant" and r.get("q") == 4}, reverse=True):
+        pick = [r for r in recs if r["case"] == "constant" and r.get("q") == 4 and r["rtol"] == rtol and _usable(r)]
+        g = [r for r in pick if r.get("code") == "granuflow" and r["method"] == "fixed_pivot"]
+        s = [r for r in pick if r.get("code") == "scipy" and r["method"] == "scipy_fp_LSODA"]
+        if g and s:
+            g0 = min(g, key=lambda r: r["solve_ms"])
+            rows.append({"target": f"constant, fixed pivot q=4, rtol {rtol:g}: vs SciPy LSODA", "goal": 10.0,
+                         "granuflow": g0, "baseline": s[0], "ratio": s[0]["solve_ms"] / g0["solve_ms"]})
+    for case, level, goal, method in (("constant", 0.01, 50.0, ""), ("constant", 0.001, 20.0, ""),
+                                      ("sum", 0.05, 20.0, "scipy_fp_LSODA")):
+        g, b = fastest(recs, case, "granuflow", level), fastest(recs, case, "scipy", level, method)
+        what = "SciPy LSODA" if method else "the fastest SciPy setting"
+        rows.append({"target": f"{case}, |err_M2| <= {level:g}: vs {what}", "goal": goal, "granuflow": g,
+                     "baseline": b, "ratio": b["solve_ms"] / g["solve_ms"] if g and b else None})
     return rows
 
 
@@ -368,9 +409,9 @@ def pbm_summary(recs, levels=PBM_LEVELS) -> list[str]:
     lines.append("Work-precision envelope, |err_M2| @ solve time (runs that no faster run beats by 10 % in |err_M2|):")
     env = envelope(recs, improvement=0.1)
     for case in sorted({r["case"] for r in env}):
-        for method in sorted({r["method"] for r in env if r["case"] == case}, key=lambda m: (m.startswith("scipy"), m)):
-            pts = [r for r in env if r["case"] == case and r["method"] == method]
-            lines.append(f"  {case:9s} {method:19s} " + ", ".join(
+        for method in sorted({label(r) for r in env if r["case"] == case}, key=lambda m: (m.startswith("scipy"), m)):
+            pts = [r for r in env if r["case"] == case and label(r) == method]
+            lines.append(f"  {case:9s} {method:22s} " + ", ".join(
                 f"{abs(r['err_M2']):.1e} @ {r['solve_ms']:.2f} ms (q={r['q']})" for r in pts))
     rows = [r for r in speed_ratios(recs, levels) if r["baseline"].endswith("LSODA")]
     if rows:
@@ -392,12 +433,29 @@ def pbm_summary(recs, levels=PBM_LEVELS) -> list[str]:
     same = same_scheme_ratios(recs)
     if same:
         lines += ["", "Same discretization and tolerances (fixed pivot; growth: first-order upwind), SciPy / granuflow "
-                  "time over all q and rtol:"]
+                  "time over all q and rtol, per granuflow integrator:"]
         for case in sorted({r["case"] for r in same}):
             for base in sorted({r["baseline"] for r in same if r["case"] == case}):
-                x = sorted(r["ratio"] for r in same if r["case"] == case and r["baseline"] == base)
-                lines.append(f"  {case:9s} {base:19s} median x{statistics.median(x):.1f} (x{x[0]:.1f} to x{x[-1]:.1f}, "
-                             f"{len(x)} pairs)")
+                for meth in sorted({r["method"] for r in same if r["case"] == case and r["baseline"] == base}):
+                    x = sorted(r["ratio"] for r in same
+                               if r["case"] == case and r["baseline"] == base and r["method"] == meth)
+                    lines.append(f"  {case:9s} {base:19s} {meth:22s} median x{statistics.median(x):.1f} "
+                                 f"(x{x[0]:.1f} to x{x[-1]:.1f}, {len(x)} pairs)")
+    auto = auto_choices(recs)
+    if auto:
+        lines += ["", "What solver.method auto ran (runs per integrator):"]
+        lines += [f"  {case:9s} " + ", ".join(f"{k} {v}" for k, v in sorted(d.items()))
+                  for case, d in sorted(auto.items())]
+    rows = targets(recs)
+    if rows:
+        lines += ["", "Targets (ratio = SciPy time / granuflow time, same run):"]
+        for r in rows:
+            g, b = r["granuflow"], r["baseline"]
+            gtxt = f"{label(g)} q={g['q']} rtol={g['rtol']:.0e} {g['solve_ms']:.2f} ms" if g else "not reached"
+            btxt = f"{label(b)} q={b['q']} rtol={b['rtol']:.0e} {b['solve_ms']:.2f} ms" if b else "not reached"
+            ratio = "-" if r["ratio"] is None else f"x{r['ratio']:.1f}"
+            met = "" if r["ratio"] is None else (" (target met)" if r["ratio"] >= r["goal"] else " (below target)")
+            lines.append(f"  {r['target']}: {ratio}, target x{r['goal']:g}{met}; granuflow {gtxt}; SciPy {btxt}")
     lines.append("Times are for information only; nothing asserts on them. `--json` prints every record.")
     return lines
 

@@ -13,7 +13,8 @@ import sys
 from .common import EXIT_BAD_INPUT, EXIT_SOLVER, Parser, one_line
 
 # What `bench --quick` reduces, per subcommand (cli/bench.py runs it).
-_QUICK = {"core": "tank chains of 100 and 1000 states (not 10000)", "pbm": "q 1, 2, 4; rtol 1e-4, 1e-6",
+_QUICK = {"core": "tank chains of 100 and 1000 states (not 10000)",
+          "pbm": "q 1, 2, 4; rtol 1e-2, 1e-4, 1e-6; integrators auto, ida, adams, erk",
           "scene": "10 classes only, SciPy once", "sweep": "a 9 x 9 map, one repeat, no Dask"}
 
 
