@@ -11,7 +11,7 @@ Typical use::
     gf.unit_reference("fluid_bed")   # ports, settings, parameters, outputs of a unit type
 
 Layers (no module imports one above it; tests/python/test_package_layers.py checks it):
-``_core`` (C++) < ``quantity``, ``outputs``, ``progress`` < ``result``, ``flowsheet``, ``kernels``, ``reference``
+``_core`` (C++) < ``textfile`` < ``quantity``, ``outputs``, ``progress`` < ``result``, ``flowsheet``, ``kernels``, ``reference``
 < ``plots`` < ``sweep`` < ``design_space``, ``calibration`` < ``bench`` < ``cli``.
 """
 from ._core import CalibrationError, ConfigError, SolverError

@@ -1,12 +1,18 @@
 """Flowsheets loaded from scene files: parameters by "unit.param", inputs, simulation."""
 from __future__ import annotations
 
+import math
+import os
 from typing import Iterable, Mapping, Sequence
 
 import numpy as np
 
 from . import _core, outputs
+from .quantity import is_number, parse_time
 from .result import Result
+from .textfile import check_regular, short
+
+ConfigError = _core.ConfigError
 
 
 class Flowsheet:
@@ -99,10 +105,15 @@ class Flowsheet:
 
     def set(self, name: str, value: float | str) -> "Flowsheet":
         """Set ``name`` (SI float, or string with a unit). Raises ConfigError outside the bounds."""
+        if isinstance(value, (bool, np.bool_)):  # True is an int to Python, but never a parameter value
+            raise ConfigError(f"parameter {name} = {value}: expected a number (SI) or a string with a unit, e.g. "
+                              "'60 degC', not a bool")
         self._scene.set(name, value)
         return self
 
     def update(self, values: Mapping[str, float | str]) -> "Flowsheet":
+        if not isinstance(values, Mapping):
+            raise ConfigError(f"update({short(values)}): expected a mapping {{'unit.param': value}}")
         for k, v in values.items():
             self.set(k, v)
         return self
@@ -121,11 +132,12 @@ class Flowsheet:
     def set_input(self, name: str, times: Sequence[float], values: Sequence[float | str], *,
                   interp: str = "linear") -> "Flowsheet":
         """Drive parameter ``name`` by a piecewise-linear (or ``interp="step"``) function of time (s)."""
-        self._scene.set_input(name, [float(t) for t in np.asarray(times, dtype=float)], list(values), interp)
+        self._scene.set_input(name, _times(times, f"set_input({name!r}): times"), list(values), interp)
         return self
 
-    def set_t_end(self, t_end: float) -> "Flowsheet":
-        self._scene.set_t_end(float(t_end))
+    def set_t_end(self, t_end: float | str) -> "Flowsheet":
+        """The default end time of a run: seconds, or a string with a time unit (``"60 min"``), > 0."""
+        self._scene.set_t_end(_end_time(t_end, "set_t_end(t_end)"))
         return self
 
     def clone(self) -> "Flowsheet":
@@ -161,11 +173,25 @@ class Flowsheet:
         Raises ``SolverError`` (with ``.t``, ``.unit``, ``.worst_residual``) if the integrator fails and
         ``ConfigError`` for invalid options.
         """
+        if t_out is not None:
+            t_out = _times(t_out, "simulate(): t_out")
+            if not t_out:  # as the scene file's `output: {times: []}`: an empty list is a mistake, not "default"
+                raise ConfigError("simulate(): t_out = []: expected a non-empty list of times in [0, t_end] "
+                                  "(or leave it out, or give n_out)")
+        for key, v in (("n_out", n_out), ("max_steps", max_steps)):
+            if v is not None and (isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, np.integer))):
+                raise ConfigError(f"simulate(): {key} = {short(v)}: expected a whole number")
+        for key, v in (("rtol", rtol), ("atol", atol)):
+            if v is not None and not is_number(v):
+                raise ConfigError(f"simulate(): {key} = {short(v)}: expected a finite number")
+        if isinstance(sensitivities, str):
+            raise ConfigError(f"simulate(): sensitivities = {short(sensitivities)}: expected a list of parameter "
+                              "names, e.g. ['inlet.T']")
         raw = self._scene.simulate(
-            t_end=None if t_end is None else float(t_end),
-            t_out=None if t_out is None else [float(x) for x in np.asarray(list(t_out), dtype=float)],
-            n_out=n_out, rtol=rtol, atol=atol, sensitivities=list(sensitivities),
-            linear_solver=linear_solver, max_steps=max_steps, method=method)
+            t_end=None if t_end is None else _end_time(t_end, "simulate(): t_end"),
+            t_out=t_out, n_out=None if n_out is None else int(n_out), rtol=rtol, atol=atol,
+            sensitivities=list(sensitivities), linear_solver=linear_solver,
+            max_steps=None if max_steps is None else int(max_steps), method=method)
         return Result(raw, scene_name=self.name, summary_map=dict(self._scene.summary_map), units=self.units())
 
     def output_sensitivities(self, params: Sequence[str], *, t_end: float | None = None,
@@ -173,8 +199,14 @@ class Flowsheet:
         """Exact sensitivities of every reported output to ``params``: ``d output / d param`` as an array
         [time, param, output] (SI per SI) at ``times`` (default: the end time), from one forward-sensitivity solve
         (the units' outputs are evaluated with the states' sensitivities carried through)."""
-        t_end = self.t_end if t_end is None else float(t_end)
-        times = [t_end] if times is None else [float(x) for x in times]
+        t_end = self.t_end if t_end is None else _end_time(t_end, "output_sensitivities(): t_end")
+        times = [t_end] if times is None else _times(times, "output_sensitivities(): times")
+        for i, t in enumerate(times):
+            if not 0 <= t <= t_end * (1 + 1e-12):
+                raise ConfigError(f"output_sensitivities(): times[{i}] = {t:g} s: expected 0 <= t <= t_end = "
+                                  f"{t_end:g} s")
+        if isinstance(params, str):
+            raise ConfigError(f"output_sensitivities(): params = {short(params)}: expected a list of parameter names")
         return _core.output_sensitivities(self._scene, t_end, times, list(params))
 
     def time_residual(self, repeats: int = 7) -> dict:
@@ -193,10 +225,35 @@ class Flowsheet:
         return f"<granuflow.Flowsheet {self.name!r}: {len(self.state_names)} states, {len(self.params)} parameters>"
 
 
-def load(path: str) -> Flowsheet:
+def _times(values, where: str) -> list[float]:
+    """A list of times in s (numbers); ConfigError naming ``where`` otherwise."""
+    if isinstance(values, (str, bytes, Mapping)) or not isinstance(values, Iterable):
+        raise ConfigError(f"{where} = {short(values)}: expected a list of times in s")
+    values = list(values)
+    for i, v in enumerate(values):
+        if not is_number(v):
+            raise ConfigError(f"{where}[{i}] = {short(v)}: expected a finite number (s)")
+    return [float(v) for v in values]
+
+
+def _end_time(value, where: str) -> float:
+    """An end time: seconds or a string with a time unit, finite and > 0."""
+    t = parse_time(value, where)
+    if not (math.isfinite(t) and t > 0):
+        raise ConfigError(f"{where} = {short(value)}: expected an end time > 0 s")
+    return t
+
+
+def load(path: str | os.PathLike) -> Flowsheet:
     """Load a scene file (YAML). Raises ConfigError naming the file, the key and what is allowed."""
-    return Flowsheet(_core.load_scene(str(path)))
+    if not isinstance(path, (str, os.PathLike)):
+        raise ConfigError(f"load({short(path)}): expected the path of a scene file (str)")
+    check_regular(path, "scene file")  # a directory or a fifo where the scene should be: named, never read
+    return Flowsheet(_core.load_scene(os.fspath(path)))
 
 
 def load_text(text: str, label: str = "<text>") -> Flowsheet:
+    """A flowsheet from the text of a scene file; ``label`` names it in messages (a file name)."""
+    if not isinstance(text, (str, bytes)):
+        raise ConfigError(f"{label}: the scene must be given as text (str), got {type(text).__name__}")
     return Flowsheet(_core.load_scene_text(text, label))

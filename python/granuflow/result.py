@@ -5,8 +5,11 @@ import math
 
 import numpy as np
 
-from . import outputs
-from .quantity import from_si, label
+from . import _core, outputs
+from .quantity import from_si, is_number, label
+from .textfile import short
+
+ConfigError = _core.ConfigError
 
 
 class Result:
@@ -134,6 +137,12 @@ class Result:
         unit = unit or units[0]
         if unit not in units:
             raise ValueError(f"psd: unit '{unit}' reports no size distribution (units with one: {', '.join(units)})")
+        if not is_number(t):
+            raise ConfigError(f"psd: t = {short(t)}: expected a time in s within the run, {self.t[0]:g} to "
+                              f"{self.t[-1]:g} s")
+        span = self.t[-1] - self.t[0]
+        if not self.t[0] - 1e-9 * span <= t <= self.t[-1] + 1e-9 * span:
+            raise ConfigError(f"psd: t = {t:g} s: outside the run, {self.t[0]:g} to {self.t[-1]:g} s")
         k = int(np.argmin(np.abs(self.t - t)))
         dcols, mcols = outputs.psd_columns(self.output_roles, unit)
         w = self.outputs[k, mcols]

@@ -117,6 +117,14 @@ def main(argv=None) -> int:
     except (_core.ConfigError, FileNotFoundError) as e:
         print(f"granuflow: bad input: {one_line(e)}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except (IsADirectoryError, NotADirectoryError, PermissionError, UnicodeError) as e:
+        # Every file the commands read goes through granuflow.textfile, which names the file and the key; this is
+        # the net under it: still one line naming the file (OSError says which), never a traceback.
+        print(f"granuflow: bad input: {one_line(e)}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except RecursionError:
+        print("granuflow: bad input: an input nested too deeply to read (YAML files allow 64 levels)", file=sys.stderr)
+        return EXIT_BAD_INPUT
     except (_core.SolverError, _core.CalibrationError) as e:
         print(f"granuflow: solver failure: {one_line(e)}", file=sys.stderr)
         return EXIT_SOLVER

@@ -12,7 +12,7 @@ from .. import sweep
 from ..design_space import contour_map, feasible_window, make_axis, parse_constraints
 from ..flowsheet import load
 from ..plots.design_space import plot_contour, plot_feasible_window
-from .common import (check_out_dir, check_workers, json_value, parse_sets, progress_option,
+from .common import (check_out_dir, check_workers, json_value, parse_seconds, parse_sets, progress_option,
                      with_unit_headers)
 
 
@@ -23,6 +23,7 @@ def cmd_contour(args) -> int:
     feasible_window.csv (the outline polygons). Returns 3 if every point failed, else 0."""
     fs = load(args.scene)
     fixed = parse_sets(args.set)
+    t_end = None if args.t_end is None else parse_seconds(args.t_end)
     check_workers(args.workers)
     cons = parse_constraints(args.constraint or [])
     sweep.check_outputs(fs, list(args.output or ["d50_um"]), where="--output")
@@ -39,7 +40,7 @@ def cmd_contour(args) -> int:
 
         client = executor = Client(args.dask)
     try:
-        grid = contour_map(fs, args.x, args.y, outputs, fixed=fixed, t_end=args.t_end, workers=args.workers,
+        grid = contour_map(fs, args.x, args.y, outputs, fixed=fixed, t_end=t_end, workers=args.workers,
                            executor=executor, progress=progress_option(args))
     finally:
         if client is not None:
@@ -58,7 +59,7 @@ def cmd_contour(args) -> int:
         written += ["feasible_window.csv", "feasible_window.png"]
     with_unit_headers(df).to_csv(os.path.join(args.out, "contour.csv"), index=False)
     for o in outputs:
-        if np.isfinite(grid[o]).sum() >= 4:
+        if np.isfinite(grid[o]).sum() >= (4 if min(grid.shape) >= 2 else 2):  # a map, or a profile of >= 2 points
             plot_contour(grid, o, os.path.join(args.out, f"contour_{o}.png"), window=win)
             written.append(f"contour_{o}.png")
     n_failed = int((~grid.ok).sum())

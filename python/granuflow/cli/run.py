@@ -42,7 +42,7 @@ def cmd_run(args) -> int:
     fs = load(args.scene)
     fs.update(parse_sets(args.set))
     specs = plot_specs(fs, drawing=not args.no_plots)  # against the scene file's own t_end
-    if args.t_end:
+    if args.t_end is not None:
         fs.set_t_end(parse_seconds(args.t_end))
     check_out_dir(args.out)
     res = fs.simulate()

@@ -19,7 +19,7 @@ def cmd_sweep(args) -> int:
     overrides = parse_sets(args.set)
     check_workers(args.workers)
     fs = spec.flowsheet(overrides)
-    if args.t_end:
+    if args.t_end is not None:
         fs.set_t_end(parse_seconds(args.t_end))
     check_out_dir(args.out)
     t0 = time.perf_counter()
