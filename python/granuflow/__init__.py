@@ -11,8 +11,8 @@ Typical use::
     gf.unit_reference("fluid_bed")   # ports, settings, parameters, outputs of a unit type
 
 Layers (no module imports one above it; tests/python/test_package_layers.py checks it):
-``_core`` (C++) < ``textfile`` < ``quantity``, ``outputs``, ``progress`` < ``result``, ``flowsheet``, ``kernels``, ``reference``
-< ``plots`` < ``sweep`` < ``design_space``, ``calibration`` < ``bench`` < ``cli``.
+``_core`` (C++) < ``textfile`` < ``quantity``, ``outputs``, ``progress`` < ``result``, ``flowsheet``, ``kernels``,
+``reference`` < ``plots`` < ``sweep`` < ``design_space``, ``calibration`` < ``bench`` < ``cli``.
 """
 from ._core import CalibrationError, ConfigError, SolverError
 from .flowsheet import Flowsheet, load, load_text
