@@ -3,13 +3,14 @@ from __future__ import annotations
 
 import math
 import os
+import warnings
 from typing import Iterable, Mapping, Sequence
 
 import numpy as np
 
 from . import _core, outputs
 from .quantity import is_number, parse_time
-from .result import Result
+from .result import GridWarning, Result
 from .textfile import check_regular, short
 
 ConfigError = _core.ConfigError
@@ -163,7 +164,7 @@ class Flowsheet:
     def simulate(self, t_end: float | None = None, *, t_out: Iterable[float] | None = None,
                  n_out: int | None = None, rtol: float | None = None, atol: float | None = None,
                  sensitivities: Sequence[str] = (), linear_solver: str | None = None,
-                 max_steps: int | None = None, method: str | None = None) -> Result:
+                 max_steps: int | None = None, method: str | None = None, warn: bool = True) -> Result:
         """Integrate the flowsheet; the GIL is released during the solve.
 
         ``method``: ``auto`` (default: IDAS for a DAE, for an ODE chosen by its stiffness), ``ida``, ``bdf``,
@@ -171,7 +172,8 @@ class Flowsheet:
         ``["method_reason"]`` say what ran and why.
 
         Raises ``SolverError`` (with ``.t``, ``.unit``, ``.worst_residual``) if the integrator fails and
-        ``ConfigError`` for invalid options.
+        ``ConfigError`` for invalid options. ``Result.warnings`` says when a size grid clips the distribution (at
+        the start or later); with ``warn`` (default) each is also issued as a :class:`GridWarning`.
         """
         if t_out is not None:
             t_out = _times(t_out, "simulate(): t_out")
@@ -192,7 +194,11 @@ class Flowsheet:
             t_out=t_out, n_out=None if n_out is None else int(n_out), rtol=rtol, atol=atol,
             sensitivities=list(sensitivities), linear_solver=linear_solver,
             max_steps=None if max_steps is None else int(max_steps), method=method)
-        return Result(raw, scene_name=self.name, summary_map=dict(self._scene.summary_map), units=self.units())
+        res = Result(raw, scene_name=self.name, summary_map=dict(self._scene.summary_map), units=self.units())
+        if warn:
+            for w in res.warnings:
+                warnings.warn(f"{self.path or self.name}: {w}", GridWarning, stacklevel=2)
+        return res
 
     def output_sensitivities(self, params: Sequence[str], *, t_end: float | None = None,
                              times: Sequence[float] | None = None):

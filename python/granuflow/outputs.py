@@ -38,8 +38,13 @@ _WORDS = {
     "moisture_wet": "moisture (wet basis)", "mdot": "mass flow", "V_dot": "volume flow", "number": "particle number",
     "particles": "particle number", "mass": "mass", "relative_humidity": "relative humidity",
     "top_class_fraction": "mass fraction in the top class", "fwet_mean": "mean wetted fraction",
-    "evaporated_fraction": "evaporated fraction", "mass_through_top": "mass through the top class",
+    "evaporated_fraction": "evaporated fraction",
 }
+
+# The mass fraction in an end class of a size grid (the top class holds what grew beyond the grid: fold) above which
+# a result warns (summary.json `warnings`, stderr, Python warnings): with 5 % in the top class d95 and above are the
+# grid's edge, not the product, and growth is held back; in the bottom class the same for d5 and below.
+GRID_END_WARNING = 0.05
 # Summary keys in plots: (readable name, unit of the summary value, unit shown).
 _SUMMARY_DISPLAY = {
     "d10_um": ("d10 (mass-based)", "um", "um"), "d50_um": ("d50 (mass-based)", "um", "um"),
@@ -81,7 +86,9 @@ def regularization_columns(roles, output_names) -> list[tuple[int, str]]:
 
 
 def grid_end_columns(roles, output_names) -> list[tuple[int, str]]:
-    """``(column, name)`` of the outputs giving the mass fraction at a population's grid end."""
+    """``(column, name)`` of the outputs a unit declares as the mass fraction at its population's grid end (the
+    fluid bed's ``top_class_fraction``); :meth:`granuflow.Result.grid_ends` reads both end classes of every size
+    distribution as well."""
     return [(j, output_names[j]) for j, (r, _, _, _) in enumerate(roles) if r == "grid_end"]
 
 

@@ -81,6 +81,12 @@ def cmd_contour(args) -> int:
               f"({grid.simulations_per_s:.0f} simulations/s)"
               + (f"; feasible window: {100 * win.fraction:.0f} % of the grid, {win.ranges()}" if win else "")
               + f"; wrote {', '.join(written)} to {args.out}")
+    warned = grid.ok & (grid.message != "")
+    if warned.any():
+        i = np.argwhere(warned)[0]
+        print(f"granuflow: {int(warned.sum())} of {grid.n_simulations} points warn (see contour.csv, message); "
+              f"first: {grid.x.param} = {grid.x.values[i[1]]:g} {grid.x.unit}, {grid.y.param} = "
+              f"{grid.y.values[i[0]]:g} {grid.y.unit}: {grid.message[tuple(i)]}", file=sys.stderr)
     if n_failed:
         i = np.argwhere(~grid.ok)[0]
         print(f"granuflow: {n_failed} of {grid.n_simulations} points failed; first: {grid.x.param} = "

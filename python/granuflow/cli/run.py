@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import os
+import sys
 
 from ..flowsheet import load
 from ..plots.spec import plot_specs
@@ -45,7 +46,9 @@ def cmd_run(args) -> int:
     if args.t_end is not None:
         fs.set_t_end(parse_seconds(args.t_end))
     check_out_dir(args.out)
-    res = fs.simulate()
+    res = fs.simulate(warn=False)
+    for w in res.warnings:  # also in summary.json; exit 0: the run is what was asked for
+        print(f"granuflow: warning: {w}", file=sys.stderr)
     os.makedirs(args.out, exist_ok=True)
     summary = res.summary
     with open(os.path.join(args.out, "summary.json"), "w") as f:
@@ -57,5 +60,6 @@ def cmd_run(args) -> int:
     if not args.quiet:
         print(f"{fs.name}: {res.t[-1]:g} s simulated in {res.wall_time_s * 1e3:.1f} ms "
               f"({res.stats['steps']} steps); wrote {', '.join(written)} to {args.out}")
-        print(json.dumps({k: summary[k] for k in summary if k not in ("solver", "units")}, indent=None))
+        print(json.dumps({k: summary[k] for k in summary if k not in ("solver", "units", "grid_end", "warnings")},
+                         indent=None))
     return 0

@@ -54,6 +54,10 @@ def cmd_sweep(args) -> int:
                 print(effects.to_string(float_format=lambda x: f"{x:.4g}"))
         print(f"{spec.name}: {len(df)} points ({n_failed} failed) in {wall:.2f} s; "
               f"wrote sweep.csv, sweep.json to {args.out}")
+    warned = df.loc[(df["status"] == sw.STATUS_OK) & (df["message"] != "")]
+    if len(warned):
+        print(f"granuflow: {len(warned)} of {len(df)} points warn (see sweep.csv, message); first: "
+              f"{warned.iloc[0]['point']}: {warned.iloc[0]['message']}", file=sys.stderr)
     if n_failed:
         first = df.loc[df["status"] != sw.STATUS_OK].iloc[0]
         print(f"granuflow: {n_failed} of {len(df)} points failed; first: {first['point']}: {first['message']}",

@@ -80,7 +80,8 @@ def run_sweep(flowsheet: Flowsheet, points: Sequence[Mapping[str, float | str]],
     not named keep the flowsheet's value. ``outputs``: summary keys (``d50_um``, ...) or state/output names (final
     value). Returns a pandas DataFrame, one row per point in the order given: ``point`` (``names[i]`` or ``i``),
     one column per parameter (its SI value), the outputs, ``wall_time_s`` (this point, including setup),
-    ``solve_time_s`` (the integrator alone), ``status`` ("ok" or "failed") and ``message``.
+    ``solve_time_s`` (the integrator alone), ``status`` ("ok" or "failed") and ``message`` (why a point failed, or
+    what an ok point's result warns of: ``Result.warnings``).
 
     A point whose solve fails (``SolverError``) or whose values are rejected (``ConfigError``) is recorded with
     status "failed" and the message; with ``raise_errors=True`` the first failure is raised instead.
@@ -115,10 +116,11 @@ def run_sweep(flowsheet: Flowsheet, points: Sequence[Mapping[str, float | str]],
             fs.update(point)
             for k in params:
                 row[k] = fs.get(k)
-            res = fs.simulate(**sim_kwargs)
+            res = fs.simulate(**sim_kwargs, warn=False)
             row.update(final_values(res, outputs))
             row["solve_time_s"] = res.wall_time_s
-            row["status"], row["message"] = STATUS_OK, ""
+            # an ok point's message holds what its result warns of (a size grid that clips the distribution)
+            row["status"], row["message"] = STATUS_OK, "; ".join(f"warning: {w}" for w in res.warnings)
         except (SolverError, ConfigError) as e:
             if raise_errors:
                 raise
