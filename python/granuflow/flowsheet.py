@@ -8,7 +8,7 @@ from typing import Iterable, Mapping, Sequence
 
 import numpy as np
 
-from . import _core, outputs
+from . import _core, accuracy, outputs
 from .quantity import is_number, parse_time
 from .result import GridWarning, Result
 from .textfile import check_regular, short
@@ -141,6 +141,60 @@ class Flowsheet:
         self._scene.set_t_end(_end_time(t_end, "set_t_end(t_end)"))
         return self
 
+    def grid(self) -> dict | None:
+        """The size grid of the scene's ``particles:`` section (its settings, defaults included, as text), or None
+        when the scene has none."""
+        settings = self.unit_settings().get("particles")
+        return dict(settings[1]) if settings and settings[0] == "particles" else None
+
+    def refined(self, factor: int) -> "Flowsheet":
+        """The same flowsheet on a size grid ``factor`` times finer over the same range of sizes (log-diameter
+        grids: the pivot spacing divided by ``factor``, so every old pivot is a new one; geometric grids: ``factor``
+        times the classes per doubling of volume), with this flowsheet's parameter values. ConfigError when the
+        scene has no size grid or the finer one exceeds the grid's limits."""
+        g = self.grid()
+        if g is None:
+            raise ConfigError(f"{self.path or self.name}: no size grid (particles: section) to refine")
+        if not isinstance(factor, int) or isinstance(factor, bool) or factor < 1:
+            raise ConfigError(f"refined(factor = {short(factor)}): expected a whole number >= 1")
+        n = int(g["classes"])
+        if g.get("grid", "log_diameter") == "geometric":
+            new = {"q": int(g["q"]) * factor, "classes": n * factor}
+        else:
+            new = {"classes": (n - 1) * factor + 1}
+        text = _with_grid_settings(self.text, new, self.path or self.name)
+        fs = load_text(text, f"{self.path or self.name} (grid refined {factor}x)")
+        fs.copy_values_from(self)
+        fs.set_t_end(self.t_end)
+        return fs
+
+    def copy_values_from(self, other: "Flowsheet") -> "Flowsheet":
+        """Every constant parameter value of ``other`` (a flowsheet of the same scene), links respected; an input
+        set from Python that the scene text does not hold cannot be carried over (ConfigError)."""
+        import yaml
+
+        declared = (yaml.safe_load(other.text) or {}).get("inputs") or {}
+        pending = []
+        for p in other.params:
+            spec = other.spec(p)
+            if spec.get("input"):
+                if p not in declared:
+                    raise ConfigError(f"{p}: driven by an input set from Python (set_input), which only the scene "
+                                      "text could carry to another grid; declare it under the scene's inputs:")
+                continue
+            pending.append((p, spec["value"]))
+        for _ in range(2):  # a link target follows its source: set it after the source
+            failed = []
+            for p, v in pending:
+                try:
+                    self.set(p, v)
+                except ConfigError:
+                    failed.append((p, v))
+            pending = failed
+        for p, v in pending:
+            self.set(p, v)  # raises, naming the parameter
+        return self
+
     def clone(self) -> "Flowsheet":
         """An independent copy with the same parameter values (for threads and sweeps)."""
         return Flowsheet(self._scene.clone())
@@ -164,7 +218,8 @@ class Flowsheet:
     def simulate(self, t_end: float | None = None, *, t_out: Iterable[float] | None = None,
                  n_out: int | None = None, rtol: float | None = None, atol: float | None = None,
                  sensitivities: Sequence[str] = (), linear_solver: str | None = None,
-                 max_steps: int | None = None, method: str | None = None, warn: bool = True) -> Result:
+                 max_steps: int | None = None, method: str | None = None, warn: bool = True,
+                 error_estimate: bool = False) -> Result:
         """Integrate the flowsheet; the GIL is released during the solve.
 
         ``method``: ``auto`` (default: IDAS for a DAE, for an ODE chosen by its stiffness), ``ida``, ``bdf``,
@@ -174,7 +229,12 @@ class Flowsheet:
         Raises ``SolverError`` (with ``.t``, ``.unit``, ``.worst_residual``) if the integrator fails and
         ``ConfigError`` for invalid options. ``Result.warnings`` says when a size grid clips the distribution (at
         the start or later); with ``warn`` (default) each is also issued as a :class:`GridWarning`.
+        ``error_estimate``: re-solve at a 100 times tighter tolerance and on size grids refined twice and four
+        times, and attach the estimated numerical error of every summary output and time series as
+        ``Result.error_estimate`` (:mod:`granuflow.accuracy`; also in ``Result.summary`` and the plots).
         """
+        if not isinstance(error_estimate, (bool, np.bool_)):
+            raise ConfigError(f"simulate(): error_estimate = {short(error_estimate)}: expected True or False")
         if t_out is not None:
             t_out = _times(t_out, "simulate(): t_out")
             if not t_out:  # as the scene file's `output: {times: []}`: an empty list is a mistake, not "default"
@@ -195,10 +255,39 @@ class Flowsheet:
             sensitivities=list(sensitivities), linear_solver=linear_solver,
             max_steps=None if max_steps is None else int(max_steps), method=method)
         res = Result(raw, scene_name=self.name, summary_map=dict(self._scene.summary_map), units=self.units())
+        if error_estimate:
+            res.error_estimate = self._error_estimate(res, linear_solver=linear_solver, max_steps=max_steps,
+                                                      method=method)
         if warn:
             for w in res.warnings:
                 warnings.warn(f"{self.path or self.name}: {w}", GridWarning, stacklevel=2)
         return res
+
+    def _error_estimate(self, res: Result, **solver) -> "accuracy.ErrorEstimate":
+        """The re-solves of :mod:`granuflow.accuracy` for ``res``: same output times and end time, tolerances
+        divided by accuracy.TOLERANCE_FACTOR, grids refined by accuracy.REFINEMENTS (when there is a size grid)."""
+        import time
+
+        t0 = time.perf_counter()
+        tight = {"rtol": max(res.rtol / accuracy.TOLERANCE_FACTOR, accuracy.MIN_RTOL),
+                 "atol": res.atol / accuracy.TOLERANCE_FACTOR}
+        common = {"t_end": float(res.t[-1]), "t_out": [float(t) for t in res.t], "warn": False,
+                  **{k: v for k, v in solver.items() if v is not None}}
+        tight_res = self.simulate(**common, **tight)
+        refined, grid, notes = [], "", []
+        g = self.grid()
+        if g is not None:
+            try:
+                flowsheets = [self.refined(f) for f in accuracy.REFINEMENTS]
+            except ConfigError as e:  # beyond the grid's limits (classes <= 2000): no discretization estimate
+                notes.append(f"no grid refinement: {' '.join(str(e).split())}")
+                flowsheets = []
+            refined = [fs.simulate(**common, **tight) for fs in flowsheets]
+            key = "q" if g.get("grid") == "geometric" else "classes"
+            if flowsheets:
+                grid = f"particles.{key} " + ", ".join(str(x.grid()[key]) for x in [self] + flowsheets)
+        return accuracy.estimate(res, tight_res, refined, self.summary_keys(), grid, (res.rtol, tight["rtol"]),
+                                 time.perf_counter() - t0, notes)
 
     def output_sensitivities(self, params: Sequence[str], *, t_end: float | None = None,
                              times: Sequence[float] | None = None):
@@ -229,6 +318,56 @@ class Flowsheet:
 
     def __repr__(self) -> str:
         return f"<granuflow.Flowsheet {self.name!r}: {len(self.state_names)} states, {len(self.params)} parameters>"
+
+
+def _with_grid_settings(text: str, settings: dict, label: str) -> str:
+    """The scene text with ``particles: settings:`` holding ``settings`` (keys replaced or added), all else as
+    written: the values are spliced in at the positions of the YAML nodes, so comments, layout and every value the
+    core reads stay byte for byte."""
+    import yaml
+
+    try:
+        root = yaml.compose(text)
+    except yaml.YAMLError as e:
+        raise ConfigError(f"{label}: cannot refine the size grid of this scene text "
+                          f"({short(' '.join(str(e).split()), 100)})") from None
+
+    def find(node, key):
+        if isinstance(node, yaml.MappingNode):
+            for k, v in node.value:
+                if isinstance(k, yaml.ScalarNode) and k.value == key:
+                    return v
+        return None
+
+    def insertion(node, entries: str):
+        """(index, text) adding ``entries`` ("a: 1, b: 2") to the mapping ``node``."""
+        if not node.value:  # {} : replaced as a whole
+            return node.start_mark.index, node.end_mark.index, "{" + entries + "}"
+        first = node.value[0][0].start_mark
+        if node.flow_style:
+            return first.index, first.index, entries + ", "
+        return first.index, first.index, entries.replace(", ", "\n" + " " * first.column) + "\n" + " " * first.column
+
+    particles = find(root, "particles")
+    if not isinstance(particles, yaml.MappingNode):
+        raise ConfigError(f"{label}: no particles: section to refine")
+    node = find(particles, "settings")
+    edits = []
+    if not isinstance(node, yaml.MappingNode):
+        edits.append(insertion(particles, "settings: {" + ", ".join(f"{k}: {v}" for k, v in settings.items()) + "}"))
+    else:
+        missing = []
+        for k, v in settings.items():
+            value = find(node, k)
+            if isinstance(value, yaml.ScalarNode):
+                edits.append((value.start_mark.index, value.end_mark.index, str(v)))
+            else:
+                missing.append(f"{k}: {v}")
+        if missing:
+            edits.append(insertion(node, ", ".join(missing)))
+    for start, end, new in sorted(edits, reverse=True):
+        text = text[:start] + new + text[end:]
+    return text
 
 
 def _times(values, where: str) -> list[float]:

@@ -92,6 +92,25 @@ def grid_end_columns(roles, output_names) -> list[tuple[int, str]]:
     return [(j, output_names[j]) for j, (r, _, _, _) in enumerate(roles) if r == "grid_end"]
 
 
+_INDEXED = re.compile(r"^(.*_)(\d+)$")  # bed.M_3, spray_zone.m_dep_3, bed.psd_d_3: one per size class
+
+
+def per_class_names(names_a, names_b) -> set[str]:
+    """The names (of states and outputs) that stand for one size class each, found by comparing two results of the
+    same scene on different grids: a stem ``bed.M_`` whose indices differ between them. The same name means a
+    different class on each grid, so such names are not compared."""
+    def stems(names):
+        out: dict[str, set[int]] = {}
+        for n in names:
+            m = _INDEXED.match(n)
+            if m:
+                out.setdefault(m.group(1), set()).add(int(m.group(2)))
+        return out
+    a, b = stems(names_a), stems(names_b)
+    differ = {s for s in set(a) | set(b) if a.get(s) != b.get(s)}
+    return {n for n in list(names_a) + list(names_b) if (m := _INDEXED.match(n)) and m.group(1) in differ}
+
+
 def is_size(name: str, si_unit: str = "m") -> bool:
     """A characteristic diameter or a size-distribution pivot diameter (shown in µm)."""
     return si_unit == "m" and (bool(_SIZE.match(name)) or ".psd_d_" in name)
@@ -143,5 +162,9 @@ def header(name: str, unit: str) -> str:
 
 
 def summary_display(key: str) -> tuple[str, str, str]:
-    """(readable name, unit of the value, unit shown) of a summary key for plots; unknown keys as they are."""
+    """(readable name, unit of the value, unit shown) of a summary key for plots; unknown keys as they are. The
+    estimated numerical error of a key (``d50_um_err``, granuflow.accuracy) is shown as the key is."""
+    if key.endswith("_err") and key[:-4] in _SUMMARY_DISPLAY:
+        name, unit, shown = _SUMMARY_DISPLAY[key[:-4]]
+        return f"estimated numerical error of {name}", unit, ("K" if shown == "degC" else shown)
     return _SUMMARY_DISPLAY.get(key, (key, "", ""))

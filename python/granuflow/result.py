@@ -40,6 +40,8 @@ class Result:
         self.stats = dict(raw["stats"])
         self.wall_time_s = raw["wall_time_s"]
         self.rtol = raw.get("rtol")
+        self.atol = raw.get("atol")
+        self.error_estimate = None  # granuflow.accuracy.ErrorEstimate with simulate(error_estimate=True)
         self.t_end = raw.get("t_end", float(self.t[-1]))
         self.scene_name = scene_name
         self.summary_map = dict(summary_map or {})
@@ -253,6 +255,8 @@ class Result:
         # classes or instances affected at any output time, per unit (docs/paper001_decisions.md asks for this).
         s["regularizations"] = {n: _finite(np.max(self.outputs[:, j]))
                                 for j, n in outputs.regularization_columns(self.output_roles, self.output_names)}
+        if self.error_estimate is not None:
+            s["error_estimate"] = self.error_estimate.to_json()
         s["grid_end"] = {k: {x: _finite(v) for x, v in e.items()} for k, e in self.grid_ends().items()}
         s["warnings"] = self.warnings
         s["wall_time_s"] = self.wall_time_s

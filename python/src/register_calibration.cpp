@@ -280,6 +280,13 @@ void register_calibration(py::module_& m) {
   m.def(
       "check_calibration_options", [](const py::dict& options) { to_options(options); }, "options"_a,
       "ConfigError naming the field, the value and the rule if `options` are not valid CalibrationOptions.");
+  m.def(
+      "calibration_tolerances",
+      [](const py::dict& options) {
+        const CalibrationOptions o = to_options(options);
+        return py::make_tuple(o.rtol, o.atol);
+      },
+      "options"_a, "(rtol, atol) the simulations of a calibration with these options use (defaults filled in).");
 
   m.def(
       "calibrate",

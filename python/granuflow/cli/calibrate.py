@@ -40,7 +40,8 @@ def cmd_calibrate(args) -> int:
     if args.compare:
         comparison = cal.calibrate(fs, exps.calibration, plan.simultaneous(), start=plan.start, options=options,
                                    label="all parameters at once")
-    rep = cal.report(fs, res, exps.calibration, exps.validation, comparison=comparison)
+    rep = cal.report(fs, res, exps.calibration, exps.validation, comparison=comparison, options=options,
+                     error_estimate=args.error_estimate)
     written = rep.write(args.out)
     if not args.quiet:
         print(res.full_report())

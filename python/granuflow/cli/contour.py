@@ -41,7 +41,7 @@ def cmd_contour(args) -> int:
         client = executor = Client(args.dask)
     try:
         grid = contour_map(fs, args.x, args.y, outputs, fixed=fixed, t_end=t_end, workers=args.workers,
-                           executor=executor, progress=progress_option(args))
+                           executor=executor, progress=progress_option(args), error_estimate=args.error_estimate)
     finally:
         if client is not None:
             client.close()
@@ -58,7 +58,7 @@ def cmd_contour(args) -> int:
         plot_feasible_window(win, os.path.join(args.out, "feasible_window.png"), grid=grid, background=outputs[0])
         written += ["feasible_window.csv", "feasible_window.png"]
     with_unit_headers(df).to_csv(os.path.join(args.out, "contour.csv"), index=False)
-    for o in outputs:
+    for o in grid.outputs:  # with --error-estimate also each output's estimated error (d50_um_err)
         if np.isfinite(grid[o]).sum() >= (4 if min(grid.shape) >= 2 else 2):  # a map, or a profile of >= 2 points
             plot_contour(grid, o, os.path.join(args.out, f"contour_{o}.png"), window=win)
             written.append(f"contour_{o}.png")
@@ -66,7 +66,7 @@ def cmd_contour(args) -> int:
     meta = {"scene": os.path.abspath(args.scene), "x": {"param": grid.x.param, "unit": grid.x.unit,
                                                         "values": grid.x.values.tolist()},
             "y": {"param": grid.y.param, "unit": grid.y.unit, "values": grid.y.values.tolist()},
-            "outputs": outputs, "fixed": fixed, "t_end_s": grid.t_end_s, "n_points": grid.n_simulations,
+            "outputs": list(grid.outputs), "fixed": fixed, "t_end_s": grid.t_end_s, "n_points": grid.n_simulations,
             "n_failed": n_failed, "wall_time_s": grid.wall_time_s,
             "simulations_per_s": json_value(grid.simulations_per_s),
             "constraints": [str(c) for c in cons], "units": dict(df.attrs.get("units", {}))}

@@ -46,7 +46,7 @@ def cmd_run(args) -> int:
     if args.t_end is not None:
         fs.set_t_end(parse_seconds(args.t_end))
     check_out_dir(args.out)
-    res = fs.simulate(warn=False)
+    res = fs.simulate(warn=False, error_estimate=args.error_estimate)
     for w in res.warnings:  # also in summary.json; exit 0: the run is what was asked for
         print(f"granuflow: warning: {w}", file=sys.stderr)
     os.makedirs(args.out, exist_ok=True)
@@ -60,6 +60,12 @@ def cmd_run(args) -> int:
     if not args.quiet:
         print(f"{fs.name}: {res.t[-1]:g} s simulated in {res.wall_time_s * 1e3:.1f} ms "
               f"({res.stats['steps']} steps); wrote {', '.join(written)} to {args.out}")
-        print(json.dumps({k: summary[k] for k in summary if k not in ("solver", "units", "grid_end", "warnings")},
-                         indent=None))
+        print(json.dumps({k: summary[k] for k in summary
+                          if k not in ("solver", "units", "grid_end", "warnings", "error_estimate")}, indent=None))
+        if res.error_estimate is not None:
+            ee = res.error_estimate
+            print(f"estimated numerical error ({ee.grid or 'no size grid'}; rtol {ee.rtol[0]:g} vs {ee.rtol[1]:g}; "
+                  f"{ee.wall_time_s:.2f} s of re-solves):")
+            for line in ee.lines():
+                print("  " + line)
     return 0

@@ -24,7 +24,7 @@ def cmd_sweep(args) -> int:
     check_out_dir(args.out)
     t0 = time.perf_counter()
     df = spec.run(flowsheet=fs, workers=args.workers, executor=args.executor,
-                  progress=progress_option(args), raise_errors=args.fail_fast)
+                  progress=progress_option(args), raise_errors=args.fail_fast, error_estimate=args.error_estimate)
     wall = time.perf_counter() - t0
     n_failed = int((df["status"] != sw.STATUS_OK).sum())
     effects = None

@@ -9,7 +9,7 @@ from .. import _core
 from ..flowsheet import Flowsheet, load
 from ..quantity import affine, is_number, parse_time, split, to_si
 from ..textfile import load_yaml, short
-from .runner import DEFAULT_OUTPUTS, check_outputs, run_sweep
+from .runner import DEFAULT_OUTPUTS, check_outputs, error_column, run_sweep
 
 ConfigError = _core.ConfigError
 _TOP_KEYS = ("sweep", "description", "scene", "variables", "points", "outputs", "set", "t_end", "notes")
@@ -72,23 +72,26 @@ class Sweep:
     # -- running ---------------------------------------------------------------------------------
     def run(self, *, workers: int | None = None, progress: bool | None = None, executor: str | Any = "threads",
             overrides: Mapping[str, float | str] | None = None, raise_errors: bool = False,
-            flowsheet: Flowsheet | None = None, simulate: Mapping[str, Any] | None = None):
+            flowsheet: Flowsheet | None = None, simulate: Mapping[str, Any] | None = None,
+            error_estimate: bool = False):
         """Run every point. Returns a DataFrame: ``point``, ``kind``, one column per variable (in its edge unit),
-        the outputs, ``wall_time_s``, ``solve_time_s``, ``status``, ``message``. ``df.attrs`` holds the sweep name,
+        the outputs (with ``error_estimate``, each followed by ``<output>_err``, its estimated numerical error),
+        ``wall_time_s``, ``solve_time_s``, ``status``, ``message``. ``df.attrs`` holds the sweep name,
         the variables (parameter, unit, levels) and the outputs, which :func:`main_effects` uses."""
         fs = flowsheet if flowsheet is not None else self.flowsheet(overrides)
         raw = run_sweep(fs, self.param_points(), self.outputs, names=self.point_names, workers=workers,
                         progress=progress, executor=executor, raise_errors=raise_errors, simulate=simulate,
-                        desc=self.name)
+                        desc=self.name, error_estimate=error_estimate)
+        errs = [error_column(o) for o in self.outputs] if error_estimate else []
         df = raw[["point"]].copy()
         df["kind"] = [p.get("kind", "") for p in self.points]
         for v in self.variables:
             df[v.name] = [float(p[v.name]) for p in self.points]
-        for c in self.outputs + ["wall_time_s", "solve_time_s", "status", "message"]:
+        for c in self.outputs + errs + ["wall_time_s", "solve_time_s", "status", "message"]:
             df[c] = raw[c].to_numpy()
         df.attrs.update(self.metadata())
         df.attrs["units"] = {**{v.name: v.unit or fs.spec(v.param)["unit"] for v in self.variables},
-                             **{o: raw.attrs["units"].get(o, "") for o in self.outputs},
+                             **{o: raw.attrs["units"].get(o, "") for o in self.outputs + errs},
                              "wall_time_s": "s", "solve_time_s": "s"}
         return df
 
