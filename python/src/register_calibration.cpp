@@ -171,6 +171,10 @@ const std::vector<std::pair<std::string, OptionSetter>>& option_setters() {
       {"profile_delta_chi2", set_field<&O::profile_delta_chi2>},
       {"profile_max_offset", set_field<&O::profile_max_offset>},
       {"profile_max_points", set_field<&O::profile_max_points>},
+      {"flat_delta_chi2", set_field<&O::flat_delta_chi2>},
+      {"flat_scan_points", set_field<&O::flat_scan_points>},
+      {"restart_delta_chi2", set_field<&O::restart_delta_chi2>},
+      {"max_restarts", set_field<&O::max_restarts>},
   };
   return setters;
 }
@@ -233,7 +237,9 @@ py::dict stage_dict(const StageResult& s) {
                   "passes"_a = s.passes, "weight_change"_a = s.weight_change, "simulations"_a = s.simulations,
                   "sensitivity_solves"_a = s.sensitivity_solves, "wall_time_s"_a = s.wall_time_s,
                   "jacobian_method"_a = s.jacobian_method, "termination"_a = s.termination, "message"_a = s.message,
-                  "usable"_a = s.usable, "profiles"_a = prof);
+                  "usable"_a = s.usable, "profiles"_a = prof, "gradient"_a = s.gradient, "curvature"_a = s.curvature,
+                  "flat"_a = s.flat, "moved"_a = s.moved, "restarts"_a = s.restarts,
+                  "sensitivity_retries"_a = s.sensitivity_retries, "notes"_a = s.notes);
 }
 
 std::vector<Experiment> to_experiments(const py::list& l) {
@@ -305,7 +311,7 @@ void register_calibration(py::module_& m) {
         return py::dict("status"_a = r.status, "message"_a = r.message, "brief"_a = r.brief(),
                         "full_report"_a = r.full_report(), "parameters"_a = r.parameters,
                         "simulations"_a = r.simulations, "sensitivity_solves"_a = r.sensitivity_solves,
-                        "wall_time_s"_a = r.wall_time_s, "stages"_a = sd);
+                        "wall_time_s"_a = r.wall_time_s, "stages"_a = sd, "warnings"_a = r.warnings);
       },
       "scene"_a, "experiments"_a, "stages"_a, "options"_a = py::dict(), "start"_a = std::map<std::string, double>{});
 

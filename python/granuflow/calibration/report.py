@@ -98,7 +98,7 @@ class CalibrationReport:
         return parity_plots(self.predictions, self.fit_rows, out_dir, units=self.units)
 
     def to_json(self) -> dict:
-        out = {"result": self.result.to_json(), "fit": self.fit_rows,
+        out = {"result": self.result.to_json(), "warnings": list(self.result.warnings), "fit": self.fit_rows,
                "comparison": None if self.comparison is None else self.comparison.to_json()}
         if self.truth:
             out["truth"] = dict(self.truth)
@@ -116,6 +116,9 @@ class CalibrationReport:
 
         put("report.json", json.dumps(self.to_json(), indent=2))
         txt = self.result.full_report()
+        extra = [w for w in self.result.warnings if w not in self.result.raw.get("warnings", [])]
+        if extra:  # what multi_start() added
+            txt += "".join(f"warning: {w}\n" for w in extra)
         if self.comparison is not None:
             txt += "\n\nComparison (" + (self.comparison.label or "other route") + "):\n" + \
                                     self.comparison.full_report()
