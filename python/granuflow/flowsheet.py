@@ -11,7 +11,7 @@ import numpy as np
 from . import _core, accuracy, outputs
 from .quantity import is_number, parse_time
 from .result import GridWarning, Result
-from .textfile import check_regular, short
+from .textfile import check_regular, check_yaml, short
 
 ConfigError = _core.ConfigError
 
@@ -97,7 +97,11 @@ class Flowsheet:
         """Scene keys the core does not interpret (plots, sweep, notes)."""
         import yaml
 
-        return yaml.safe_load(self._scene.extra_yaml) or {}
+        text = self._scene.extra_yaml
+        # the core keeps these keys as YAML, aliases unexpanded: held to the limits of every YAML file before PyYAML
+        # builds them (an alias bomb under plots: would expand in any message that shows it)
+        check_yaml(text, f"{self.path or self.name} (keys plots, sweep, notes as the core keeps them)", "scene file")
+        return yaml.safe_load(text) or {}
 
     # -- parameters -----------------------------------------------------------------------------
     def get(self, name: str) -> float:

@@ -66,6 +66,9 @@ units:
 connections: [feed.out -> tank.in, tank.out -> product.in]
 """
 
+with open(DEMO) as _f:
+    DEMO_TEXT = _f.read()
+
 UNWRITABLE = "/sys/granuflow-out"  # sysfs refuses new files, even to root (chmod does not stop root)
 
 
@@ -266,6 +269,13 @@ CLI_CASES = {
     "run_out_empty": (lambda tmp_path: (["run", SCENE, "--out", ""], [SCENE], None),
                       ["--out = ''", "expected a folder"]),
     "run_scene_is_a_directory": (scene_file_case("dir"), ["is a directory; expected a scene file"]),
+    # the keys of a scene the core keeps as YAML for the Python side (plots, notes): an alias bomb there expanded
+    # in the message about a bad plot entry
+    "run_scene_plots_alias_bomb": (scene_file_case(sub(DEMO_TEXT, DEMO_TEXT[DEMO_TEXT.index("plots:"):],
+                                                       "notes:\n" + "".join("  " + line + "\n" for line in
+                                                                            alias_bomb().splitlines()[:-1])
+                                                       + "plots: [*a8]\n")),
+                                   ["more than 200000 values", "alias"]),  # the core's loader may find it first
     "run_scene_is_a_fifo": (scene_file_case("fifo"), ["not a regular file"]),
     "contour_axis_is_a_link_target": (scene_case("contour", "--x", "bed.T0:degC:50:70:3", "--y",
                                                  "nozzle.mdot:g/min:60:120:3"),
