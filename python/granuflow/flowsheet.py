@@ -142,7 +142,7 @@ class Flowsheet:
 
     def set_t_end(self, t_end: float | str) -> "Flowsheet":
         """The default end time of a run: seconds, or a string with a time unit (``"60 min"``), > 0."""
-        self._scene.set_t_end(_end_time(t_end, "set_t_end(t_end)"))
+        self._scene.set_t_end(_end_time(t_end, "set_t_end()"))
         return self
 
     def grid(self) -> dict | None:
@@ -254,7 +254,7 @@ class Flowsheet:
             raise ConfigError(f"simulate(): sensitivities = {short(sensitivities)}: expected a list of parameter "
                               "names, e.g. ['inlet.T']")
         raw = self._scene.simulate(
-            t_end=None if t_end is None else _end_time(t_end, "simulate(): t_end"),
+            t_end=None if t_end is None else _end_time(t_end, "simulate()"),
             t_out=t_out, n_out=None if n_out is None else int(n_out), rtol=rtol, atol=atol,
             sensitivities=list(sensitivities), linear_solver=linear_solver,
             max_steps=None if max_steps is None else int(max_steps), method=method)
@@ -298,7 +298,7 @@ class Flowsheet:
         """Exact sensitivities of every reported output to ``params``: ``d output / d param`` as an array
         [time, param, output] (SI per SI) at ``times`` (default: the end time), from one forward-sensitivity solve
         (the units' outputs are evaluated with the states' sensitivities carried through)."""
-        t_end = self.t_end if t_end is None else _end_time(t_end, "output_sensitivities(): t_end")
+        t_end = self.t_end if t_end is None else _end_time(t_end, "output_sensitivities()")
         times = [t_end] if times is None else _times(times, "output_sensitivities(): times")
         for i, t in enumerate(times):
             if not 0 <= t <= t_end * (1 + 1e-12):
@@ -386,10 +386,11 @@ def _times(values, where: str) -> list[float]:
 
 
 def _end_time(value, where: str) -> float:
-    """An end time: seconds or a string with a time unit, finite and > 0."""
-    t = parse_time(value, where)
+    """An end time: seconds or a string with a time unit, finite and > 0. ``where``: the call, e.g. "simulate()"."""
+    t = parse_time(value, f"{where}: t_end")
     if not (math.isfinite(t) and t > 0):
-        raise ConfigError(f"{where} = {short(value)}: expected an end time > 0 s")
+        raise ConfigError(f"{where}: t_end = {t:g} s violates t_end > 0 (an end time in s, or with a time unit such "
+                          "as '60 min')")
     return t
 
 
