@@ -177,7 +177,11 @@ class Flowsheet:
         set from Python that the scene text does not hold cannot be carried over (ConfigError)."""
         import yaml
 
-        declared = (yaml.safe_load(other.text) or {}).get("inputs") or {}
+        try:
+            doc = yaml.safe_load(other.text) or {}
+        except yaml.YAMLError:  # YAML the core reads but PyYAML does not: the inputs cannot be told apart
+            doc = {}
+        declared = (doc.get("inputs") or {}) if isinstance(doc, dict) else {}
         pending = []
         for p in other.params:
             spec = other.spec(p)
@@ -286,7 +290,11 @@ class Flowsheet:
             except ConfigError as e:  # beyond the grid's limits (classes <= 2000): no discretization estimate
                 notes.append(f"no grid refinement: {' '.join(str(e).split())}")
                 flowsheets = []
-            refined = [fs.simulate(**common, **tight) for fs in flowsheets]
+            try:
+                refined = [fs.simulate(**common, **tight) for fs in flowsheets]
+            except _core.SolverError as e:  # the answer stands; only its grid error is not known
+                notes.append(f"no grid refinement: a solve on a refined grid failed ({' '.join(str(e).split())})")
+                refined, flowsheets = [], []
             key = "q" if g.get("grid") == "geometric" else "classes"
             if flowsheets:
                 grid = f"particles.{key} " + ", ".join(str(x.grid()[key]) for x in [self] + flowsheets)
