@@ -11,16 +11,16 @@ Typical use::
     gf.unit_reference("fluid_bed")   # ports, settings, parameters, outputs of a unit type
 
 Layers (no module imports one above it; tests/python/test_package_layers.py checks it):
-``_core`` (C++) < ``quantity``, ``outputs``, ``progress`` < ``result``, ``flowsheet``, ``kernels``, ``reference``
-< ``plots`` < ``sweep`` < ``design_space``, ``calibration`` < ``bench`` < ``cli``.
+``_core`` (C++) < ``textfile`` < ``quantity``, ``outputs``, ``progress`` < ``result``, ``flowsheet``, ``kernels``,
+``reference`` < ``plots`` < ``sweep`` < ``design_space``, ``calibration`` < ``bench`` < ``cli``.
 """
 from ._core import CalibrationError, ConfigError, SolverError
 from .flowsheet import Flowsheet, load, load_text
 from .kernels import aggregation_kernels, register_kernel
 from .reference import kernel_reference, unit_reference, unit_types
-from .result import Result
+from .result import GridWarning, Result
 
 __version__ = "0.2.0"
-__all__ = ["load", "load_text", "Flowsheet", "Result", "ConfigError", "SolverError", "CalibrationError",
-           "unit_types", "unit_reference", "kernel_reference", "register_kernel", "aggregation_kernels",
-           "__version__"]
+__all__ = ["load", "load_text", "Flowsheet", "Result", "GridWarning", "ConfigError", "SolverError",
+           "CalibrationError", "unit_types", "unit_reference", "kernel_reference", "register_kernel",
+           "aggregation_kernels", "__version__"]

@@ -78,7 +78,7 @@ def bench_core(repeats: int, quick: bool = False, progress: bool = False) -> lis
     walls = []
     for _ in range(repeats):
         t0 = time.perf_counter()
-        res = fs.simulate()
+        res = fs.simulate(warn=False)
         walls.append(time.perf_counter() - t0)
     records.append({"bench": "demo_flowsheet", "scene": demo, "states": len(res.state_names),
                     "wall_ms_median": statistics.median(walls) * 1e3, "solve_ms_median_inside": res.wall_time_s * 1e3,
@@ -139,7 +139,7 @@ def bench_scene(repeats: int, classes=(10, 20, 40), scipy: bool = True, scipy_re
             walls = []
             for _ in range(repeats):
                 t0 = time.perf_counter()
-                res = fs.simulate()
+                res = fs.simulate(warn=False)
                 walls.append(time.perf_counter() - t0)
             summary = res.summary
             wall = statistics.median(walls)

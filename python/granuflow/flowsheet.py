@@ -1,12 +1,19 @@
 """Flowsheets loaded from scene files: parameters by "unit.param", inputs, simulation."""
 from __future__ import annotations
 
+import math
+import os
+import warnings
 from typing import Iterable, Mapping, Sequence
 
 import numpy as np
 
-from . import _core, outputs
-from .result import Result
+from . import _core, accuracy, outputs
+from .quantity import is_number, parse_time
+from .result import GridWarning, Result
+from .textfile import check_regular, check_yaml, short
+
+ConfigError = _core.ConfigError
 
 
 class Flowsheet:
@@ -90,7 +97,11 @@ class Flowsheet:
         """Scene keys the core does not interpret (plots, sweep, notes)."""
         import yaml
 
-        return yaml.safe_load(self._scene.extra_yaml) or {}
+        text = self._scene.extra_yaml
+        # the core keeps these keys as YAML, aliases unexpanded: held to the limits of every YAML file before PyYAML
+        # builds them (an alias bomb under plots: would expand in any message that shows it)
+        check_yaml(text, f"{self.path or self.name} (keys plots, sweep, notes as the core keeps them)", "scene file")
+        return yaml.safe_load(text) or {}
 
     # -- parameters -----------------------------------------------------------------------------
     def get(self, name: str) -> float:
@@ -99,10 +110,15 @@ class Flowsheet:
 
     def set(self, name: str, value: float | str) -> "Flowsheet":
         """Set ``name`` (SI float, or string with a unit). Raises ConfigError outside the bounds."""
+        if isinstance(value, (bool, np.bool_)):  # True is an int to Python, but never a parameter value
+            raise ConfigError(f"parameter {name} = {value}: expected a number (SI) or a string with a unit, e.g. "
+                              "'60 degC', not a bool")
         self._scene.set(name, value)
         return self
 
     def update(self, values: Mapping[str, float | str]) -> "Flowsheet":
+        if not isinstance(values, Mapping):
+            raise ConfigError(f"update({short(values)}): expected a mapping {{'unit.param': value}}")
         for k, v in values.items():
             self.set(k, v)
         return self
@@ -121,11 +137,70 @@ class Flowsheet:
     def set_input(self, name: str, times: Sequence[float], values: Sequence[float | str], *,
                   interp: str = "linear") -> "Flowsheet":
         """Drive parameter ``name`` by a piecewise-linear (or ``interp="step"``) function of time (s)."""
-        self._scene.set_input(name, [float(t) for t in np.asarray(times, dtype=float)], list(values), interp)
+        self._scene.set_input(name, _times(times, f"set_input({name!r}): times"), list(values), interp)
         return self
 
-    def set_t_end(self, t_end: float) -> "Flowsheet":
-        self._scene.set_t_end(float(t_end))
+    def set_t_end(self, t_end: float | str) -> "Flowsheet":
+        """The default end time of a run: seconds, or a string with a time unit (``"60 min"``), > 0."""
+        self._scene.set_t_end(_end_time(t_end, "set_t_end()"))
+        return self
+
+    def grid(self) -> dict | None:
+        """The size grid of the scene's ``particles:`` section (its settings, defaults included, as text), or None
+        when the scene has none."""
+        settings = self.unit_settings().get("particles")
+        return dict(settings[1]) if settings and settings[0] == "particles" else None
+
+    def refined(self, factor: int) -> "Flowsheet":
+        """The same flowsheet on a size grid ``factor`` times finer over the same range of sizes (log-diameter
+        grids: the pivot spacing divided by ``factor``, so every old pivot is a new one; geometric grids: ``factor``
+        times the classes per doubling of volume), with this flowsheet's parameter values. ConfigError when the
+        scene has no size grid or the finer one exceeds the grid's limits."""
+        g = self.grid()
+        if g is None:
+            raise ConfigError(f"{self.path or self.name}: no size grid (particles: section) to refine")
+        if not isinstance(factor, int) or isinstance(factor, bool) or factor < 1:
+            raise ConfigError(f"refined(factor = {short(factor)}): expected a whole number >= 1")
+        n = int(g["classes"])
+        if g.get("grid", "log_diameter") == "geometric":
+            new = {"q": int(g["q"]) * factor, "classes": n * factor}
+        else:
+            new = {"classes": (n - 1) * factor + 1}
+        text = _with_grid_settings(self.text, new, self.path or self.name)
+        fs = load_text(text, f"{self.path or self.name} (grid refined {factor}x)")
+        fs.copy_values_from(self)
+        fs.set_t_end(self.t_end)
+        return fs
+
+    def copy_values_from(self, other: "Flowsheet") -> "Flowsheet":
+        """Every constant parameter value of ``other`` (a flowsheet of the same scene), links respected; an input
+        set from Python that the scene text does not hold cannot be carried over (ConfigError)."""
+        import yaml
+
+        try:
+            doc = yaml.safe_load(other.text) or {}
+        except yaml.YAMLError:  # YAML the core reads but PyYAML does not: the inputs cannot be told apart
+            doc = {}
+        declared = (doc.get("inputs") or {}) if isinstance(doc, dict) else {}
+        pending = []
+        for p in other.params:
+            spec = other.spec(p)
+            if spec.get("input"):
+                if p not in declared:
+                    raise ConfigError(f"{p}: driven by an input set from Python (set_input), which only the scene "
+                                      "text could carry to another grid; declare it under the scene's inputs:")
+                continue
+            pending.append((p, spec["value"]))
+        for _ in range(2):  # a link target follows its source: set it after the source
+            failed = []
+            for p, v in pending:
+                try:
+                    self.set(p, v)
+                except ConfigError:
+                    failed.append((p, v))
+            pending = failed
+        for p, v in pending:
+            self.set(p, v)  # raises, naming the parameter
         return self
 
     def clone(self) -> "Flowsheet":
@@ -151,7 +226,8 @@ class Flowsheet:
     def simulate(self, t_end: float | None = None, *, t_out: Iterable[float] | None = None,
                  n_out: int | None = None, rtol: float | None = None, atol: float | None = None,
                  sensitivities: Sequence[str] = (), linear_solver: str | None = None,
-                 max_steps: int | None = None, method: str | None = None) -> Result:
+                 max_steps: int | None = None, method: str | None = None, warn: bool = True,
+                 error_estimate: bool = False) -> Result:
         """Integrate the flowsheet; the GIL is released during the solve.
 
         ``method``: ``auto`` (default: IDAS for a DAE, for an ODE chosen by its stiffness), ``ida``, ``bdf``,
@@ -159,22 +235,85 @@ class Flowsheet:
         ``["method_reason"]`` say what ran and why.
 
         Raises ``SolverError`` (with ``.t``, ``.unit``, ``.worst_residual``) if the integrator fails and
-        ``ConfigError`` for invalid options.
+        ``ConfigError`` for invalid options. ``Result.warnings`` says when a size grid clips the distribution (at
+        the start or later); with ``warn`` (default) each is also issued as a :class:`GridWarning`.
+        ``error_estimate``: re-solve at a 100 times tighter tolerance and on size grids refined twice and four
+        times, and attach the estimated numerical error of every summary output and time series as
+        ``Result.error_estimate`` (:mod:`granuflow.accuracy`; also in ``Result.summary`` and the plots).
         """
+        if not isinstance(error_estimate, (bool, np.bool_)):
+            raise ConfigError(f"simulate(): error_estimate = {short(error_estimate)}: expected True or False")
+        if t_out is not None:
+            t_out = _times(t_out, "simulate(): t_out")
+            if not t_out:  # as the scene file's `output: {times: []}`: an empty list is a mistake, not "default"
+                raise ConfigError("simulate(): t_out = []: expected a non-empty list of times in [0, t_end] "
+                                  "(or leave it out, or give n_out)")
+        for key, v in (("n_out", n_out), ("max_steps", max_steps)):
+            if v is not None and (isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, np.integer))):
+                raise ConfigError(f"simulate(): {key} = {short(v)}: expected a whole number")
+        for key, v in (("rtol", rtol), ("atol", atol)):
+            if v is not None and not is_number(v):
+                raise ConfigError(f"simulate(): {key} = {short(v)}: expected a finite number")
+        if isinstance(sensitivities, str):
+            raise ConfigError(f"simulate(): sensitivities = {short(sensitivities)}: expected a list of parameter "
+                              "names, e.g. ['inlet.T']")
         raw = self._scene.simulate(
-            t_end=None if t_end is None else float(t_end),
-            t_out=None if t_out is None else [float(x) for x in np.asarray(list(t_out), dtype=float)],
-            n_out=n_out, rtol=rtol, atol=atol, sensitivities=list(sensitivities),
-            linear_solver=linear_solver, max_steps=max_steps, method=method)
-        return Result(raw, scene_name=self.name, summary_map=dict(self._scene.summary_map), units=self.units())
+            t_end=None if t_end is None else _end_time(t_end, "simulate()"),
+            t_out=t_out, n_out=None if n_out is None else int(n_out), rtol=rtol, atol=atol,
+            sensitivities=list(sensitivities), linear_solver=linear_solver,
+            max_steps=None if max_steps is None else int(max_steps), method=method)
+        res = Result(raw, scene_name=self.name, summary_map=dict(self._scene.summary_map), units=self.units())
+        if error_estimate:
+            res.error_estimate = self._error_estimate(res, linear_solver=linear_solver, max_steps=max_steps,
+                                                      method=method)
+        if warn:
+            for w in res.warnings:
+                warnings.warn(f"{self.path or self.name}: {w}", GridWarning, stacklevel=2)
+        return res
+
+    def _error_estimate(self, res: Result, **solver) -> "accuracy.ErrorEstimate":
+        """The re-solves of :mod:`granuflow.accuracy` for ``res``: same output times and end time, tolerances
+        divided by accuracy.TOLERANCE_FACTOR, grids refined by accuracy.REFINEMENTS (when there is a size grid)."""
+        import time
+
+        t0 = time.perf_counter()
+        tight = {"rtol": max(res.rtol / accuracy.TOLERANCE_FACTOR, accuracy.MIN_RTOL),
+                 "atol": res.atol / accuracy.TOLERANCE_FACTOR}
+        common = {"t_end": float(res.t[-1]), "t_out": [float(t) for t in res.t], "warn": False,
+                  **{k: v for k, v in solver.items() if v is not None}}
+        tight_res = self.simulate(**common, **tight)
+        refined, grid, notes = [], "", []
+        g = self.grid()
+        if g is not None:
+            try:
+                flowsheets = [self.refined(f) for f in accuracy.REFINEMENTS]
+            except ConfigError as e:  # beyond the grid's limits (classes <= 2000): no discretization estimate
+                notes.append(f"no grid refinement: {' '.join(str(e).split())}")
+                flowsheets = []
+            try:
+                refined = [fs.simulate(**common, **tight) for fs in flowsheets]
+            except _core.SolverError as e:  # the answer stands; only its grid error is not known
+                notes.append(f"no grid refinement: a solve on a refined grid failed ({' '.join(str(e).split())})")
+                refined, flowsheets = [], []
+            key = "q" if g.get("grid") == "geometric" else "classes"
+            if flowsheets:
+                grid = f"particles.{key} " + ", ".join(str(x.grid()[key]) for x in [self] + flowsheets)
+        return accuracy.estimate(res, tight_res, refined, self.summary_keys(), grid, (res.rtol, tight["rtol"]),
+                                 time.perf_counter() - t0, notes)
 
     def output_sensitivities(self, params: Sequence[str], *, t_end: float | None = None,
                              times: Sequence[float] | None = None):
         """Exact sensitivities of every reported output to ``params``: ``d output / d param`` as an array
         [time, param, output] (SI per SI) at ``times`` (default: the end time), from one forward-sensitivity solve
         (the units' outputs are evaluated with the states' sensitivities carried through)."""
-        t_end = self.t_end if t_end is None else float(t_end)
-        times = [t_end] if times is None else [float(x) for x in times]
+        t_end = self.t_end if t_end is None else _end_time(t_end, "output_sensitivities()")
+        times = [t_end] if times is None else _times(times, "output_sensitivities(): times")
+        for i, t in enumerate(times):
+            if not 0 <= t <= t_end * (1 + 1e-12):
+                raise ConfigError(f"output_sensitivities(): times[{i}] = {t:g} s: expected 0 <= t <= t_end = "
+                                  f"{t_end:g} s")
+        if isinstance(params, str):
+            raise ConfigError(f"output_sensitivities(): params = {short(params)}: expected a list of parameter names")
         return _core.output_sensitivities(self._scene, t_end, times, list(params))
 
     def time_residual(self, repeats: int = 7) -> dict:
@@ -193,10 +332,86 @@ class Flowsheet:
         return f"<granuflow.Flowsheet {self.name!r}: {len(self.state_names)} states, {len(self.params)} parameters>"
 
 
-def load(path: str) -> Flowsheet:
+def _with_grid_settings(text: str, settings: dict, label: str) -> str:
+    """The scene text with ``particles: settings:`` holding ``settings`` (keys replaced or added), all else as
+    written: the values are spliced in at the positions of the YAML nodes, so comments, layout and every value the
+    core reads stay byte for byte."""
+    import yaml
+
+    try:
+        root = yaml.compose(text)
+    except yaml.YAMLError as e:
+        raise ConfigError(f"{label}: cannot refine the size grid of this scene text "
+                          f"({short(' '.join(str(e).split()), 100)})") from None
+
+    def find(node, key):
+        if isinstance(node, yaml.MappingNode):
+            for k, v in node.value:
+                if isinstance(k, yaml.ScalarNode) and k.value == key:
+                    return v
+        return None
+
+    def insertion(node, entries: str):
+        """(index, text) adding ``entries`` ("a: 1, b: 2") to the mapping ``node``."""
+        if not node.value:  # {} : replaced as a whole
+            return node.start_mark.index, node.end_mark.index, "{" + entries + "}"
+        first = node.value[0][0].start_mark
+        if node.flow_style:
+            return first.index, first.index, entries + ", "
+        return first.index, first.index, entries.replace(", ", "\n" + " " * first.column) + "\n" + " " * first.column
+
+    particles = find(root, "particles")
+    if not isinstance(particles, yaml.MappingNode):
+        raise ConfigError(f"{label}: no particles: section to refine")
+    node = find(particles, "settings")
+    edits = []
+    if not isinstance(node, yaml.MappingNode):
+        edits.append(insertion(particles, "settings: {" + ", ".join(f"{k}: {v}" for k, v in settings.items()) + "}"))
+    else:
+        missing = []
+        for k, v in settings.items():
+            value = find(node, k)
+            if isinstance(value, yaml.ScalarNode):
+                edits.append((value.start_mark.index, value.end_mark.index, str(v)))
+            else:
+                missing.append(f"{k}: {v}")
+        if missing:
+            edits.append(insertion(node, ", ".join(missing)))
+    for start, end, new in sorted(edits, reverse=True):
+        text = text[:start] + new + text[end:]
+    return text
+
+
+def _times(values, where: str) -> list[float]:
+    """A list of times in s (numbers); ConfigError naming ``where`` otherwise."""
+    if isinstance(values, (str, bytes, Mapping)) or not isinstance(values, Iterable):
+        raise ConfigError(f"{where} = {short(values)}: expected a list of times in s")
+    values = list(values)
+    for i, v in enumerate(values):
+        if not is_number(v):
+            raise ConfigError(f"{where}[{i}] = {short(v)}: expected a finite number (s)")
+    return [float(v) for v in values]
+
+
+def _end_time(value, where: str) -> float:
+    """An end time: seconds or a string with a time unit, finite and > 0. ``where``: the call, e.g. "simulate()"."""
+    t = parse_time(value, f"{where}: t_end")
+    if not (math.isfinite(t) and t > 0):
+        raise ConfigError(f"{where}: t_end = {t:g} s violates t_end > 0 (an end time in s, or with a time unit such "
+                          "as '60 min')")
+    return t
+
+
+def load(path: str | os.PathLike) -> Flowsheet:
     """Load a scene file (YAML). Raises ConfigError naming the file, the key and what is allowed."""
-    return Flowsheet(_core.load_scene(str(path)))
+    if not isinstance(path, (str, os.PathLike)):
+        raise ConfigError(f"load({short(path)}): expected the path of a scene file (str)")
+    check_regular(path, "scene file")  # a directory or a fifo where the scene should be: named, never read
+    return Flowsheet(_core.load_scene(os.fspath(path)))
 
 
 def load_text(text: str, label: str = "<text>") -> Flowsheet:
+    """A flowsheet from the text of a scene file; ``label`` names it in messages (a file name)."""
+    if not isinstance(text, (str, bytes)):
+        raise ConfigError(f"{label}: the scene must be given as text (str), got {type(text).__name__}")
     return Flowsheet(_core.load_scene_text(text, label))

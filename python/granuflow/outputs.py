@@ -38,8 +38,13 @@ _WORDS = {
     "moisture_wet": "moisture (wet basis)", "mdot": "mass flow", "V_dot": "volume flow", "number": "particle number",
     "particles": "particle number", "mass": "mass", "relative_humidity": "relative humidity",
     "top_class_fraction": "mass fraction in the top class", "fwet_mean": "mean wetted fraction",
-    "evaporated_fraction": "evaporated fraction", "mass_through_top": "mass through the top class",
+    "evaporated_fraction": "evaporated fraction",
 }
+
+# The mass fraction in an end class of a size grid (the top class holds what grew beyond the grid: fold) above which
+# a result warns (summary.json `warnings`, stderr, Python warnings): with 5 % in the top class d95 and above are the
+# grid's edge, not the product, and growth is held back; in the bottom class the same for d5 and below.
+GRID_END_WARNING = 0.05
 # Summary keys in plots: (readable name, unit of the summary value, unit shown).
 _SUMMARY_DISPLAY = {
     "d10_um": ("d10 (mass-based)", "um", "um"), "d50_um": ("d50 (mass-based)", "um", "um"),
@@ -81,8 +86,29 @@ def regularization_columns(roles, output_names) -> list[tuple[int, str]]:
 
 
 def grid_end_columns(roles, output_names) -> list[tuple[int, str]]:
-    """``(column, name)`` of the outputs giving the mass fraction at a population's grid end."""
+    """``(column, name)`` of the outputs a unit declares as the mass fraction at its population's grid end (the
+    fluid bed's ``top_class_fraction``); :meth:`granuflow.Result.grid_ends` reads both end classes of every size
+    distribution as well."""
     return [(j, output_names[j]) for j, (r, _, _, _) in enumerate(roles) if r == "grid_end"]
+
+
+_INDEXED = re.compile(r"^(.*_)(\d+)$")  # bed.M_3, spray_zone.m_dep_3, bed.psd_d_3: one per size class
+
+
+def per_class_names(names_a, names_b) -> set[str]:
+    """The names (of states and outputs) that stand for one size class each, found by comparing two results of the
+    same scene on different grids: a stem ``bed.M_`` whose indices differ between them. The same name means a
+    different class on each grid, so such names are not compared."""
+    def stems(names):
+        out: dict[str, set[int]] = {}
+        for n in names:
+            m = _INDEXED.match(n)
+            if m:
+                out.setdefault(m.group(1), set()).add(int(m.group(2)))
+        return out
+    a, b = stems(names_a), stems(names_b)
+    differ = {s for s in set(a) | set(b) if a.get(s) != b.get(s)}
+    return {n for n in list(names_a) + list(names_b) if (m := _INDEXED.match(n)) and m.group(1) in differ}
 
 
 def is_size(name: str, si_unit: str = "m") -> bool:
@@ -136,5 +162,9 @@ def header(name: str, unit: str) -> str:
 
 
 def summary_display(key: str) -> tuple[str, str, str]:
-    """(readable name, unit of the value, unit shown) of a summary key for plots; unknown keys as they are."""
+    """(readable name, unit of the value, unit shown) of a summary key for plots; unknown keys as they are. The
+    estimated numerical error of a key (``d50_um_err``, granuflow.accuracy) is shown as the key is."""
+    if key.endswith("_err") and key[:-4] in _SUMMARY_DISPLAY:
+        name, unit, shown = _SUMMARY_DISPLAY[key[:-4]]
+        return f"estimated numerical error of {name}", unit, ("K" if shown == "degC" else shown)
     return _SUMMARY_DISPLAY.get(key, (key, "", ""))

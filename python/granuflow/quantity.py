@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from . import _core
+from .textfile import short
 
 ConfigError = _core.ConfigError
 
@@ -45,7 +46,7 @@ def number(value: Any, where: str) -> float:
         except ValueError:
             pass
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise ConfigError(f"{where} = {value!r}: expected a number, optionally followed by a unit")
+        raise ConfigError(f"{where} = {short(value)}: expected a number, optionally followed by a unit")
     return float(value)
 
 
@@ -129,7 +130,7 @@ def parse_time(value: Any, where: str) -> float:
             v, u = None, ""
         if v is not None:
             return _core.to_si(v, u, "s", where)
-    raise ConfigError(f"{where} = {value!r}: expected seconds or a number with a time unit (e.g. '60 min')")
+    raise ConfigError(f"{where} = {short(value)}: expected seconds or a number with a time unit (e.g. '60 min')")
 
 
 def si_or_nan(value: Any, si_unit: str, where: str = "value") -> float:

@@ -5,8 +5,15 @@ import math
 
 import numpy as np
 
-from . import outputs
-from .quantity import from_si, label
+from . import _core, outputs
+from .quantity import from_si, is_number, label
+from .textfile import short
+
+ConfigError = _core.ConfigError
+
+
+class GridWarning(UserWarning):
+    """A result whose size grid clips the distribution (:attr:`Result.warnings`)."""
 
 
 class Result:
@@ -33,6 +40,8 @@ class Result:
         self.stats = dict(raw["stats"])
         self.wall_time_s = raw["wall_time_s"]
         self.rtol = raw.get("rtol")
+        self.atol = raw.get("atol")
+        self.error_estimate = None  # granuflow.accuracy.ErrorEstimate with simulate(error_estimate=True)
         self.t_end = raw.get("t_end", float(self.t[-1]))
         self.scene_name = scene_name
         self.summary_map = dict(summary_map or {})
@@ -134,6 +143,12 @@ class Result:
         unit = unit or units[0]
         if unit not in units:
             raise ValueError(f"psd: unit '{unit}' reports no size distribution (units with one: {', '.join(units)})")
+        if not is_number(t):
+            raise ConfigError(f"psd: t = {short(t)}: expected a time in s within the run, {self.t[0]:g} to "
+                              f"{self.t[-1]:g} s")
+        span = self.t[-1] - self.t[0]
+        if not self.t[0] - 1e-9 * span <= t <= self.t[-1] + 1e-9 * span:
+            raise ConfigError(f"psd: t = {t:g} s: outside the run, {self.t[0]:g} to {self.t[-1]:g} s")
         k = int(np.argmin(np.abs(self.t - t)))
         dcols, mcols = outputs.psd_columns(self.output_roles, unit)
         w = self.outputs[k, mcols]
@@ -152,6 +167,53 @@ class Result:
         df.attrs["units"] = {"d_um": "um", "mass_kg": "kg", "mass_fraction": "-", "Q3": "-"}
         df.attrs["t_s"] = t_k
         return df
+
+    # -- the ends of the size grid ----------------------------------------------------------------
+    def grid_ends(self) -> dict[str, dict]:
+        """The mass fraction at the ends of each size grid: per unit with a size distribution its bottom and top
+        class (``"bed.bottom_class"``, ``"bed.top_class"``; the top class holds what grew beyond the grid), and
+        every output a unit declares as a grid-end fraction (role ``grid_end``) of a unit without one. Each:
+        ``{"initial", "final", "max"}`` over the output times, and ``"d_um"``, the pivot of that class."""
+        out: dict[str, dict] = {}
+        units = self.psd_units()
+        for unit in units:
+            dcols, mcols = outputs.psd_columns(self.output_roles, unit)
+            m = self.outputs[:, mcols]
+            total = m.sum(axis=1)
+            for end, k in (("bottom_class", 0), ("top_class", -1)):
+                f = np.divide(m[:, k], total, out=np.zeros_like(total), where=total > 0)
+                out[f"{unit}.{end}"] = {"initial": float(f[0]), "final": float(f[-1]), "max": float(np.max(f)),
+                                        "d_um": float(from_si(self.outputs[0, dcols[k]], "um", "m"))}
+        for j, name in outputs.grid_end_columns(self.output_roles, self.output_names):
+            if self.output_roles[j][3] not in units:
+                col = self.outputs[:, j]
+                out[name] = {"initial": float(col[0]), "final": float(col[-1]), "max": float(np.max(col)),
+                             "d_um": None}
+        return out
+
+    @property
+    def warnings(self) -> list[str]:
+        """What a user must know before trusting the numbers (summary.json ``warnings``): an end class of a size
+        grid holding more than ``outputs.GRID_END_WARNING`` of the mass, at the start (the initial distribution
+        lies outside the grid) or at any later output time (the grid clips the product)."""
+        out = []
+        lim = outputs.GRID_END_WARNING
+        for name, e in self.grid_ends().items():
+            unit, _, end = name.rpartition(".")
+            where = {"top_class": "top size class", "bottom_class": "bottom size class"}.get(end, name)
+            at = f" ({e['d_um']:.4g} um)" if e["d_um"] is not None else ""
+            side = "d_min" if end == "bottom_class" else "d_max"
+            if e["initial"] > lim:
+                out.append(f"{unit}: the initial size distribution lies outside the grid: "
+                           f"{100 * e['initial']:.3g} % of the initial mass is in the {where}{at}; check the initial "
+                           "distribution against the grid (particles: settings: d_min, d_max)")
+            elif e["max"] > lim:
+                peak = f" (up to {100 * e['max']:.3g} % during it)" if e["max"] > 1.01 * e["final"] else ""
+                out.append(f"{unit}: {100 * e['final']:.3g} % of the mass is in the {where}{at} at the end of the "
+                           f"run{peak}: the grid clips the distribution (more than {100 * lim:g} %), so the sizes "
+                           f"near that end are the grid's, not the product's; widen the grid (particles: settings: "
+                           f"{side})")
+        return out
 
     # -- summary --------------------------------------------------------------------------------
     def balance_closure(self) -> dict:
@@ -193,13 +255,18 @@ class Result:
         # classes or instances affected at any output time, per unit (docs/paper001_decisions.md asks for this).
         s["regularizations"] = {n: _finite(np.max(self.outputs[:, j]))
                                 for j, n in outputs.regularization_columns(self.output_roles, self.output_names)}
+        if self.error_estimate is not None:
+            s["error_estimate"] = self.error_estimate.to_json()
+        s["grid_end"] = {k: {x: _finite(v) for x, v in e.items()} for k, e in self.grid_ends().items()}
+        s["warnings"] = self.warnings
         s["wall_time_s"] = self.wall_time_s
         st = self.stats
         s["solver"] = {"states": st["states"], "steps": st["steps"], "residuals": st["residuals"],
                        "jacobians": st["jacobians"], "linear_solver": st["linear_solver"],
                        "reinits": st["reinits"], "rtol": self.rtol}
         s["units"] = {"t_end_s": "s", **outputs.STANDARD_SUMMARY_UNITS, **units,
-                      "balance": "-", "regularizations": "classes or instances", "wall_time_s": "s"}
+                      "balance": "-", "regularizations": "classes or instances",
+                      "grid_end": "mass fraction (d_um: um)", "wall_time_s": "s"}
         return s
 
     def __repr__(self) -> str:

@@ -119,9 +119,26 @@ Stage to_stage(const py::dict& d) {
 // Sets one CalibrationOptions field from a Python value.
 using OptionSetter = void (*)(CalibrationOptions&, const py::handle&);
 
+// A name-valued option (a str); a cast_error saying which names otherwise.
+std::string name_of(const py::handle& v, const char* names) {
+  if (!py::isinstance<py::str>(v)) throw py::cast_error(names);
+  return v.cast<std::string>();
+}
+
+// pybind converts True to 1 and 3 to true: a flag is no count and a count no flag, so a bool field takes only
+// True/False and a number field no bool. The cast_error says what the field takes.
 template <auto Member>
 void set_field(CalibrationOptions& o, const py::handle& v) {
-  o.*Member = v.cast<std::remove_reference_t<decltype(o.*Member)>>();
+  using T = std::remove_reference_t<decltype(o.*Member)>;
+  const char* expected = std::is_same_v<T, bool> ? "true or false"
+                         : std::is_integral_v<T> ? "a whole number"
+                                                 : "a number";
+  if (py::isinstance<py::bool_>(v) != std::is_same_v<T, bool>) throw py::cast_error(expected);
+  try {
+    o.*Member = v.cast<T>();
+  } catch (const py::cast_error&) {
+    throw py::cast_error(expected);
+  }
 }
 
 // The one list of option names: an unknown key is answered with it, in CalibrationOptions' order.
@@ -136,10 +153,13 @@ const std::vector<std::pair<std::string, OptionSetter>>& option_setters() {
       {"initial_trust_region_radius", set_field<&O::initial_trust_region_radius>},
       {"num_threads", set_field<&O::num_threads>},
       {"sigma_basis",
-       [](O& o, const py::handle& v) { o.sigma_basis = sigma_basis_from_string(v.cast<std::string>()); }},
+       [](O& o, const py::handle& v) { o.sigma_basis = sigma_basis_from_string(name_of(v, "model or data")); }},
       {"max_reweighting_passes", set_field<&O::max_reweighting_passes>},
       {"reweighting_tolerance", set_field<&O::reweighting_tolerance>},
-      {"jacobian", [](O& o, const py::handle& v) { o.jacobian = jacobian_method_from_string(v.cast<std::string>()); }},
+      {"jacobian",
+       [](O& o, const py::handle& v) {
+         o.jacobian = jacobian_method_from_string(name_of(v, "sensitivities or central_differences"));
+       }},
       {"fd_step", set_field<&O::fd_step>},
       {"rtol", set_field<&O::rtol>},
       {"atol", set_field<&O::atol>},
@@ -151,6 +171,10 @@ const std::vector<std::pair<std::string, OptionSetter>>& option_setters() {
       {"profile_delta_chi2", set_field<&O::profile_delta_chi2>},
       {"profile_max_offset", set_field<&O::profile_max_offset>},
       {"profile_max_points", set_field<&O::profile_max_points>},
+      {"flat_delta_chi2", set_field<&O::flat_delta_chi2>},
+      {"flat_scan_points", set_field<&O::flat_scan_points>},
+      {"restart_delta_chi2", set_field<&O::restart_delta_chi2>},
+      {"max_restarts", set_field<&O::max_restarts>},
   };
   return setters;
 }
@@ -159,6 +183,9 @@ CalibrationOptions to_options(const py::dict& d) {
   const auto& setters = option_setters();
   CalibrationOptions o;
   for (const auto& [kk, v] : d) {
+    if (!py::isinstance<py::str>(kk))
+      throw ConfigError("calibration option " + py::repr(kk).cast<std::string>().substr(0, 60) +
+                        ": expected an option name (str)");
     const auto k = kk.cast<std::string>();
     const auto it = std::find_if(setters.begin(), setters.end(), [&](const auto& s) { return s.first == k; });
     if (it == setters.end()) {
@@ -168,9 +195,11 @@ CalibrationOptions to_options(const py::dict& d) {
     }
     try {
       it->second(o, v);
-    } catch (const py::cast_error&) {
-      throw ConfigError("calibration option " + k + " = " + std::string(py::repr(v)) +
-                        ": wrong type (a number, a bool or a name, as the field of CalibrationOptions)");
+    } catch (const py::cast_error& e) {
+      std::string shown = py::repr(v).cast<std::string>();
+      if (shown.size() > 60) shown = shown.substr(0, 57) + "...";
+      throw ConfigError("calibration option " + k + " = " + shown + ": expected " + e.what() +
+                        " (as the field of CalibrationOptions)");
     }
   }
   o.validate();
@@ -208,7 +237,9 @@ py::dict stage_dict(const StageResult& s) {
                   "passes"_a = s.passes, "weight_change"_a = s.weight_change, "simulations"_a = s.simulations,
                   "sensitivity_solves"_a = s.sensitivity_solves, "wall_time_s"_a = s.wall_time_s,
                   "jacobian_method"_a = s.jacobian_method, "termination"_a = s.termination, "message"_a = s.message,
-                  "usable"_a = s.usable, "profiles"_a = prof);
+                  "usable"_a = s.usable, "profiles"_a = prof, "gradient"_a = s.gradient, "curvature"_a = s.curvature,
+                  "flat"_a = s.flat, "moved"_a = s.moved, "restarts"_a = s.restarts,
+                  "sensitivity_retries"_a = s.sensitivity_retries, "notes"_a = s.notes);
 }
 
 std::vector<Experiment> to_experiments(const py::list& l) {
@@ -255,6 +286,13 @@ void register_calibration(py::module_& m) {
   m.def(
       "check_calibration_options", [](const py::dict& options) { to_options(options); }, "options"_a,
       "ConfigError naming the field, the value and the rule if `options` are not valid CalibrationOptions.");
+  m.def(
+      "calibration_tolerances",
+      [](const py::dict& options) {
+        const CalibrationOptions o = to_options(options);
+        return py::make_tuple(o.rtol, o.atol);
+      },
+      "options"_a, "(rtol, atol) the simulations of a calibration with these options use (defaults filled in).");
 
   m.def(
       "calibrate",
@@ -273,7 +311,7 @@ void register_calibration(py::module_& m) {
         return py::dict("status"_a = r.status, "message"_a = r.message, "brief"_a = r.brief(),
                         "full_report"_a = r.full_report(), "parameters"_a = r.parameters,
                         "simulations"_a = r.simulations, "sensitivity_solves"_a = r.sensitivity_solves,
-                        "wall_time_s"_a = r.wall_time_s, "stages"_a = sd);
+                        "wall_time_s"_a = r.wall_time_s, "stages"_a = sd, "warnings"_a = r.warnings);
       },
       "scene"_a, "experiments"_a, "stages"_a, "options"_a = py::dict(), "start"_a = std::map<std::string, double>{});
 

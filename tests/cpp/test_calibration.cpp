@@ -3,6 +3,7 @@
 // differences), a parameter the data cannot see flagged, and option validation.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 
 #include "granuflow/calibration.hpp"
@@ -200,6 +201,125 @@ TEST(Calibrate, FlagsAParameterTheDataDoNotSee) {
   EXPECT_NE(r.brief().find("unidentifiable: droplets.k_evap"), std::string::npos) << r.brief();
 }
 
+// The penetration depth of the spray zone: below about 130 um nothing in d50 or d90 responds to it (the loss is
+// flat there), near the truth (168 um) it is sharply determined.
+Stage penetration_depth_stage() {
+  Stage st;
+  st.name = "size";
+  st.free = {{"spray_zone.h_pen", Transform::kLog, 10e-6, 5e-3, {}}};
+  st.observables = {"bed.d50", "bed.d90"};
+  return st;
+}
+
+bool contains(const std::vector<std::string>& v, const std::string& needle) {
+  for (const auto& x : v)
+    if (x.find(needle) != std::string::npos) return true;
+  return false;
+}
+
+TEST(Calibrate, AStartInAFlatRegionIsFoundAndLeft) {
+  Scene s = short_headline();
+  const double truth = s.flowsheet->param("spray_zone.h_pen");
+  auto exps = experiments({"bed.d50", "bed.d90"});
+  fill_with_model(s, exps, {});
+  CalibrationOptions o;
+  o.profile = false;
+  o.flat_scan_points = 0;  // the old behaviour: stays where it started, and says why
+  const std::map<std::string, double> start{{"spray_zone.h_pen", 100e-6}};
+  const CalibrationResult stuck = calibrate(s, units::builtin(), exps, {penetration_depth_stage()}, o, start);
+  const StageResult& a = stuck.stages[0];
+  EXPECT_NEAR(stuck.parameters.at("spray_zone.h_pen"), 100e-6, 1e-9);
+  ASSERT_EQ(a.flat.size(), 1u);
+  EXPECT_EQ(a.flat[0], "spray_zone.h_pen");
+  EXPECT_FALSE(a.moved);
+  ASSERT_EQ(a.curvature.size(), 1u);
+  EXPECT_LT(a.curvature[0] * std::pow(std::log(5e-3 / 10e-6), 2), o.flat_delta_chi2);
+  EXPECT_GT(a.cost, 1.0);  // noise-free data: the optimum's cost is zero
+  EXPECT_TRUE(contains(stuck.warnings, "stage 'size': the loss is flat in spray_zone.h_pen")) << stuck.brief();
+  EXPECT_TRUE(contains(stuck.warnings, "the start lies in a flat region of the loss"));
+  // with the scan: restarted from where the loss responds, and at the truth
+  o.flat_scan_points = 16;
+  const CalibrationResult r = calibrate(s, units::builtin(), exps, {penetration_depth_stage()}, o, start);
+  const StageResult& b = r.stages[0];
+  EXPECT_GE(b.restarts, 1);
+  EXPECT_TRUE(b.flat.empty());
+  EXPECT_NEAR(r.parameters.at("spray_zone.h_pen"), truth, 1e-3 * truth);
+  EXPECT_LT(b.cost, 1e-4);
+  EXPECT_GT(b.curvature[0], 1.0);
+  EXPECT_TRUE(contains(r.warnings, "the loss was flat in spray_zone.h_pen")) << r.full_report();
+  EXPECT_TRUE(contains(r.warnings, "restarted from there"));
+  EXPECT_GT(r.simulations, stuck.simulations);  // the scan and the restart cost simulations, and are counted
+}
+
+TEST(Calibrate, AProfileBelowTheEstimateRestartsTheStage) {
+  Scene s = short_headline();
+  const double truth = s.flowsheet->param("spray_zone.h_pen");
+  auto exps = experiments({"bed.d50", "bed.d90"});
+  fill_with_model(s, exps, {});
+  CalibrationOptions o;
+  o.flat_scan_points = 0;  // only the profile of the flagged estimate can find the way out
+  // from 60 um (flat: the stage does not move) one profile step of a factor e^1.0116 = 2.75 each way: 21.8 um
+  // (flat too) and 165 um, inside the valley of the truth (168 um; χ²/2 below 1 from 155 to 173 um)
+  o.profile_max_points = 1;
+  o.profile_max_offset = std::log(165.0 / 60.0);
+  const CalibrationResult r =
+      calibrate(s, units::builtin(), exps, {penetration_depth_stage()}, o, {{"spray_zone.h_pen", 60e-6}});
+  const StageResult& st = r.stages[0];
+  EXPECT_GE(st.restarts, 1);
+  EXPECT_NEAR(r.parameters.at("spray_zone.h_pen"), truth, 1e-3 * truth);
+  EXPECT_TRUE(contains(st.notes, "a profile found a cost lower than the estimate's")) << r.full_report();
+  // the profile reported is the one around the final estimate: nothing below it
+  for (const auto& p : st.profiles)
+    for (double d : p.delta_chi2) EXPECT_GT(d, -o.restart_delta_chi2) << p.name;
+}
+
+TEST(Calibrate, AFailedSensitivitySolveDoesNotEndTheCalibration) {
+  Scene s = short_headline();
+  auto exps = experiments({"gas.T", "bed.d50"});
+  fill_with_model(s, exps, {});
+  CalibrationOptions o;
+  o.profile = false;
+  const std::map<std::string, double> start{{"wall.k_wall", 20.0}, {"bed.ln_beta0", -16.8}};
+  const CalibrationResult ref = calibrate(s, units::builtin(), exps, {two_parameter_stage()}, o, start);
+  EXPECT_EQ(ref.stages[0].sensitivity_retries, 0);
+  // the first sensitivity solve of run1 fails: retried with smaller steps, the same answer
+  std::atomic<int> calls{0};
+  calibration_testing::fail_sensitivity_solve = [&](const std::string& e) { return e == "run1" && calls++ == 0; };
+  const CalibrationResult once = calibrate(s, units::builtin(), exps, {two_parameter_stage()}, o, start);
+  EXPECT_EQ(once.stages[0].sensitivity_retries, 1);
+  EXPECT_TRUE(contains(once.warnings, "1 sensitivity solves failed and were retried")) << once.brief();
+  for (const auto& [k, v] : ref.parameters) EXPECT_NEAR(once.parameters.at(k), v, 1e-3 * std::abs(v)) << k;
+  // every sensitivity solve of run1 fails: central differences of plain simulations take their place
+  calibration_testing::fail_sensitivity_solve = [](const std::string& e) { return e == "run1"; };
+  const CalibrationResult always = calibrate(s, units::builtin(), exps, {two_parameter_stage()}, o, start);
+  calibration_testing::fail_sensitivity_solve = nullptr;
+  EXPECT_GT(always.stages[0].sensitivity_retries, 1);
+  EXPECT_EQ(always.status, "ok");
+  for (const auto& [k, v] : ref.parameters) EXPECT_NEAR(always.parameters.at(k), v, 1e-3 * std::abs(v)) << k;
+}
+
+TEST(Calibrate, DataThatNoStageUsesIsReported) {
+  Scene s = short_headline();
+  auto exps = experiments({"gas.T", "bed.moisture_wet"});
+  fill_with_model(s, exps, {});
+  Stage st;
+  st.name = "wall";
+  st.free = {{"wall.k_wall", Transform::kLog, 1.0, 200.0, {}}};
+  st.observables = {"gas.T", "bed.moisture"};  // dry basis watched, wet basis measured
+  CalibrationOptions o;
+  o.profile = false;
+  const auto unused = unused_observations(exps, {st});
+  ASSERT_EQ(unused.size(), 1u);
+  EXPECT_EQ(unused[0], "bed.moisture_wet (experiments run0, run1; 8 samples)");
+  const CalibrationResult r = calibrate(s, units::builtin(), exps, {st}, o, {{"wall.k_wall", 20.0}});
+  EXPECT_TRUE(contains(r.warnings, "data that no stage uses: bed.moisture_wet")) << r.brief();
+  EXPECT_NE(r.brief().find("1 warning"), std::string::npos);
+  // a stage without observables uses everything
+  Stage all = st;
+  all.observables.clear();
+  EXPECT_TRUE(unused_observations(exps, {st, all}).empty());
+}
+
 TEST(Calibrate, RejectsBadConfigurationWithTheRule) {
   CalibrationOptions o;
   o.max_iterations = 0;
@@ -210,6 +330,15 @@ TEST(Calibrate, RejectsBadConfigurationWithTheRule) {
     EXPECT_NE(std::string(e.what()).find("CalibrationOptions.max_iterations = 0: violates max_iterations >= 1"),
               std::string::npos)
         << e.what();
+  }
+  using Change = void (*)(CalibrationOptions&);
+  for (Change bad : std::vector<Change>{[](CalibrationOptions& c) { c.flat_scan_points = 2; },
+                                        [](CalibrationOptions& c) { c.max_restarts = -1; },
+                                        [](CalibrationOptions& c) { c.restart_delta_chi2 = 0; },
+                                        [](CalibrationOptions& c) { c.flat_delta_chi2 = -1; }}) {
+    CalibrationOptions c;
+    bad(c);
+    EXPECT_THROW(c.validate(), ConfigError);
   }
   EXPECT_THROW(transform_from_string("ln"), ConfigError);
   EXPECT_EQ(sigma_basis_from_string(to_string(SigmaBasis::kData)), SigmaBasis::kData);

@@ -123,9 +123,10 @@ def test_one_unit_conversion_module_and_one_output_name_module():
 
 
 @pytest.mark.parametrize("layer, below", [
-    ("granuflow.quantity", {"granuflow.outputs", "granuflow.progress"}),
+    ("granuflow.textfile", set()),
+    ("granuflow.quantity", {"granuflow.outputs", "granuflow.progress", "granuflow.textfile"}),
     ("granuflow.outputs", set()),
-    ("granuflow.result", {"granuflow.outputs", "granuflow.quantity"}),
+    ("granuflow.result", {"granuflow.outputs", "granuflow.quantity", "granuflow.textfile"}),
 ])
 def test_foundation_modules_depend_only_downwards(layer, below):
     deps = {d for d, _ in imports(modules())[layer]}

@@ -68,6 +68,15 @@ void CalibrationOptions::validate() const {
     fail("initial_trust_region_radius", initial_trust_region_radius, "initial_trust_region_radius > 0");
   if (max_reweighting_passes < 1) fail("max_reweighting_passes", max_reweighting_passes, "max_reweighting_passes >= 1");
   if (!(reweighting_tolerance >= 0)) fail("reweighting_tolerance", reweighting_tolerance, "reweighting_tolerance >= 0");
+  if (!(flat_delta_chi2 > 0)) fail("flat_delta_chi2", flat_delta_chi2, "flat_delta_chi2 > 0");
+  if (flat_scan_points < 0 || flat_scan_points == 1 || flat_scan_points == 2)
+    fail("flat_scan_points", flat_scan_points, "flat_scan_points = 0 (off) or >= 3");
+  if (!(restart_delta_chi2 > 0)) fail("restart_delta_chi2", restart_delta_chi2, "restart_delta_chi2 > 0");
+  if (max_restarts < 0) fail("max_restarts", max_restarts, "max_restarts >= 0");
+}
+
+namespace calibration_testing {
+std::function<bool(const std::string&)> fail_sensitivity_solve;
 }
 
 std::string observable_unit(const Flowsheet& fs, const std::string& name) {
@@ -264,35 +273,38 @@ class ExperimentModel {
       SimOptions o = sim_;
       extract(simulate(fs, o), m, nullptr);
       ++sims_;
-      if (!dm) return;
-      // Central differences in θ (one-sided at a bound): 2 plain simulations per free parameter.
-      dm->assign(size_t(rows()) * n, 0.0);
-      std::vector<double> th(theta, theta + n), mp, mm;
-      for (int k = 0; k < n; ++k) {
-        const double h =
-            opt_.fd_step * (space_.transform[k] == Transform::kLog ? 1.0 : std::max(std::abs(theta[k]), 1.0));
-        const double hi = std::min(theta[k] + h, space_.theta_upper(k)),
-                     lo = std::max(theta[k] - h, space_.theta_lower(k));
-        for (int side = 0; side < 2; ++side) {
-          th[k] = side == 0 ? hi : lo;
-          fs.set_param(space_.names[k], clamp_p(k, space_.to_p(k, th[k])));
-          extract(simulate(fs, o), side == 0 ? mp : mm, nullptr);
-          ++sims_;
-        }
-        th[k] = theta[k];
-        fs.set_param(space_.names[k], clamp_p(k, space_.to_p(k, theta[k])));
-        for (int r = 0; r < rows(); ++r) (*dm)[size_t(r) * n + k] = (mp[r] - mm[r]) / (hi - lo);
-      }
+      if (dm) central_differences(theta, *dm);
       return;
     }
+    // One failed sensitivity solve must not end a calibration: retried once with smaller steps, then replaced by
+    // central differences of plain simulations (which only throw when the model itself fails at θ).
     SimOptions o = sim_;
     o.sensitivities = space_.names;
-    const SimResult res = simulate(fs, o);
-    ++sims_, ++sens_;
+    SimResult res;
+    try {
+      res = sensitivity_solve(o);
+    } catch (const SolverError&) {
+      ++retries_;
+      SimOptions smaller = o;
+      smaller.rtol = std::max(o.rtol / 10, 1e-14);
+      smaller.atol = o.atol / 10;
+      smaller.max_step = o.max_step > 0 ? std::min(o.max_step, o.t_end / 200) : o.t_end / 200;
+      try {
+        res = sensitivity_solve(smaller);
+      } catch (const SolverError&) {
+        SimOptions plain = sim_;
+        extract(simulate(fs, plain), m, nullptr);
+        ++sims_;
+        central_differences(theta, *dm);
+        return;
+      }
+    }
     extract(res, m, dm);
     for (int r = 0; r < rows(); ++r)
       for (int k = 0; k < n; ++k) (*dm)[size_t(r) * n + k] *= space_.dp_dtheta(k, theta[k]);
   }
+
+  long retries() const { return retries_; }
 
  private:
   struct Obs {
@@ -303,6 +315,36 @@ class ExperimentModel {
   };
 
   double clamp_p(int k, double p) const { return std::min(std::max(p, space_.lower[k]), space_.upper[k]); }
+
+  SimResult sensitivity_solve(const SimOptions& o) {
+    ++sims_, ++sens_;
+    if (calibration_testing::fail_sensitivity_solve && calibration_testing::fail_sensitivity_solve(name_))
+      throw SolverError("experiment '" + name_ + "': sensitivity solve failed (test)", 0.0, "", 0.0);
+    return simulate(*scene_.flowsheet, o);
+  }
+
+  // dm/dθ by central differences in θ (one-sided at a bound): 2 plain simulations per free parameter. The
+  // flowsheet holds the parameters of θ before and after.
+  void central_differences(const double* theta, std::vector<double>& dm) {
+    const int n = space_.size();
+    Flowsheet& fs = *scene_.flowsheet;
+    SimOptions o = sim_;
+    dm.assign(size_t(rows()) * n, 0.0);
+    std::vector<double> mp, mm;
+    for (int k = 0; k < n; ++k) {
+      const double h =
+          opt_.fd_step * (space_.transform[k] == Transform::kLog ? 1.0 : std::max(std::abs(theta[k]), 1.0));
+      const double hi = std::min(theta[k] + h, space_.theta_upper(k)),
+                   lo = std::max(theta[k] - h, space_.theta_lower(k));
+      for (int side = 0; side < 2; ++side) {
+        fs.set_param(space_.names[k], clamp_p(k, space_.to_p(k, side == 0 ? hi : lo)));
+        extract(simulate(fs, o), side == 0 ? mp : mm, nullptr);
+        ++sims_;
+      }
+      fs.set_param(space_.names[k], clamp_p(k, space_.to_p(k, theta[k])));
+      for (int r = 0; r < rows(); ++r) dm[size_t(r) * n + k] = (mp[r] - mm[r]) / (hi - lo);
+    }
+  }
 
   void extract(const SimResult& r, std::vector<double>& m, std::vector<double>* dm) {
     const int n = space_.size();
@@ -339,7 +381,7 @@ class ExperimentModel {
   std::vector<double> data_, sigma_abs_, sigma_rel_, t_out_;
   SimOptions sim_;
   bool any_output_ = false;
-  long sims_ = 0, sens_ = 0;
+  long sims_ = 0, sens_ = 0, retries_ = 0;
 };
 
 // The weighted residuals of one experiment; the residual block of Ceres.
@@ -477,6 +519,11 @@ struct StageRun {
   long sensitivity_solves() const {
     long n = 0;
     for (const auto& m : models) n += m->sensitivity_solves();
+    return n;
+  }
+  long sensitivity_retries() const {
+    long n = 0;
+    for (const auto& m : models) n += m->retries();
     return n;
   }
 
@@ -661,6 +708,23 @@ StageResult run_stage(const Scene& scene, const Registry<Unit>& reg, const std::
   const long dof = res.residuals - n;
   res.chi2_reduced = dof > 0 ? 2 * res.cost / dof : std::numeric_limits<double>::quiet_NaN();
   for (int k = 0; k < n; ++k) params[sp.names[k]] = sp.to_p(k, theta[k]);
+  // Gradient Jᵀr and curvature (JᵀJ)_kk at the estimate; flat: χ² would change by less than flat_delta_chi2 with
+  // θ_k anywhere within its bounds (to second order), so nothing the stage watches responds to it here.
+  res.gradient.assign(n, 0.0);
+  res.curvature.assign(n, 0.0);
+  for (long i = 0; i < res.residuals; ++i)
+    for (int k = 0; k < n; ++k) {
+      const double jk = J[size_t(i) * n + k];
+      res.gradient[k] += jk * r[i];
+      res.curvature[k] += jk * jk;
+    }
+  res.moved = false;
+  for (int k = 0; k < n; ++k) {
+    const double span = sp.theta_upper(k) - sp.theta_lower(k);
+    if (res.curvature[k] * span * span < opt.flat_delta_chi2) res.flat.push_back(sp.names[k]);
+    if (std::abs(theta[k] - theta_start[k]) > 1e-9 * (1 + std::abs(theta_start[k]))) res.moved = true;
+  }
+  res.sensitivity_retries = run.sensitivity_retries();
 
   res.estimates.resize(n);
   for (int k = 0; k < n; ++k) {
@@ -718,10 +782,13 @@ StageResult run_stage(const Scene& scene, const Registry<Unit>& reg, const std::
 }
 
 // Δχ² profile of the loss over one free parameter of `stage`, the others re-optimized (warm-started outward).
+// `lowest` (with its Δχ² in `lowest_dchi`) receives the parameters of the profile point of lowest cost when it is
+// below `*lowest_dchi`: a profile that finds a lower cost than the estimate's shows the stage stopped short.
 Profile profile_parameter(const Scene& scene, const Registry<Unit>& reg, const std::vector<Experiment>& exps,
                           const Stage& stage, const CalibrationOptions& opt,
                           const std::map<std::string, double>& optimum, const StageResult& at, int which,
-                          const std::vector<std::vector<double>>& sigmas) {
+                          const std::vector<std::vector<double>>& sigmas, std::map<std::string, double>& lowest,
+                          double& lowest_dchi) {
   const Estimate& e = at.estimates[which];
   Profile pr;
   pr.name = e.name;
@@ -751,20 +818,27 @@ Profile profile_parameter(const Scene& scene, const Registry<Unit>& reg, const s
       if (clipped) th = side < 0 ? lo_th : hi_th;
       p[e.name] = to_p(th);
       double cost;
-      if (sub.free.empty()) {
-        StageRun run(scene, reg, exps, stage, o, p);
-        run.set_sigmas(sigmas);
-        std::vector<double> r, thv{th};
-        run.evaluate(thv, r, nullptr, o.num_threads);
-        cost = half_sum_squares(r);
-        pr.simulations += run.simulations();
-      } else {
-        const StageResult sr = run_stage(scene, reg, exps, sub, o, p, false, std::min(o.max_iterations, 20), &sigmas);
-        cost = sr.cost;
-        pr.simulations += sr.simulations;
-        pr.sensitivity_solves += sr.sensitivity_solves;
+      try {
+        if (sub.free.empty()) {
+          StageRun run(scene, reg, exps, stage, o, p);
+          run.set_sigmas(sigmas);
+          std::vector<double> r, thv{th};
+          run.evaluate(thv, r, nullptr, o.num_threads);
+          cost = half_sum_squares(r);
+          pr.simulations += run.simulations();
+        } else {
+          const StageResult sr = run_stage(scene, reg, exps, sub, o, p, false, std::min(o.max_iterations, 20), &sigmas);
+          cost = sr.cost;
+          pr.simulations += sr.simulations;
+          pr.sensitivity_solves += sr.sensitivity_solves;
+        }
+      } catch (const SolverError&) {  // the model fails out there: the profile ends on this side
+        break;
+      } catch (const CalibrationError&) {
+        break;
       }
       const double dchi = 2 * (cost - at.cost);
+      if (dchi < lowest_dchi) lowest_dchi = dchi, lowest = p;
       pts.push_back({th, dchi});
       if (off == two_se) dchi_2se[(side + 1) / 2] = dchi;
       if (dchi > opt.profile_delta_chi2 && off >= std::min(two_se, reach)) {
@@ -873,32 +947,177 @@ CalibrationResult calibrate(const Scene& scene, const Registry<Unit>& reg, const
       if (!out.parameters.count(f.name)) out.parameters[f.name] = fs.param(f.name);
   for (size_t s = 0; s < stages.size(); ++s) {
     const bool last = s + 1 == stages.size();
+    const Stage& stage = stages[s];
     std::vector<std::vector<double>> sigmas;
-    StageResult r =
-        run_stage(scene, reg, exps, stages[s], opt, out.parameters, true, opt.max_iterations, nullptr, &sigmas);
+    StageResult r = run_stage(scene, reg, exps, stage, opt, out.parameters, true, opt.max_iterations, nullptr, &sigmas);
+    long extra_sims = 0, extra_sens = 0;  // scans, profiles and runs a restart replaced
+    // Restarts from a lower point of the loss: a scan over the bounds of a parameter the loss is flat in at the
+    // estimate (the start may lie in a flat region), or a profile point of the last stage below the estimate.
+    const auto restart_from = [&](std::map<std::string, double> from, const std::string& why) {
+      std::vector<std::vector<double>> sig;
+      const double old_cost = r.cost;
+      StageResult again = run_stage(scene, reg, exps, stage, opt, from, true, opt.max_iterations, nullptr, &sig);
+      if (!(again.cost < old_cost)) {  // weights differ between runs: only an actual improvement replaces it
+        extra_sims += again.simulations, extra_sens += again.sensitivity_solves;
+        r.notes.push_back(why + "; the restart ended at a cost of " + fmt(again.cost, 6) + ", no lower: kept");
+        return false;
+      }
+      extra_sims += r.simulations, extra_sens += r.sensitivity_solves;
+      for (const auto& p : r.profiles) extra_sims += p.simulations, extra_sens += p.sensitivity_solves;
+      again.notes = r.notes;
+      again.restarts = r.restarts + 1;
+      again.sensitivity_retries += r.sensitivity_retries;
+      again.notes.push_back(why + "; restarted from there: cost " + fmt(old_cost, 6) + " -> " + fmt(again.cost, 6) +
+                            " (Δχ² = " + fmt(2 * (old_cost - again.cost), 3) + ")");
+      r = std::move(again);
+      sigmas = std::move(sig);
+      out.parameters = std::move(from);
+      return true;
+    };
+    const auto unit_of = [&](const std::string& name) { return fs.param_spec(fs.param_id(name)).unit; };
+    while (!r.flat.empty() && opt.flat_scan_points > 0 && r.restarts < opt.max_restarts) {
+      // The scan: the lowest point, and the edge of the flat region (the scan point nearest the estimate, in units
+      // of the span, where the loss responds), from where the stage's descent can find a narrow valley the scan's
+      // spacing misses.
+      std::string best_name, edge_name;
+      double best_value = 0, best_cost = r.cost - 0.5 * opt.restart_delta_chi2, edge_value = 0, edge_distance = 2;
+      for (const auto& name : r.flat) {
+        const Space sp = make_space(fs, stage);
+        const int k = static_cast<int>(std::find(sp.names.begin(), sp.names.end(), name) - sp.names.begin());
+        StageRun run(scene, reg, exps, stage, opt, out.parameters);
+        run.set_sigmas(sigmas);
+        std::vector<double> th = start_theta(sp, out.parameters), res;
+        const double at = th[k], span = sp.theta_upper(k) - sp.theta_lower(k);
+        for (int j = 0; j < opt.flat_scan_points; ++j) {
+          th[k] = sp.theta_lower(k) + span * j / (opt.flat_scan_points - 1);
+          try {
+            run.evaluate(th, res, nullptr, opt.num_threads);
+          } catch (const SolverError&) {  // the model fails there: not a point to restart from
+            continue;
+          }
+          const double c = half_sum_squares(res);
+          if (c < best_cost) best_cost = c, best_name = name, best_value = sp.to_p(k, th[k]);
+          if (std::abs(c - r.cost) > 0.5 * opt.restart_delta_chi2 && std::abs(th[k] - at) / span < edge_distance)
+            edge_distance = std::abs(th[k] - at) / span, edge_name = name, edge_value = sp.to_p(k, th[k]);
+        }
+        extra_sims += run.simulations();
+      }
+      std::map<std::string, double> from = out.parameters;
+      std::string why;
+      if (!best_name.empty()) {
+        why = "the loss was flat in " + best_name + " at " + fmt(out.parameters.at(best_name)) + " " +
+              unit_of(best_name) + " (nothing the stage watches responds to it there); a scan over its bounds found " +
+              "a cost lower by Δχ² = " + fmt(2 * (r.cost - best_cost), 3) + " at " + fmt(best_value) + " " +
+              unit_of(best_name);
+        from[best_name] = best_value;
+      } else if (!edge_name.empty()) {
+        why = "the loss was flat in " + edge_name + " at " + fmt(out.parameters.at(edge_name)) + " " +
+              unit_of(edge_name) + " (nothing the stage watches responds to it there); a scan over its bounds " +
+              "found it responding from " + fmt(edge_value) + " " + unit_of(edge_name) + " on";
+        from[edge_name] = edge_value;
+      } else {
+        break;  // flat across the bounds: the data of the stage do not determine it
+      }
+      if (!restart_from(from, why)) break;
+    }
     if (last && opt.profile) {
-      for (size_t k = 0; k < r.estimates.size(); ++k) {
-        if (r.estimates[k].flag.empty()) continue;
-        Profile p = profile_parameter(scene, reg, exps, stages[s], opt, out.parameters, r, static_cast<int>(k), sigmas);
-        Estimate& e = r.estimates[k];
+      while (true) {
+        std::map<std::string, double> lowest;
+        double lowest_dchi = -opt.restart_delta_chi2;
+        r.profiles.clear();
+        for (size_t k = 0; k < r.estimates.size(); ++k) {
+          if (r.estimates[k].flag.empty()) continue;
+          Profile p = profile_parameter(scene, reg, exps, stage, opt, out.parameters, r, static_cast<int>(k), sigmas,
+                                        lowest, lowest_dchi);
+          r.profiles.push_back(std::move(p));
+        }
+        if (lowest.empty() || r.restarts >= opt.max_restarts) break;
+        std::string moved;
+        for (const auto& e : r.estimates)
+          if (lowest.count(e.name) && lowest.at(e.name) != e.value)
+            moved += (moved.empty() ? "" : ", ") + e.name + " = " + fmt(lowest.at(e.name)) + " " + unit_of(e.name);
+        if (!restart_from(lowest, "a profile found a cost lower than the estimate's by Δχ² = " + fmt(-lowest_dchi, 3) +
+                                      " (at " + moved + ")"))
+          break;
+      }
+      for (auto& p : r.profiles) {
+        const auto it =
+            std::find_if(r.estimates.begin(), r.estimates.end(), [&](const Estimate& e) { return e.name == p.name; });
+        Estimate& e = *it;
         e.identifiable = p.verdict != "unidentifiable" && std::isfinite(e.se);
         e.flag += "; profile: " + p.verdict + " (Δχ² < " + fmt(opt.profile_delta_chi2, 3) + " over [" +
                   fmt(p.lower_95) + ", " + fmt(p.upper_95) + "]" + (p.bounded_below ? "" : ", open below") +
                   (p.bounded_above ? "" : ", open above") + ")";
-        r.profiles.push_back(std::move(p));
       }
     }
+    // What the user must know about this stage.
+    const std::string w = "stage '" + r.name + "': ";
+    for (const auto& name : r.flat)
+      r.notes.push_back("the loss is flat in " + name + " at its estimate " + fmt(out.parameters.at(name)) + " " +
+                        unit_of(name) +
+                        (opt.flat_scan_points > 0 ? " and a scan over its bounds found no lower cost" : "") +
+                        ": the data of this stage do not determine it from here (try other starts or bounds)");
+    if (!r.moved) {
+      std::string names;
+      for (const auto& e : r.estimates) names += (names.empty() ? "" : ", ") + e.name;
+      r.notes.push_back(
+          "no free parameter moved from its start (" + names + ")" +
+          (r.flat.empty() ? ": the start was already the optimum" : ": the start lies in a flat region of the loss"));
+    }
+    if (r.sensitivity_retries > 0)
+      r.notes.push_back(std::to_string(r.sensitivity_retries) +
+                        " sensitivity solves failed and were retried with smaller steps or replaced by central "
+                        "differences");
+    for (const auto& n : r.notes)
+      if (n.rfind("no free parameter moved", 0) != 0 || !r.flat.empty()) out.warnings.push_back(w + n);
     // USER_SUCCESS is the small-change callback above: converged by this calibration's own criterion
     if (r.termination != "CONVERGENCE" && r.termination != "USER_SUCCESS" && out.status == "ok") {
       out.status = "no_convergence";
       out.message = "stage '" + r.name + "': " + r.message;
     }
+    r.simulations += extra_sims;
+    r.sensitivity_solves += extra_sens;
     out.simulations += r.simulations;
     out.sensitivity_solves += r.sensitivity_solves;
     for (const auto& p : r.profiles) out.simulations += p.simulations, out.sensitivity_solves += p.sensitivity_solves;
     out.stages.push_back(std::move(r));
   }
+  if (const auto unused = unused_observations(exps, stages); !unused.empty()) {
+    std::string list;
+    for (const auto& u : unused) list += (list.empty() ? "" : ", ") + u;
+    out.warnings.push_back("data that no stage uses: " + list +
+                           "; add them to a stage's observables (a stage without observables uses all) or leave them "
+                           "out of the experiments");
+  }
   out.wall_time_s = seconds_since(t0);
+  return out;
+}
+
+std::vector<std::string> unused_observations(const std::vector<Experiment>& exps, const std::vector<Stage>& stages) {
+  std::set<std::string> used;
+  for (const auto& st : stages) {
+    if (st.observables.empty()) return {};  // a stage that watches everything
+    used.insert(st.observables.begin(), st.observables.end());
+  }
+  std::map<std::string, std::pair<std::vector<std::string>, long>> unused;  // name -> (experiments, samples)
+  for (const auto& e : exps)
+    for (const auto& o : e.observations) {
+      if (used.count(o.name)) continue;
+      long n = 0;
+      for (double v : o.value) n += std::isfinite(v);
+      if (n == 0) continue;
+      auto& [names, samples] = unused[o.name];
+      if (names.empty() || names.back() != e.name) names.push_back(e.name);
+      samples += n;
+    }
+  std::vector<std::string> out;
+  for (const auto& [name, what] : unused) {
+    std::string list;
+    for (size_t i = 0; i < what.first.size() && i < 4; ++i) list += (i ? ", " : "") + what.first[i];
+    if (what.first.size() > 4) list += ", ...";
+    out.push_back(name + " (experiment" + (what.first.size() == 1 ? " " : "s ") + list + "; " +
+                  std::to_string(what.second) + " samples)");
+  }
   return out;
 }
 
@@ -915,6 +1134,7 @@ std::string CalibrationResult::brief() const {
     for (const auto& e : stages.back().estimates)
       if (!e.identifiable) flagged += (flagged.empty() ? "" : ", ") + e.name;
   if (!flagged.empty()) os << "; unidentifiable: " << flagged;
+  if (!warnings.empty()) os << "; " << warnings.size() << " warning" << (warnings.size() == 1 ? "" : "s");
   return os.str();
 }
 
@@ -922,6 +1142,7 @@ std::string CalibrationResult::full_report() const {
   std::ostringstream os;
   os << brief() << "\n";
   if (!message.empty()) os << message << "\n";
+  for (const auto& w : warnings) os << "warning: " << w << "\n";
   os << "\nstage                         iter   cost start     cost end  chi2_red  sims  sens   time_s  jacobian\n";
   for (const auto& s : stages)
     os << std::left << std::setw(28) << s.name << std::right << std::setw(6) << s.iterations << std::setw(13)
@@ -949,6 +1170,7 @@ std::string CalibrationResult::full_report() const {
         os << "\n";
       }
     }
+    for (const auto& n : s.notes) os << "note: " << n << "\n";
     for (const auto& p : s.profiles) {
       os << "profile of " << p.name << " (" << p.verdict << "):";
       for (size_t i = 0; i < p.values.size(); ++i) os << " " << fmt(p.values[i]) << ":" << fmt(p.delta_chi2[i], 3);

@@ -67,14 +67,15 @@ Python::
 from ..outputs import D_VALUES, OBSERVABLE_DISPLAY, OBSERVABLE_GROUPS
 from .files import (CalibrationError, ConfigError, Experiment, ExperimentSet, FreeParameter, Observation, Stage,
                     StagePlan, check_stage_data, load_experiments, load_stages, save_experiments)
-from .fit import CalibrationResult, best, calibrate, multi_start, predict, random_starts, stage_bounds
+from .fit import (CalibrationResult, best, calibrate, compare_starts, multi_start, predict, random_starts,
+                  stage_bounds)
 from .paper001 import TABLE1_LEVELS, TABLE5_SIGMA
-from .report import CalibrationReport, fit_statistics, report
+from .report import CalibrationReport, fit_statistics, model_errors, report
 from .synthetic import paper001_stages, synthetic_experiments, table1_points
 
 __all__ = ["D_VALUES", "OBSERVABLE_DISPLAY", "OBSERVABLE_GROUPS", "CalibrationError", "ConfigError", "Experiment",
            "ExperimentSet", "FreeParameter", "Observation", "Stage", "StagePlan", "check_stage_data",
            "load_experiments", "load_stages", "save_experiments", "CalibrationResult", "best", "calibrate",
-           "multi_start", "predict", "random_starts", "stage_bounds", "TABLE1_LEVELS", "TABLE5_SIGMA",
-           "CalibrationReport", "fit_statistics", "report", "paper001_stages", "synthetic_experiments",
+           "compare_starts", "multi_start", "predict", "random_starts", "stage_bounds", "TABLE1_LEVELS", "TABLE5_SIGMA",
+           "CalibrationReport", "fit_statistics", "model_errors", "report", "paper001_stages", "synthetic_experiments",
            "table1_points"]

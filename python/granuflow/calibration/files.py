@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import csv
+import io
 import math
 import os
 from dataclasses import dataclass, field
@@ -13,6 +14,7 @@ from .. import _core
 from ..flowsheet import Flowsheet, load
 from ..outputs import OBSERVABLE_DISPLAY
 from ..quantity import difference_to_si, from_si, number, show, to_si
+from ..textfile import MAX_DATA_BYTES, load_yaml, read_text, short
 from .paper001 import TABLE1_LEVELS
 
 ConfigError = _core.ConfigError
@@ -118,11 +120,11 @@ class ExperimentSet:
 
 def sigma_entry(spec: Any, si_unit: str, where: str) -> tuple[float, float]:
     if not isinstance(spec, Mapping) or set(spec) - {"abs", "rel"} or len(spec) != 1:
-        raise ConfigError(f"{where}: expected {{abs: value [unit]}} or {{rel: fraction}}, got {spec!r}")
+        raise ConfigError(f"{where}: expected {{abs: value [unit]}} or {{rel: fraction}}, got {short(spec)}")
     if "abs" in spec:
         v = difference_to_si(spec["abs"], si_unit, where)
         if not (v > 0 and math.isfinite(v)):
-            raise ConfigError(f"{where}.abs = {spec['abs']!r}: violates 0 < abs < inf")
+            raise ConfigError(f"{where}.abs = {short(spec['abs'])}: violates 0 < abs < inf")
         return v, 0.0
     v = number(spec["rel"], f"{where}.rel")
     if not (v > 0 and math.isfinite(v)):
@@ -141,8 +143,11 @@ def _parse_header(h: str) -> tuple[str, str]:
 def _read_csv(path: str) -> tuple[dict[str, list[float | None]], dict[str, str], list[int]]:
     """Columns (None: an empty field, not measured; inf and nan kept, the caller rejects them), units and the
     line number of every row."""
-    with open(path, newline="") as f:
-        rows = list(enumerate(csv.reader(f), start=1))
+    text = read_text(path, "CSV data file", MAX_DATA_BYTES)
+    try:
+        rows = list(enumerate(csv.reader(io.StringIO(text, newline="")), start=1))
+    except csv.Error as e:  # e.g. a field longer than the csv module's limit
+        raise ConfigError(f"{path}: not a CSV table ({short(str(e), 100)})") from None
     rows = [(i, r) for i, r in rows if r and not r[0].lstrip().startswith("#")]
     if not rows:
         raise ConfigError(f"{path}: empty data file")
@@ -170,40 +175,38 @@ def _read_csv(path: str) -> tuple[dict[str, list[float | None]], dict[str, str],
 def _check_mapping(doc: Any, allowed: Sequence[str], where: str) -> dict:
     """`doc` itself, checked to be a mapping with only the `allowed` keys."""
     if not isinstance(doc, dict):
-        raise ConfigError(f"{where}: expected a mapping with keys {', '.join(allowed)}, got {doc!r}")
+        raise ConfigError(f"{where}: expected a mapping with keys {', '.join(allowed)}, got {short(doc)}")
     for k in doc:
         if k not in allowed:
             raise ConfigError(f"{where}: unknown key '{k}' (allowed: {', '.join(allowed)})")
     return doc
 
 
-def _read_mapping(path: str, allowed: Sequence[str]) -> dict:
-    """A YAML file whose top level is a mapping with only the `allowed` keys."""
-    import yaml
-
-    with open(path) as f:
-        try:
-            doc = yaml.safe_load(f) or {}
-        except yaml.YAMLError as e:
-            raise ConfigError(f"{path}: not valid YAML ({' '.join(str(e).split())})") from None
-    return _check_mapping(doc, allowed, path)
+def _read_mapping(path: str, allowed: Sequence[str], kind: str) -> dict:
+    """A YAML file (a `kind`, e.g. "stage file") whose top level is a mapping with only the `allowed` keys."""
+    return _check_mapping(load_yaml(path, kind) or {}, allowed, path)
 
 
 def load_experiments(path: str | os.PathLike, flowsheet: Flowsheet | None = None) -> ExperimentSet:
     """Read an experiment file (see the module docstring). Raises ConfigError naming the file and key."""
     path = os.fspath(path)
     base = os.path.dirname(os.path.abspath(path))
-    doc = _read_mapping(path, _EXP_KEYS)
+    doc = _read_mapping(path, _EXP_KEYS, "experiment file")
     scene = doc.get("scene", "")
+    if not isinstance(scene, str):
+        raise ConfigError(f"{path}: scene = {short(scene)}: expected the path of a scene file (relative to this file)")
     if scene and not os.path.isabs(scene):
         scene = os.path.normpath(os.path.join(base, scene))
+    if scene and flowsheet is None and not os.path.isfile(scene):
+        what = "a directory" if os.path.isdir(scene) else "no such file"
+        raise ConfigError(f"{path}: scene = '{doc['scene']}': {what} ({scene}); expected a scene file")
     fs = flowsheet or (load(scene) if scene else None)
     if fs is None:
         raise ConfigError(f"{path}: give `scene:` or pass a flowsheet")
     defaults = doc.get("sigma") or {}
     if not isinstance(defaults, dict):
         raise ConfigError(f"{path}: sigma: expected a mapping observable -> {{abs: value [unit]}} or "
-                          f"{{rel: fraction}}, got {defaults!r}")
+                          f"{{rel: fraction}}, got {short(defaults)}")
     runs = doc.get("runs")
     if not isinstance(runs, list) or not runs:
         raise ConfigError(f"{path}: `runs` must be a non-empty list")
@@ -221,7 +224,7 @@ def load_experiments(path: str | os.PathLike, flowsheet: Flowsheet | None = None
             raise ConfigError(f"{where}.use = '{use}': not one of calibration, validation")
         for k in ("set", "sigma"):
             if not isinstance(run.get(k) or {}, dict):
-                raise ConfigError(f"{where}.{k}: expected a mapping, got {run[k]!r}")
+                raise ConfigError(f"{where}.{k}: expected a mapping, got {short(run[k])}")
         settings = {}
         for k, v in (run.get("set") or {}).items():
             settings[k] = param_to_si(fs, k, v, f"{where}.set.{k}")
@@ -243,22 +246,26 @@ def load_experiments(path: str | os.PathLike, flowsheet: Flowsheet | None = None
         elif isinstance(data, dict):
             units = data.get("units", {}) or {}
             if not isinstance(units, dict) or not all(isinstance(u, str) for u in units.values()):
-                raise ConfigError(f"{where}.data.units: expected a mapping column -> unit name, got {units!r}")
+                raise ConfigError(f"{where}.data.units: expected a mapping column -> unit name, got {short(units)}")
             units = dict(units)
             cols = {}
             for k, v in data.items():
                 if k == "units":
                     continue
+                if not isinstance(k, str):
+                    raise ConfigError(f"{where}.data: column name {short(k)}: expected a state or output name "
+                                      "(e.g. bed.d50) or t")
                 if not isinstance(v, list) or not all(x is None or (isinstance(x, (int, float)) and
                                                                     not isinstance(x, bool)) for x in v):
-                    raise ConfigError(f"{where}.data.{k}: expected a list of numbers (null: not measured), got {v!r}")
+                    raise ConfigError(f"{where}.data.{k}: expected a list of numbers (null: not measured), "
+                                      f"got {short(v)}")
                 cols[k] = [None if x is None else float(x) for x in v]
 
             def at(name: str, i: int) -> str:
                 return f"{where}.data.{name}[{i}]"
             empty = "null"
         else:
-            raise ConfigError(f"{where}.data: expected a CSV file name or a mapping of columns, got {data!r}")
+            raise ConfigError(f"{where}.data: expected a CSV file name or a mapping of columns, got {short(data)}")
         if "t" not in cols:
             raise ConfigError(f"{where}.data: no time column 't' (e.g. 't [min]')")
         t_raw = cols.pop("t")
@@ -422,20 +429,20 @@ def all_free(stages: Sequence[Stage]) -> list[FreeParameter]:
 def load_stages(path: str | os.PathLike, flowsheet: Flowsheet) -> StagePlan:
     """Read a stage file (see the module docstring)."""
     path = os.fspath(path)
-    doc = _read_mapping(path, _STAGEFILE_KEYS)
+    doc = _read_mapping(path, _STAGEFILE_KEYS, "stage file")
     start_doc = doc.get("start") or {}
     if not isinstance(start_doc, dict):
-        raise ConfigError(f"{path}: start: expected a mapping parameter -> value [unit], got {start_doc!r}")
+        raise ConfigError(f"{path}: start: expected a mapping parameter -> value [unit], got {short(start_doc)}")
     start = {k: param_to_si(flowsheet, k, v, f"{path}: start.{k}") for k, v in start_doc.items()}
     options = doc.get("options") or {}
     if not isinstance(options, dict):
-        raise ConfigError(f"{path}: options: expected a mapping of CalibrationOptions fields, got {options!r}")
+        raise ConfigError(f"{path}: options: expected a mapping of CalibrationOptions fields, got {short(options)}")
     options = dict(options)
     _in_context(f"{path}: options", _core.check_calibration_options, options)
     stages: list[Stage] = []
     seen: dict[str, FreeParameter] = {}
     if not isinstance(doc.get("stages") or [], list):
-        raise ConfigError(f"{path}: stages: expected a list of stages, got {doc['stages']!r}")
+        raise ConfigError(f"{path}: stages: expected a list of stages, got {short(doc['stages'])}")
     for i, st in enumerate(doc.get("stages") or []):
         where = f"{path}: stages[{i}]"
         _check_mapping(st, _STAGE_KEYS, where)
@@ -455,10 +462,10 @@ def load_stages(path: str | os.PathLike, flowsheet: Flowsheet) -> StagePlan:
                 raise ConfigError(f"{where}.free: empty; give at least one parameter "
                                   "(e.g. wall.k_wall: {transform: log, lower: 1, upper: 200}) or 'inherit'")
         else:
-            raise ConfigError(f"{where}.free = {free_spec!r}: expected a mapping of parameters or 'inherit'")
+            raise ConfigError(f"{where}.free = {short(free_spec)}: expected a mapping of parameters or 'inherit'")
         obs = st.get("observables", "all")
         if obs not in ("all", None) and not isinstance(obs, list):
-            raise ConfigError(f"{where}.observables: expected a list of observables or 'all', got {obs!r}")
+            raise ConfigError(f"{where}.observables: expected a list of observables or 'all', got {short(obs)}")
         obs = [] if obs in ("all", None) else [str(o) for o in obs]
         for j, o in enumerate(obs):
             _in_context(f"{where}.observables[{j}]", flowsheet.unit_of, o)
@@ -488,7 +495,7 @@ def _free_parameter(flowsheet: Flowsheet, p: str, spec: Any, where: str) -> Free
     u = decl["unit"]
     transform = spec.get("transform", "none")
     if transform not in ("none", "log"):
-        raise ConfigError(f"{where}.transform = {transform!r}: not one of none, log")
+        raise ConfigError(f"{where}.transform = {short(transform)}: not one of none, log")
     bounds = {}
     for key in ("lower", "upper"):
         if spec.get(key) is None:
@@ -515,7 +522,7 @@ def _free_parameter(flowsheet: Flowsheet, p: str, spec: Any, where: str) -> Free
                           f"(lower {lo:g} {u})")
     logarithmic = spec.get("logarithmic")
     if logarithmic is not None and not isinstance(logarithmic, bool):
-        raise ConfigError(f"{where}.logarithmic = {logarithmic!r}: expected true or false")
+        raise ConfigError(f"{where}.logarithmic = {short(logarithmic)}: expected true or false")
     return FreeParameter(p, transform, bounds["lower"], bounds["upper"], logarithmic)
 
 

@@ -34,6 +34,9 @@ class CalibrationResult:
         self.wall_time_s = float(raw["wall_time_s"])
         self.status = raw["status"]
         self.message = raw["message"]
+        # a stage left in a flat region of the loss, restarts from lower points, retried sensitivity solves, data no
+        # stage uses; multi_start() adds how this start compares with the others
+        self.warnings: list[str] = list(raw.get("warnings", []))
 
     def brief(self) -> str:
         return self.raw["brief"]
@@ -237,7 +240,35 @@ def multi_start(flowsheet: Flowsheet, experiments: Sequence[Experiment], stages:
 
 
 def best(results: Sequence[CalibrationResult | Exception]) -> CalibrationResult:
+    """The start of lowest final cost; it carries :func:`compare_starts`' verdict in its warnings."""
     ok = [r for r in results if isinstance(r, CalibrationResult)]
     if not ok:
         raise CalibrationError(f"every start failed; first: {results[0] if results else 'no starts'}")
-    return min(ok, key=lambda r: r.cost)
+    winner = min(ok, key=lambda r: r.cost)
+    for w in compare_starts(results):
+        if w not in winner.warnings:
+            winner.warnings.append(w)
+    return winner
+
+
+def compare_starts(results: Sequence[CalibrationResult | Exception], delta_chi2: float = 3.84) -> list[str]:
+    """What the starts of a multi-start say together: the starts that failed, and those that ended more than
+    ``delta_chi2`` (χ², default the 95 % level of one parameter) above the best, each a local minimum or a flat
+    region the calibration could not leave (their estimates are not the answer)."""
+    ok = [r for r in results if isinstance(r, CalibrationResult)]
+    out = []
+    failed = [i for i, r in enumerate(results) if not isinstance(r, CalibrationResult)]
+    if failed:
+        first = " ".join(str(results[failed[0]]).split())
+        out.append(f"{len(failed)} of {len(results)} starts failed (start {', '.join(map(str, failed[:6]))}"
+                   f"{', ...' if len(failed) > 6 else ''}); first: {first[:200]}")
+    if len(ok) < 2:
+        return out
+    low = min(r.cost for r in ok)
+    above = [(r.label or f"start {i}", 2 * (r.cost - low)) for i, r in enumerate(results)
+             if isinstance(r, CalibrationResult) and 2 * (r.cost - low) > delta_chi2]
+    if above:
+        shown = ", ".join(f"{name} (Δχ² = {d:.3g})" for name, d in above[:6]) + (", ..." if len(above) > 6 else "")
+        out.append(f"{len(above)} of {len(ok)} starts ended more than Δχ² = {delta_chi2:g} above the best: {shown}; "
+                   "each stopped in a local minimum or a flat region of the loss")
+    return out

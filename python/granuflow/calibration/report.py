@@ -10,6 +10,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
+from .. import _core, accuracy
 from ..flowsheet import Flowsheet
 from ..outputs import OBSERVABLE_GROUPS
 from .files import Experiment
@@ -42,6 +43,17 @@ def fit_statistics(predictions: Sequence[dict], groups: bool = True) -> list[dic
                     "rmse": math.sqrt(ss_res / len(d)) if len(d) else math.nan,
                     "mean_abs_rel": float(np.mean(np.abs(m - d) / np.abs(d))) if len(d) else math.nan})
     return out
+
+
+def _worst_model_error(predictions: Sequence[dict], output: str) -> float:
+    """The largest |model error| / sigma over the samples of ``output`` (an observable or a group)."""
+    worst = math.nan
+    for p in predictions:
+        if output in (p["observable"], _group_of(p["observable"])) and "model_error" in p:
+            e = np.abs(np.asarray(p["model_error"], dtype=float)) / np.asarray(p["sigma"], dtype=float)
+            if e.size and np.isfinite(e).any():
+                worst = float(np.nanmax(e)) if math.isnan(worst) else max(worst, float(np.nanmax(e)))
+    return worst
 
 
 @dataclass
@@ -86,7 +98,7 @@ class CalibrationReport:
         return parity_plots(self.predictions, self.fit_rows, out_dir, units=self.units)
 
     def to_json(self) -> dict:
-        out = {"result": self.result.to_json(), "fit": self.fit_rows,
+        out = {"result": self.result.to_json(), "warnings": list(self.result.warnings), "fit": self.fit_rows,
                "comparison": None if self.comparison is None else self.comparison.to_json()}
         if self.truth:
             out["truth"] = dict(self.truth)
@@ -104,6 +116,9 @@ class CalibrationReport:
 
         put("report.json", json.dumps(self.to_json(), indent=2))
         txt = self.result.full_report()
+        extra = [w for w in self.result.warnings if w not in self.result.raw.get("warnings", [])]
+        if extra:  # what multi_start() added
+            txt += "".join(f"warning: {w}\n" for w in extra)
         if self.comparison is not None:
             txt += "\n\nComparison (" + (self.comparison.label or "other route") + "):\n" + \
                                     self.comparison.full_report()
@@ -117,27 +132,62 @@ class CalibrationReport:
         files += ["estimates.csv", "correlation.csv", "history.csv", "fit.csv"]
         with open(os.path.join(out_dir, "predictions.csv"), "w", newline="") as f:
             w = csv.writer(f)
-            w.writerow(["set", "experiment", "observable", "t_s", "data", "model", "sigma"])
+            errors = any("model_error" in p for ps in self.predictions.values() for p in ps)
+            w.writerow(["set", "experiment", "observable", "t_s", "data", "model", "sigma"]
+                       + (["model_error"] if errors else []))
             for setname, preds in self.predictions.items():
                 for p in preds:
                     for i in range(len(p["t"])):
                         w.writerow([setname, p["experiment"], p["observable"], p["t"][i], p["data"][i], p["model"][i],
-                                    p["sigma"][i]])
+                                    p["sigma"][i]] + ([p["model_error"][i]] if errors else []))
         files.append("predictions.csv")
         files += [os.path.basename(x) for x in self.parity_plots(out_dir)]
         return files
 
 
+def model_errors(flowsheet: Flowsheet, experiments: Sequence[Experiment], params: Mapping[str, float],
+                 predictions: Sequence[dict], options: Mapping[str, Any] | None = None) -> None:
+    """The estimated numerical error of each predicted sample (granuflow.accuracy): the predictions again at a 100
+    times tighter tolerance and on size grids refined twice and four times; adds ``"model_error"`` (SI, signed:
+    model minus the converged model) to every prediction in ``predictions`` (those of ``experiments``)."""
+    rtol, atol = _core.calibration_tolerances(dict(options or {}))
+    tight = {**dict(options or {}), "rtol": max(rtol / accuracy.TOLERANCE_FACTOR, accuracy.MIN_RTOL),
+             "atol": atol / accuracy.TOLERANCE_FACTOR}
+    runs = [predict(flowsheet, experiments, params, options=tight)]
+    if flowsheet.grid() is not None:
+        runs += [predict(flowsheet.refined(f), experiments, params, options=tight) for f in accuracy.REFINEMENTS]
+    key = {(p["experiment"], p["observable"]): k for k, p in enumerate(predictions)}
+    by = [{(p["experiment"], p["observable"]): p for p in run} for run in runs]
+    for (e, o), k in key.items():
+        base = np.asarray(predictions[k]["model"], dtype=float)
+        t = np.asarray(by[0][(e, o)]["model"], dtype=float)
+        err = base - t
+        if len(by) == 3:
+            err = err + accuracy.richardson_series(t, np.asarray(by[1][(e, o)]["model"], dtype=float),
+                                                   np.asarray(by[2][(e, o)]["model"], dtype=float), np.abs(err))
+        predictions[k]["model_error"] = err.tolist()
+
+
 def report(flowsheet: Flowsheet, result: CalibrationResult, calibration: Sequence[Experiment],
            validation: Sequence[Experiment] = (), *, comparison: CalibrationResult | None = None,
-           truth: Mapping[str, float] | None = None, options: Mapping[str, Any] | None = None) -> CalibrationReport:
-    """Predictions at the final estimates on both sets, and R²/RMSE per output (and pooled per group)."""
+           truth: Mapping[str, float] | None = None, options: Mapping[str, Any] | None = None,
+           error_estimate: bool = False) -> CalibrationReport:
+    """Predictions at the final estimates on both sets, and R²/RMSE per output (and pooled per group). With
+    ``error_estimate`` every prediction also carries the estimated numerical error of the model (``model_error``,
+    :func:`model_errors`), and the fit table the largest |model error| / sigma per output: a model error well below
+    the measurement's sigma does not move the estimates."""
     preds = {"calibration": predict(flowsheet, calibration, result.parameters, options=options)}
     if validation:
         preds["validation"] = predict(flowsheet, validation, result.parameters, options=options)
+    if error_estimate:
+        for name, exps in (("calibration", calibration), ("validation", validation)):
+            if name in preds:
+                model_errors(flowsheet, exps, result.parameters, preds[name], options)
     rows = []
     for setname, p in preds.items():
         for r in fit_statistics(p):
+            if error_estimate:
+                r["max_model_error_over_sigma"] = _worst_model_error(p, r["output"])
             rows.append({"set": setname, **r})
     units = {p["observable"]: flowsheet.unit_of(p["observable"]) for ps in preds.values() for p in ps}
     for r in rows:  # RMSE is in the SI unit of the observable (of the group's members for pooled rows)

@@ -52,6 +52,9 @@ def main(argv=None) -> int:
     r.add_argument("--set", action="append", metavar="UNIT.PARAM=VALUE", help="override a parameter (unit allowed)")
     r.add_argument("--t-end", help="end time in seconds (or with a unit, e.g. '60 min')")
     r.add_argument("--no-plots", action="store_true", help="write summary.json and timeseries.csv only (faster)")
+    r.add_argument("--error-estimate", action="store_true",
+                   help="re-solve on size grids 2 and 4 times finer and at a 100 times tighter tolerance; the "
+                        "estimated numerical error of every summary output goes to summary.json and the plots")
     r.add_argument("--quiet", action="store_true", help="no output but errors")
     r.set_defaults(func=_cmd("run", "cmd_run"))
     w = sub.add_parser("sweep", help="run a sweep file; write sweep.csv and sweep.json")
@@ -59,6 +62,8 @@ def main(argv=None) -> int:
     w.add_argument("--out", required=True, help="output folder (created)")
     _add_batch_options(w)
     w.add_argument("--fail-fast", action="store_true", help="stop at the first failed point (exit 3)")
+    w.add_argument("--error-estimate", action="store_true",
+                   help="each point also on finer size grids and a tighter tolerance: columns <output>_err")
     w.set_defaults(func=_cmd("sweep", "cmd_sweep"))
     k = sub.add_parser("contour", help="contour map of outputs over two parameters; feasible window; CSV and PNG")
     k.add_argument("scene")
@@ -71,6 +76,9 @@ def main(argv=None) -> int:
     k.add_argument("--out", required=True, help="output folder (created)")
     _add_batch_options(k)
     k.add_argument("--dask", metavar="ADDRESS", help="run on the Dask scheduler at ADDRESS (tcp://host:8786)")
+    k.add_argument("--error-estimate", action="store_true",
+                   help="each point also on finer size grids and a tighter tolerance: a map of each output's "
+                        "estimated numerical error (contour_<output>_err.png) next to the output's")
     k.set_defaults(func=_cmd("contour", "cmd_contour"))
     u = sub.add_parser("units", help="the built-in unit types; with NAME its ports, settings, parameters, outputs")
     u.add_argument("name", nargs="?", help="a unit type (e.g. fluid_bed)")
@@ -106,6 +114,9 @@ def main(argv=None) -> int:
     c.add_argument("--spread", type=float, default=1.0, help="multi-start: ± spread in ln units around the start")
     c.add_argument("--seed", type=int, default=0, help="multi-start: random seed")
     c.add_argument("--compare", action="store_true", help="also fit all parameters at once from the same start")
+    c.add_argument("--error-estimate", action="store_true",
+                   help="the model's numerical error at every sample (finer size grids, tighter tolerance) in "
+                        "predictions.csv and, against sigma, in fit.csv")
     c.add_argument("--no-progress", action="store_true", help="no progress bar (default: only on a terminal)")
     c.add_argument("--quiet", action="store_true", help="no output but errors (and no progress bar)")
     c.set_defaults(func=_cmd("calibrate", "cmd_calibrate"))
@@ -117,6 +128,14 @@ def main(argv=None) -> int:
         return args.func(args)
     except (_core.ConfigError, FileNotFoundError) as e:
         print(f"granuflow: bad input: {one_line(e)}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except (IsADirectoryError, NotADirectoryError, PermissionError, UnicodeError) as e:
+        # Every file the commands read goes through granuflow.textfile, which names the file and the key; this is
+        # the net under it: still one line naming the file (OSError says which), never a traceback.
+        print(f"granuflow: bad input: {one_line(e)}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except RecursionError:
+        print("granuflow: bad input: an input nested too deeply to read (YAML files allow 64 levels)", file=sys.stderr)
         return EXIT_BAD_INPUT
     except (_core.SolverError, _core.CalibrationError) as e:
         print(f"granuflow: solver failure: {one_line(e)}", file=sys.stderr)

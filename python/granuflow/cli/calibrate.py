@@ -1,6 +1,8 @@
 """granuflow calibrate."""
 from __future__ import annotations
 
+import sys
+
 from .common import check_at_least, check_out_dir, check_workers, progress_option
 
 
@@ -40,7 +42,10 @@ def cmd_calibrate(args) -> int:
     if args.compare:
         comparison = cal.calibrate(fs, exps.calibration, plan.simultaneous(), start=plan.start, options=options,
                                    label="all parameters at once")
-    rep = cal.report(fs, res, exps.calibration, exps.validation, comparison=comparison)
+    for w in res.warnings:  # also in report.json and report.txt; exit 0: the calibration is what was asked for
+        print(f"granuflow: warning: {w}", file=sys.stderr)
+    rep = cal.report(fs, res, exps.calibration, exps.validation, comparison=comparison, options=options,
+                     error_estimate=args.error_estimate)
     written = rep.write(args.out)
     if not args.quiet:
         print(res.full_report())

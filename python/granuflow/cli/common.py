@@ -21,7 +21,13 @@ class Parser(argparse.ArgumentParser):
 
 
 def parse_seconds(text: str, option: str = "--t-end") -> float:
-    return parse_time(text, option)
+    """A run's end time from the command line (s, or with a time unit): finite and > 0. An empty value is an
+    error, not "the scene's" (leave the option out for that)."""
+    t = parse_time(text, option)
+    if not (math.isfinite(t) and t > 0):
+        raise ConfigError(f"{option} = '{text}': t_end = {t:g} s violates t_end > 0 (an end time such as '60 min'; "
+                          f"leave {option} out for the scene's)")
+    return t
 
 
 def parse_sets(items) -> dict:
@@ -45,7 +51,14 @@ def check_workers(workers) -> None:
 
 
 def check_out_dir(out: str, option: str = "--out") -> None:
-    """The output folder: an existing folder or a path that can be created (not an existing file)."""
+    """The output folder, before anything runs: an existing folder or a path that can be created (not an existing
+    file), that this process can write to: a probe file is written and removed in the folder, or where it would be
+    created (nothing is created for a run that then refuses its input). An answer computed for an hour must not be
+    lost to a typo."""
+    import tempfile
+
+    if not out:
+        raise ConfigError(f"{option} = '': expected a folder to write to")
     if os.path.exists(out) and not os.path.isdir(out):
         raise ConfigError(f"{option} = '{out}': an existing file, not a folder (give a folder to write to)")
     parent = out
@@ -53,6 +66,12 @@ def check_out_dir(out: str, option: str = "--out") -> None:
         parent = os.path.dirname(parent.rstrip(os.sep))
     if parent and not os.path.isdir(parent):
         raise ConfigError(f"{option} = '{out}': '{parent}' is a file, not a folder (give a folder to write to)")
+    try:
+        with tempfile.TemporaryFile(dir=parent or ".", prefix=".granuflow-write-check-"):
+            pass
+    except OSError as e:
+        raise ConfigError(f"{option} = '{out}': cannot write there ({e.strerror}); give a folder this user can "
+                          "write to") from None
 
 
 def json_value(v):

@@ -12,7 +12,7 @@ from .. import sweep
 from ..design_space import contour_map, feasible_window, make_axis, parse_constraints
 from ..flowsheet import load
 from ..plots.design_space import plot_contour, plot_feasible_window
-from .common import (check_out_dir, check_workers, json_value, parse_sets, progress_option,
+from .common import (check_out_dir, check_workers, json_value, parse_seconds, parse_sets, progress_option,
                      with_unit_headers)
 
 
@@ -23,6 +23,7 @@ def cmd_contour(args) -> int:
     feasible_window.csv (the outline polygons). Returns 3 if every point failed, else 0."""
     fs = load(args.scene)
     fixed = parse_sets(args.set)
+    t_end = None if args.t_end is None else parse_seconds(args.t_end)
     check_workers(args.workers)
     cons = parse_constraints(args.constraint or [])
     sweep.check_outputs(fs, list(args.output or ["d50_um"]), where="--output")
@@ -39,8 +40,8 @@ def cmd_contour(args) -> int:
 
         client = executor = Client(args.dask)
     try:
-        grid = contour_map(fs, args.x, args.y, outputs, fixed=fixed, t_end=args.t_end, workers=args.workers,
-                           executor=executor, progress=progress_option(args))
+        grid = contour_map(fs, args.x, args.y, outputs, fixed=fixed, t_end=t_end, workers=args.workers,
+                           executor=executor, progress=progress_option(args), error_estimate=args.error_estimate)
     finally:
         if client is not None:
             client.close()
@@ -57,15 +58,15 @@ def cmd_contour(args) -> int:
         plot_feasible_window(win, os.path.join(args.out, "feasible_window.png"), grid=grid, background=outputs[0])
         written += ["feasible_window.csv", "feasible_window.png"]
     with_unit_headers(df).to_csv(os.path.join(args.out, "contour.csv"), index=False)
-    for o in outputs:
-        if np.isfinite(grid[o]).sum() >= 4:
+    for o in grid.outputs:  # with --error-estimate also each output's estimated error (d50_um_err)
+        if np.isfinite(grid[o]).sum() >= (4 if min(grid.shape) >= 2 else 2):  # a map, or a profile of >= 2 points
             plot_contour(grid, o, os.path.join(args.out, f"contour_{o}.png"), window=win)
             written.append(f"contour_{o}.png")
     n_failed = int((~grid.ok).sum())
     meta = {"scene": os.path.abspath(args.scene), "x": {"param": grid.x.param, "unit": grid.x.unit,
                                                         "values": grid.x.values.tolist()},
             "y": {"param": grid.y.param, "unit": grid.y.unit, "values": grid.y.values.tolist()},
-            "outputs": outputs, "fixed": fixed, "t_end_s": grid.t_end_s, "n_points": grid.n_simulations,
+            "outputs": list(grid.outputs), "fixed": fixed, "t_end_s": grid.t_end_s, "n_points": grid.n_simulations,
             "n_failed": n_failed, "wall_time_s": grid.wall_time_s,
             "simulations_per_s": json_value(grid.simulations_per_s),
             "constraints": [str(c) for c in cons], "units": dict(df.attrs.get("units", {}))}
@@ -80,6 +81,12 @@ def cmd_contour(args) -> int:
               f"({grid.simulations_per_s:.0f} simulations/s)"
               + (f"; feasible window: {100 * win.fraction:.0f} % of the grid, {win.ranges()}" if win else "")
               + f"; wrote {', '.join(written)} to {args.out}")
+    warned = grid.ok & (grid.message != "")
+    if warned.any():
+        i = np.argwhere(warned)[0]
+        print(f"granuflow: {int(warned.sum())} of {grid.n_simulations} points warn (see contour.csv, message); "
+              f"first: {grid.x.param} = {grid.x.values[i[1]]:g} {grid.x.unit}, {grid.y.param} = "
+              f"{grid.y.values[i[0]]:g} {grid.y.unit}: {grid.message[tuple(i)]}", file=sys.stderr)
     if n_failed:
         i = np.argwhere(~grid.ok)[0]
         print(f"granuflow: {n_failed} of {grid.n_simulations} points failed; first: {grid.x.param} = "

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import os
+import sys
 
 from ..flowsheet import load
 from ..plots.spec import plot_specs
@@ -42,10 +43,12 @@ def cmd_run(args) -> int:
     fs = load(args.scene)
     fs.update(parse_sets(args.set))
     specs = plot_specs(fs, drawing=not args.no_plots)  # against the scene file's own t_end
-    if args.t_end:
+    if args.t_end is not None:
         fs.set_t_end(parse_seconds(args.t_end))
     check_out_dir(args.out)
-    res = fs.simulate()
+    res = fs.simulate(warn=False, error_estimate=args.error_estimate)
+    for w in res.warnings:  # also in summary.json; exit 0: the run is what was asked for
+        print(f"granuflow: warning: {w}", file=sys.stderr)
     os.makedirs(args.out, exist_ok=True)
     summary = res.summary
     with open(os.path.join(args.out, "summary.json"), "w") as f:
@@ -57,5 +60,12 @@ def cmd_run(args) -> int:
     if not args.quiet:
         print(f"{fs.name}: {res.t[-1]:g} s simulated in {res.wall_time_s * 1e3:.1f} ms "
               f"({res.stats['steps']} steps); wrote {', '.join(written)} to {args.out}")
-        print(json.dumps({k: summary[k] for k in summary if k not in ("solver", "units")}, indent=None))
+        print(json.dumps({k: summary[k] for k in summary
+                          if k not in ("solver", "units", "grid_end", "warnings", "error_estimate")}, indent=None))
+        if res.error_estimate is not None:
+            ee = res.error_estimate
+            print(f"estimated numerical error ({ee.grid or 'no size grid'}; rtol {ee.rtol[0]:g} vs {ee.rtol[1]:g}; "
+                  f"{ee.wall_time_s:.2f} s of re-solves):")
+            for line in ee.lines():
+                print("  " + line)
     return 0

@@ -19,12 +19,12 @@ def cmd_sweep(args) -> int:
     overrides = parse_sets(args.set)
     check_workers(args.workers)
     fs = spec.flowsheet(overrides)
-    if args.t_end:
+    if args.t_end is not None:
         fs.set_t_end(parse_seconds(args.t_end))
     check_out_dir(args.out)
     t0 = time.perf_counter()
     df = spec.run(flowsheet=fs, workers=args.workers, executor=args.executor,
-                  progress=progress_option(args), raise_errors=args.fail_fast)
+                  progress=progress_option(args), raise_errors=args.fail_fast, error_estimate=args.error_estimate)
     wall = time.perf_counter() - t0
     n_failed = int((df["status"] != sw.STATUS_OK).sum())
     effects = None
@@ -54,6 +54,10 @@ def cmd_sweep(args) -> int:
                 print(effects.to_string(float_format=lambda x: f"{x:.4g}"))
         print(f"{spec.name}: {len(df)} points ({n_failed} failed) in {wall:.2f} s; "
               f"wrote sweep.csv, sweep.json to {args.out}")
+    warned = df.loc[(df["status"] == sw.STATUS_OK) & (df["message"] != "")]
+    if len(warned):
+        print(f"granuflow: {len(warned)} of {len(df)} points warn (see sweep.csv, message); first: "
+              f"{warned.iloc[0]['point']}: {warned.iloc[0]['message']}", file=sys.stderr)
     if n_failed:
         first = df.loc[df["status"] != sw.STATUS_OK].iloc[0]
         print(f"granuflow: {n_failed} of {len(df)} points failed; first: {first['point']}: {first['message']}",

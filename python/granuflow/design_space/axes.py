@@ -144,6 +144,10 @@ def make_axis(fs: Flowsheet, spec, where: str = "axis", *, with_n: bool = True, 
     else:
         s = fs.spec(param)
         desc, lower, upper = s.get("description", ""), s["lower"], s["upper"]
+        if s.get("input"):
+            raise ConfigError(f"{where}: {param} is driven by a time-dependent input of scene '{fs.name}' "
+                              f"(inputs: {param}); every point would run the input, not the axis values: vary "
+                              "another parameter, or remove the input from the scene")
     a, b = _param_affine(fs, param, unit, where)
     v = np.asarray(values, dtype=float)
     if v.size > MAX_AXIS_POINTS:
@@ -157,6 +161,16 @@ def make_axis(fs: Flowsheet, spec, where: str = "axis", *, with_n: bool = True, 
     if bad.any():
         raise ConfigError(f"{where}: {param} = {v[bad][0]:g} {unit}: outside the bounds "
                           f"{lower:g} <= {param} <= {upper:g} {param_si_unit(fs, param)}")
+    if param != T_END:
+        # a value the flowsheet refuses although within the bounds (a link target, which follows its source; a
+        # link source its followers cannot start from) would fail at every point after the runs: refuse it now
+        probe = fs.clone()
+        for value in dict.fromkeys([float(si[0]), float(si[-1])]):
+            try:
+                probe.set(param, value)
+            except ConfigError as e:
+                shown = f"{(value - a) / b:g} {unit}".strip()
+                raise ConfigError(f"{where}: {param} = {shown}: {' '.join(str(e).split())}") from None
     return Axis(param, unit, v, si, desc, param_si_unit(fs, param))
 
 

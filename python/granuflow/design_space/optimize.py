@@ -124,7 +124,7 @@ class _Problem:
                     self.fs.set(p, v)
             if self.outputs:
                 self.n_sim += 1
-                values = sweep.final_values(self.fs.simulate(**kw), self.outputs)
+                values = sweep.final_values(self.fs.simulate(**kw, warn=False), self.outputs)
         except (SolverError, ConfigError) as e:
             status, message = sweep.STATUS_FAILED, " ".join(str(e).split())
             values = {o: math.nan for o in self.outputs}

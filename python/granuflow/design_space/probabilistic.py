@@ -77,7 +77,7 @@ class _LinearizedPoint:
         self.sim_kwargs, self.steps, self.use_core = sim_kwargs, steps, use_core
 
     def _values(self, fs) -> dict:
-        return sweep.final_values(fs.simulate(**self.sim_kwargs), self.outputs)
+        return sweep.final_values(fs.simulate(**self.sim_kwargs, warn=False), self.outputs)
 
     def __call__(self, fs, item) -> dict:
         i, point = item

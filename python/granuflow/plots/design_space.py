@@ -66,6 +66,8 @@ def plot_contour(grid, output: str, path: str | None = None, *, ax=None, levels:
     (returns it)."""
     fig, ax, own = _axes(ax, path)
     label, z = _display(output, grid[output])
+    if min(z.shape) < 2:  # one point on an axis (allowed): a profile along the other, no contours
+        return _profile(fig, ax, path, own, grid, output, label, z, title, window)
     zm = np.ma.masked_invalid(z)
     cf = ax.contourf(grid.x.values, grid.y.values, zm, levels=levels, cmap=cmap)
     cs = ax.contour(grid.x.values, grid.y.values, zm, levels=cf.levels, colors="k", linewidths=0.6)
@@ -83,12 +85,31 @@ def plot_contour(grid, output: str, path: str | None = None, *, ax=None, levels:
     return _finish(fig, ax, path, own)
 
 
+def _profile(fig, ax, path, own, grid, output, label, z, title, window):
+    """``output`` along the axis with more than one point, the other held at its single value (a map with one
+    point on an axis); the feasible points marked when a window is given."""
+    along, held = (grid.x, grid.y) if z.shape[1] >= z.shape[0] else (grid.y, grid.x)
+    v = z.ravel()
+    ax.plot(along.values, v, "o-", ms=4, label=label.split(" / ")[0])
+    if window is not None and window.mask.any():
+        ok = window.mask.ravel()
+        ax.plot(along.values[ok], v[ok], "o", color="tab:red", ms=6, label="feasible")
+        ax.legend(loc="best", fontsize=8)
+    ax.set_xlabel(along.label)
+    ax.set_ylabel(label)
+    ax.grid(alpha=0.3)
+    note = f"{held.param} = {held.values[0]:g} {held.unit}".strip()
+    ax.set_title(title if title is not None else f"{label.split(' / ')[0]} after {grid.t_end_s / 60:g} min ({note})",
+                 fontsize=10)
+    return _finish(fig, ax, path, own)
+
+
 def plot_feasible_window(window, path: str | None = None, *, grid=None,
                          background: str | None = None, ax=None, title: str | None = None):
     """Fig. 20 style: each constraint's boundary line (labelled), the feasible window hatched, the grid points
     inside it marked red; optionally filled contours of ``background`` (an output of ``grid``) underneath."""
     fig, ax, own = _axes(ax, path)
-    if grid is not None and background is not None:
+    if grid is not None and background is not None and min(grid[background].shape) >= 2:
         label, z = _display(background, grid[background])
         cf = ax.contourf(grid.x.values, grid.y.values, np.ma.masked_invalid(z), levels=12, cmap="Greys", alpha=0.6)
         fig.colorbar(cf, ax=ax, label=label)
@@ -101,8 +122,9 @@ def plot_feasible_window(window, path: str | None = None, *, grid=None,
     X, Y = np.meshgrid(window.x.values, window.y.values)
     ax.plot(X[window.mask], Y[window.mask], "o", color="tab:red", ms=3, label="feasible grid points")
     ax.plot(X[~window.mask], Y[~window.mask], "o", color="0.6", ms=2, label="infeasible grid points")
-    ax.set_xlim(window.x.lo, window.x.hi)
-    ax.set_ylim(window.y.lo, window.y.hi)
+    for axis, set_lim in ((window.x, ax.set_xlim), (window.y, ax.set_ylim)):
+        if axis.hi > axis.lo:  # a single point on an axis: matplotlib picks a range around it
+            set_lim(axis.lo, axis.hi)
     ax.set_xlabel(window.x.label)
     ax.set_ylabel(window.y.label)
     ax.set_title(title if title is not None else "Design space: " + ", ".join(_display_bound(c)

@@ -41,7 +41,11 @@ def plot_series(result, spec: dict, path: str) -> str:
         top = clipped_top_um(result, name, si)
         if top is not None:
             label += f", clipped by the size grid (top class {top:.0f} µm)"
-        ax.plot(result.t / 60.0, convert(result[name], unit, si), label=label)
+        line, = ax.plot(result.t / 60.0, convert(result[name], unit, si), label=label)
+        err = _error(result, name)
+        if err is not None:  # the estimated numerical error as a band around the curve
+            lo, hi = (convert(result[name] + sign * np.abs(err), unit, si) for sign in (-1, 1))
+            ax.fill_between(result.t / 60.0, lo, hi, color=line.get_color(), alpha=0.25, lw=0)
     unit = units.pop() if len(units) == 1 else ""
     ylabel = spec.get("ylabel", "")
     ax.set_xlabel("time / min")
@@ -50,8 +54,37 @@ def plot_series(result, spec: dict, path: str) -> str:
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     _margins(fig)
+    _error_footnote(fig, result, spec["y"], spec.get("unit"))
     fig.savefig(path, dpi=110)
     return path
+
+
+def _error(result, name: str):
+    """The estimated numerical error of a series over time, if the result carries an error estimate."""
+    ee = getattr(result, "error_estimate", None)
+    return None if ee is None else ee.error(name)
+
+
+def _error_footnote(fig, result, names, unit=None) -> None:
+    """A footnote under the axes: the estimated numerical error of each named series at the end of the run and how it
+    was estimated (bands show it over time), when the result carries an error estimate."""
+    ee = getattr(result, "error_estimate", None)
+    if ee is None:
+        return
+    parts = []
+    for name in names:
+        err = ee.error(name)
+        if err is None:
+            continue
+        si = result.unit(name)
+        shown = unit or outputs.display_unit(name, si)
+        e = float(convert(result[name][-1] + abs(err[-1]), shown, si) - convert(result[name][-1], shown, si))
+        parts.append(f"{name} ±{e:.3g} {pretty(shown)}")
+    how = (f"grid {ee.grid.split(' ', 1)[1]} classes" if ee.grid else "no size grid") + \
+        f", rtol {ee.rtol[0]:g} vs {ee.rtol[1]:g}"
+    fig.subplots_adjust(bottom=0.2)
+    fig.text(0.01, 0.01, f"Estimated numerical error at the end (bands over time; {how}): " + ", ".join(parts),
+             fontsize=6.5, wrap=True)
 
 
 # Mass fraction in the top class above which a shown distribution counts as clipped by the grid.
@@ -98,5 +131,7 @@ def plot_psd(result, path: str, times_s=None, unit: str | None = None) -> str:
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8)
     _margins(fig)
+    _error_footnote(fig, result, [n for n in (f"{unit or (result.psd_units() or [''])[0]}.d{x}" for x in (10, 50, 90))
+                                  if n in result])
     fig.savefig(path, dpi=110)
     return path

@@ -6,6 +6,7 @@ import os
 
 from .. import _core
 from ..quantity import conversion, display_units
+from ..textfile import short
 
 ConfigError = _core.ConfigError
 
@@ -17,7 +18,7 @@ def _plot_file(name, where: str, formats: list[str] | None) -> str:
     """A plot's `file:`: a plain file name (no folder) with an extension matplotlib writes (not checked when
     ``formats`` is None: no plots are drawn)."""
     if not isinstance(name, str) or not name.strip():
-        raise ConfigError(f"{where} = {name!r}: expected a file name such as plot.png")
+        raise ConfigError(f"{where} = {short(name)}: expected a file name such as plot.png")
     if name != os.path.basename(name) or "/" in name or "\\" in name or name in (".", "..") or os.path.isabs(name):
         raise ConfigError(f"{where} = '{name}': expected a plain file name inside the output folder "
                           "(no folder part, e.g. plot.png)")
@@ -36,7 +37,7 @@ def plot_specs(fs, *, drawing: bool = True) -> list[dict]:
     specs = fs.extra.get("plots") or []
     where = f"{fs.path or fs.name}: plots"
     if not isinstance(specs, list):
-        raise ConfigError(f"{where}: expected a list of plot mappings, got {specs!r}")
+        raise ConfigError(f"{where}: expected a list of plot mappings, got {short(specs)}")
     known = set(fs.state_names) | set(fs.output_names)
     formats = None
     if specs and drawing:
@@ -48,7 +49,7 @@ def plot_specs(fs, *, drawing: bool = True) -> list[dict]:
         w = f"{where}[{k}]"
         if isinstance(spec, dict) and "kind" in spec:
             if spec["kind"] != "psd":
-                raise ConfigError(f"{w}.kind = {spec['kind']!r}: not one of psd (or leave kind out and give y)")
+                raise ConfigError(f"{w}.kind = {short(spec['kind'])}: not one of psd (or leave kind out and give y)")
             for key in spec:
                 if key not in _PSD_KEYS:
                     raise ConfigError(f"{w}: unknown key '{key}' (allowed for kind psd: {', '.join(_PSD_KEYS)})")
@@ -57,15 +58,15 @@ def plot_specs(fs, *, drawing: bool = True) -> list[dict]:
             if "times_min" in spec:
                 times = spec["times_min"]
                 if not isinstance(times, list) or not times:
-                    raise ConfigError(f"{w}.times_min = {times!r}: expected a non-empty list of times in minutes")
+                    raise ConfigError(f"{w}.times_min = {short(times)}: expected a non-empty list of times in minutes")
                 for i, t in enumerate(times):
                     ok = isinstance(t, (int, float)) and not isinstance(t, bool) and math.isfinite(t)
                     if not ok or not 0 <= t <= t_end_min * (1 + 1e-12):
-                        raise ConfigError(f"{w}.times_min[{i}] = {t!r}: expected a time in minutes within "
+                        raise ConfigError(f"{w}.times_min[{i}] = {short(t)}: expected a time in minutes within "
                                           f"[0, {t_end_min:g}] (the scene's t_end)")
             continue
         if not isinstance(spec, dict) or not isinstance(spec.get("y"), list):
-            raise ConfigError(f"{w} = {spec!r}: expected a mapping with y: [state or output names] "
+            raise ConfigError(f"{w} = {short(spec)}: expected a mapping with y: [state or output names] "
                               "(or kind: psd)")
         for key in spec:
             if key not in _SERIES_KEYS:
@@ -74,7 +75,7 @@ def plot_specs(fs, *, drawing: bool = True) -> list[dict]:
         if unit is None:
             unit = ""
         if not isinstance(unit, str):
-            raise ConfigError(f"{w}.unit = {unit!r}: expected a unit name (allowed: {', '.join(display_units())})")
+            raise ConfigError(f"{w}.unit = {short(unit)}: expected a unit name (allowed: {', '.join(display_units())})")
         for n in spec["y"]:
             if n not in known:
                 raise ConfigError(f"{w}.y: '{n}' is neither a state nor an output of scene '{fs.name}'")

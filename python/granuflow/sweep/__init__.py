@@ -27,6 +27,7 @@ Python::
     sw = sweep.load_sweep("flowsheets/stoeckl_gf25_table1.yaml")
     df = sw.run(workers=2)                  # one row per point: variables (edge units), outputs, time, status
     sweep.main_effects(df)                  # over the cube corners: mean(high) - mean(low)
+    sw.run(error_estimate=True)             # and d50_um_err ...: each point's estimated numerical error
 
     # the generic runner, for points built in code (values SI floats or strings with a unit):
     df = sweep.run_sweep(gf.load(scene), [{"nozzle.mdot": "60 g/min"}, {"nozzle.mdot": "120 g/min"}],
@@ -41,8 +42,9 @@ the flowsheet on each worker from the scene text and the parameter values).
 from .analysis import corner_points, main_effects
 from .executors import EXECUTORS, SerialExecutor, ThreadExecutor, make_executor
 from .file import Sweep, Variable, load_sweep, run_sweep_file
-from .runner import DEFAULT_OUTPUTS, STATUS_FAILED, STATUS_OK, check_outputs, final_values, run_sweep
+from .runner import (DEFAULT_OUTPUTS, STATUS_FAILED, STATUS_OK, check_outputs, error_column, final_errors,
+                     final_values, run_sweep)
 
 __all__ = ["corner_points", "main_effects", "EXECUTORS", "SerialExecutor", "ThreadExecutor", "make_executor", "Sweep",
            "Variable", "load_sweep", "run_sweep_file", "DEFAULT_OUTPUTS", "STATUS_FAILED", "STATUS_OK",
-           "check_outputs", "final_values", "run_sweep"]
+           "check_outputs", "error_column", "final_errors", "final_values", "run_sweep"]

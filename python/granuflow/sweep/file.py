@@ -8,7 +8,8 @@ from typing import Any, Mapping
 from .. import _core
 from ..flowsheet import Flowsheet, load
 from ..quantity import affine, is_number, parse_time, split, to_si
-from .runner import DEFAULT_OUTPUTS, check_outputs, run_sweep
+from ..textfile import load_yaml, short
+from .runner import DEFAULT_OUTPUTS, check_outputs, error_column, run_sweep
 
 ConfigError = _core.ConfigError
 _TOP_KEYS = ("sweep", "description", "scene", "variables", "points", "outputs", "set", "t_end", "notes")
@@ -71,23 +72,26 @@ class Sweep:
     # -- running ---------------------------------------------------------------------------------
     def run(self, *, workers: int | None = None, progress: bool | None = None, executor: str | Any = "threads",
             overrides: Mapping[str, float | str] | None = None, raise_errors: bool = False,
-            flowsheet: Flowsheet | None = None, simulate: Mapping[str, Any] | None = None):
+            flowsheet: Flowsheet | None = None, simulate: Mapping[str, Any] | None = None,
+            error_estimate: bool = False):
         """Run every point. Returns a DataFrame: ``point``, ``kind``, one column per variable (in its edge unit),
-        the outputs, ``wall_time_s``, ``solve_time_s``, ``status``, ``message``. ``df.attrs`` holds the sweep name,
+        the outputs (with ``error_estimate``, each followed by ``<output>_err``, its estimated numerical error),
+        ``wall_time_s``, ``solve_time_s``, ``status``, ``message``. ``df.attrs`` holds the sweep name,
         the variables (parameter, unit, levels) and the outputs, which :func:`main_effects` uses."""
         fs = flowsheet if flowsheet is not None else self.flowsheet(overrides)
         raw = run_sweep(fs, self.param_points(), self.outputs, names=self.point_names, workers=workers,
                         progress=progress, executor=executor, raise_errors=raise_errors, simulate=simulate,
-                        desc=self.name)
+                        desc=self.name, error_estimate=error_estimate)
+        errs = [error_column(o) for o in self.outputs] if error_estimate else []
         df = raw[["point"]].copy()
         df["kind"] = [p.get("kind", "") for p in self.points]
         for v in self.variables:
             df[v.name] = [float(p[v.name]) for p in self.points]
-        for c in self.outputs + ["wall_time_s", "solve_time_s", "status", "message"]:
+        for c in self.outputs + errs + ["wall_time_s", "solve_time_s", "status", "message"]:
             df[c] = raw[c].to_numpy()
         df.attrs.update(self.metadata())
         df.attrs["units"] = {**{v.name: v.unit or fs.spec(v.param)["unit"] for v in self.variables},
-                             **{o: raw.attrs["units"].get(o, "") for o in self.outputs},
+                             **{o: raw.attrs["units"].get(o, "") for o in self.outputs + errs},
                              "wall_time_s": "s", "solve_time_s": "s"}
         return df
 
@@ -103,26 +107,16 @@ def set_or_raise(fs: Flowsheet, name: str, value, where: str, shown=None) -> Non
         fs.set(name, value)
     except (ConfigError, TypeError) as e:
         shown = value if shown is None else shown
-        raise ConfigError(f"{where} = {shown!r}: {' '.join(str(e).split())}") from None
+        raise ConfigError(f"{where} = {short(shown)}: {' '.join(str(e).split())}") from None
 
 
 def load_sweep(path: str | os.PathLike) -> Sweep:
     """Read and check a sweep file. Raises ConfigError naming the file, the key, the value and what is allowed;
     every point is checked against the parameter bounds before anything runs."""
-    import yaml
-
     path = os.fspath(path)
-    try:
-        with open(path) as f:
-            text = f.read()
-    except OSError as e:
-        raise ConfigError(f"{path}: cannot read the sweep file ({e.strerror})") from None
-    try:
-        doc = yaml.safe_load(text)
-    except yaml.YAMLError as e:
-        raise ConfigError(f"{path}: not valid YAML ({' '.join(str(e).split())})") from None
+    doc = load_yaml(path, "sweep file")
     if not isinstance(doc, dict):
-        raise ConfigError(f"{path}: expected a mapping with keys {', '.join(_TOP_KEYS)}")
+        raise ConfigError(f"{path}: expected a mapping with keys {', '.join(_TOP_KEYS)}, got {short(doc)}")
 
     def err(key: str, msg: str) -> ConfigError:
         return ConfigError(f"{path}: {key}: {msg}")
@@ -134,7 +128,7 @@ def load_sweep(path: str | os.PathLike) -> Sweep:
         if k not in doc:
             raise err(k, "missing required key")
     if not isinstance(doc["scene"], str):
-        raise err("scene", f"expected a path (relative to the sweep file), got {doc['scene']!r}")
+        raise err("scene", f"expected a path (relative to the sweep file), got {short(doc['scene'])}")
     scene = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(path)), doc["scene"]))
     if not os.path.isfile(scene):
         raise err("scene", f"'{doc['scene']}': no such file ({scene})")
@@ -161,10 +155,14 @@ def load_sweep(path: str | os.PathLike) -> Sweep:
         if param not in fs.params:
             raise err(f"{key}.param", f"unknown parameter '{param}' of scene '{fs.name}' "
                                       f"(allowed: {', '.join(fs.params)})")
+        if fs.spec(param).get("input"):
+            raise err(f"{key}.param", f"{param} is driven by a time-dependent input of scene '{fs.name}' (inputs: "
+                                      f"{param}); every point would run the input, not the sweep's values: sweep "
+                                      "another parameter, or remove the input from the scene")
         si_unit = fs.spec(param)["unit"]
         unit = spec.get("unit", "")
         if not isinstance(unit, str):
-            raise err(f"{key}.unit", f"expected a unit string, got {unit!r}")
+            raise err(f"{key}.unit", f"expected a unit string, got {short(unit)}")
         try:
             affine(unit, si_unit, param)
         except ConfigError as e:
@@ -172,7 +170,7 @@ def load_sweep(path: str | os.PathLike) -> Sweep:
                                      f"{' '.join(str(e).split())}") from None
         levels = spec.get("levels", [])
         if not isinstance(levels, list) or not all(is_number(x) for x in levels):
-            raise err(f"{key}.levels", f"expected a list of numbers in {unit or si_unit}, got {levels!r}")
+            raise err(f"{key}.levels", f"expected a list of numbers in {unit or si_unit}, got {short(levels)}")
         variables.append(Variable(vname, param, unit, [float(x) for x in levels], str(spec.get("description", ""))))
     if len({v.param for v in variables}) != len(variables):
         raise err("variables", "two variables set the same parameter")
@@ -180,24 +178,26 @@ def load_sweep(path: str | os.PathLike) -> Sweep:
     # outputs
     outputs = doc.get("outputs", list(DEFAULT_OUTPUTS))
     if not isinstance(outputs, list) or not outputs:
-        raise err("outputs", f"expected a list of summary keys, got {outputs!r}")
+        raise err("outputs", f"expected a list of summary keys, got {short(outputs)}")
     outputs = check_outputs(fs, outputs, where=f"{path}: outputs")
 
     # fixed settings and end time
     fixed = doc.get("set") or {}
     if not isinstance(fixed, dict):
-        raise err("set", f"expected a mapping unit.param -> value, got {fixed!r}")
+        raise err("set", f"expected a mapping unit.param -> value, got {short(fixed)}")
     for k, v in fixed.items():
         if k not in fs.params:
             raise err(f"set.{k}", f"unknown parameter (allowed: {', '.join(fs.params)})")
         if any(var.param == k for var in variables):
             raise err(f"set.{k}", "is also a sweep variable")
         if not (is_number(v) or isinstance(v, str)):
-            raise err(f"set.{k}", f"expected a number or a string with a unit, got {v!r}")
+            raise err(f"set.{k}", f"expected a number or a string with a unit, got {short(v)}")
         set_or_raise(fs, k, v, f"{path}: set.{k}")
     t_end = None
     if "t_end" in doc:
         t_end = parse_time(doc["t_end"], f"{path}: t_end")
+        if not t_end > 0:
+            raise err("t_end", f"{short(doc['t_end'])}: expected an end time > 0 (e.g. 60 min)")
 
     # points
     pdoc = doc["points"]
@@ -207,7 +207,7 @@ def load_sweep(path: str | os.PathLike) -> Sweep:
     allowed = list(_POINT_LABELS) + [v.name for v in variables]
     for i, p in enumerate(pdoc):
         if not isinstance(p, dict):
-            raise err(f"points[{i}]", f"expected a mapping with keys {', '.join(allowed)}, got {p!r}")
+            raise err(f"points[{i}]", f"expected a mapping with keys {', '.join(allowed)}, got {short(p)}")
         pname = str(p.get("name", f"P{i + 1}"))
         key = f"points[{i}] ({pname})"
         if pname in seen:
@@ -239,7 +239,7 @@ def _quantity(value, where: str, expected: str) -> tuple[float, str] | None:
             return split(value, where)
         except ConfigError:
             pass
-    raise ConfigError(f"{where} = {value!r}: expected {expected}")
+    raise ConfigError(f"{where} = {short(value)}: expected {expected}")
 
 
 def _edge_value(fs: Flowsheet, v: Variable, value, where: str) -> float:
@@ -251,7 +251,7 @@ def _edge_value(fs: Flowsheet, v: Variable, value, where: str) -> float:
     try:
         si = to_si(q[0], si_unit, v.param, q[1])
     except ConfigError as e:
-        raise ConfigError(f"{where} = {value!r}: {' '.join(str(e).split())}") from None
+        raise ConfigError(f"{where} = {short(value)}: {' '.join(str(e).split())}") from None
     a, b = affine(v.unit, si_unit, v.param)
     return (si - a) / b
 

@@ -35,6 +35,26 @@ def check_outputs(flowsheet: Flowsheet, outputs: Sequence[str], where: str = "ou
     return out
 
 
+def final_errors(res, outputs: Sequence[str]) -> dict[str, float]:
+    """The estimated numerical error (total, signed; NaN where none) of ``outputs`` at the final time, as
+    ``{"<output>_err": value}``, from a result simulated with ``error_estimate=True``."""
+    ee = res.error_estimate
+    out = {}
+    for o in outputs:
+        if o in ee.outputs:
+            v = ee.outputs[o].total
+        else:
+            series = ee.error(o)
+            v = float(series[-1]) if series is not None else math.nan
+        out[error_column(o)] = float(v) if v is not None else math.nan
+    return out
+
+
+def error_column(output: str) -> str:
+    """The column of an output's estimated numerical error: ``d50_um`` -> ``d50_um_err``."""
+    return f"{output}_err"
+
+
 def final_values(res, outputs: Sequence[str]) -> dict[str, float]:
     """``outputs`` of a result at its final time: summary keys, else states and reported outputs; NaN where the
     summary has no value (null in summary.json)."""
@@ -73,19 +93,22 @@ def run_sweep(flowsheet: Flowsheet, points: Sequence[Mapping[str, float | str]],
               outputs: Sequence[str] = DEFAULT_OUTPUTS, *, names: Sequence[str] | None = None,
               workers: int | None = None, progress: bool | None = None, executor: str | Any = "threads",
               t_end: float | None = None, raise_errors: bool = False, simulate: Mapping[str, Any] | None = None,
-              desc: str = "sweep"):
+              desc: str = "sweep", error_estimate: bool = False):
     """Simulate ``flowsheet`` once per point and collect ``outputs``.
 
     ``points``: one mapping per run, ``{"unit.param": value}`` with SI floats or strings with a unit; parameters
     not named keep the flowsheet's value. ``outputs``: summary keys (``d50_um``, ...) or state/output names (final
     value). Returns a pandas DataFrame, one row per point in the order given: ``point`` (``names[i]`` or ``i``),
     one column per parameter (its SI value), the outputs, ``wall_time_s`` (this point, including setup),
-    ``solve_time_s`` (the integrator alone), ``status`` ("ok" or "failed") and ``message``.
+    ``solve_time_s`` (the integrator alone), ``status`` ("ok" or "failed") and ``message`` (why a point failed, or
+    what an ok point's result warns of: ``Result.warnings``).
 
     A point whose solve fails (``SolverError``) or whose values are rejected (``ConfigError``) is recorded with
     status "failed" and the message; with ``raise_errors=True`` the first failure is raised instead.
     ``progress``: tqdm bar on stderr (default: only when stderr is a terminal). ``simulate``: keyword arguments
-    of ``Flowsheet.simulate`` (``rtol``, ``atol``, ...).
+    of ``Flowsheet.simulate`` (``rtol``, ``atol``, ...). ``error_estimate``: every point re-solved as
+    ``simulate(error_estimate=True)`` (four solves instead of one), and a column ``<output>_err`` per output with its
+    estimated numerical error (signed: value minus the converged answer; granuflow.accuracy).
     """
     import numpy as np
     import pandas as pd
@@ -115,10 +138,13 @@ def run_sweep(flowsheet: Flowsheet, points: Sequence[Mapping[str, float | str]],
             fs.update(point)
             for k in params:
                 row[k] = fs.get(k)
-            res = fs.simulate(**sim_kwargs)
+            res = fs.simulate(**sim_kwargs, warn=False, error_estimate=bool(error_estimate))
             row.update(final_values(res, outputs))
+            if error_estimate:
+                row.update(final_errors(res, outputs))
             row["solve_time_s"] = res.wall_time_s
-            row["status"], row["message"] = STATUS_OK, ""
+            # an ok point's message holds what its result warns of (a size grid that clips the distribution)
+            row["status"], row["message"] = STATUS_OK, "; ".join(f"warning: {w}" for w in res.warnings)
         except (SolverError, ConfigError) as e:
             if raise_errors:
                 raise
@@ -127,7 +153,8 @@ def run_sweep(flowsheet: Flowsheet, points: Sequence[Mapping[str, float | str]],
         return row
 
     rows = collect(make_executor(executor, workers), evaluate, flowsheet, list(enumerate(points)), progress, desc)
-    cols = ["point"] + params + outputs + ["wall_time_s", "solve_time_s", "status", "message"]
+    errs = [error_column(o) for o in outputs] if error_estimate else []
+    cols = ["point"] + params + outputs + errs + ["wall_time_s", "solve_time_s", "status", "message"]
     data = []
     for r in rows:
         d = {c: r.get(c, np.nan) for c in cols}
@@ -139,5 +166,7 @@ def run_sweep(flowsheet: Flowsheet, points: Sequence[Mapping[str, float | str]],
         data.append(d)
     df = pd.DataFrame(data, columns=cols)
     df.attrs["units"] = {**{k: flowsheet.spec(k)["unit"] for k in params},
-                         **{o: flowsheet.value_unit(o) for o in outputs}, "wall_time_s": "s", "solve_time_s": "s"}
+                         **{o: flowsheet.value_unit(o) for o in outputs},
+                         **{error_column(o): flowsheet.value_unit(o) for o in outputs if error_estimate},
+                         "wall_time_s": "s", "solve_time_s": "s"}
     return df

@@ -28,6 +28,7 @@
 // (bad configuration: ConfigError), never an abort; a simulation failing at a trial point makes Ceres shrink
 // its step.
 #pragma once
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
@@ -119,6 +120,20 @@ struct CalibrationOptions {
   double profile_max_offset = 2.3;      // farthest profile point from the optimum in θ, in units of
                                         // max(SE_θ, 1) for kLog/logarithmic (2.3 = a factor of 10), else of SE
   int profile_max_points = 4;           // per side, >= 1
+  // Flat regions of the loss (a start where no observable responds to a parameter, e.g. a penetration depth below
+  // ~130 um where d50 does not move, stays there with a small gradient and reports success). At the end of every
+  // stage a free parameter is flat when its curvature (JᵀJ)_kk, times the square of its span in θ, is below
+  // flat_delta_chi2: moving it anywhere within its bounds would change χ² by less than that to second order.
+  // The loss is then scanned over its bounds (flat_scan_points values evenly spaced in θ, the other parameters at
+  // their estimates; 0: no scan), and a scan point, or a point of a profile, whose χ² lies more than
+  // restart_delta_chi2 below the estimate's restarts the stage from it (at most max_restarts times per stage).
+  double flat_delta_chi2 = 0.01;    // > 0
+  int flat_scan_points = 16;        // >= 0 (0: off; otherwise >= 3)
+  double restart_delta_chi2 = 1.0;  // > 0
+  int max_restarts = 2;             // >= 0
+  // A sensitivity solve that fails is retried once with a tenth of the tolerance and at most 1/200 of the run per
+  // step, then replaced by central differences of plain simulations; only when those fail too does the evaluation
+  // fail (Ceres then shortens its step). The report counts the retries.
   // Throws ConfigError naming the field, the value and the rule.
   void validate() const;
 };
@@ -168,6 +183,14 @@ struct StageResult {
   std::string message;
   bool usable = false;
   std::vector<Profile> profiles;
+  // At the estimate, in θ: the gradient of the cost ½χ², Jᵀr, and the curvature (JᵀJ)_kk of every free parameter
+  // (χ² changes by about curvature Δθ² when θ_k alone moves by Δθ).
+  std::vector<double> gradient, curvature;
+  std::vector<std::string> flat;   // free parameters the loss does not respond to at the estimate (flat_delta_chi2)
+  bool moved = true;               // some free parameter left its start
+  int restarts = 0;                // restarts from a lower point of a scan or profile
+  long sensitivity_retries = 0;    // failed sensitivity solves retried (smaller step, or central differences)
+  std::vector<std::string> notes;  // what happened beyond the plain solve (restarts, flat parameters, retries)
 };
 
 struct CalibrationResult {
@@ -177,6 +200,9 @@ struct CalibrationResult {
   double wall_time_s = 0.0;
   std::string status = "ok";  // "ok" | "no_convergence" (a stage stopped without converging)
   std::string message;
+  // What a user must know before trusting the estimates: a stage left in a flat region of the loss, restarts
+  // from lower points, retried sensitivity solves, data that no stage uses.
+  std::vector<std::string> warnings;
   std::string brief() const;        // one line
   std::string full_report() const;  // tables: stages, estimates, correlation, flags, profiles
 };
@@ -213,6 +239,16 @@ struct FitStatistics {
   double r2 = 0.0, rmse = 0.0, mean_abs_rel = 0.0;
 };
 std::vector<FitStatistics> fit_statistics(const std::vector<Prediction>& predictions);
+
+// Observations that no stage uses (a stage without observables uses all): "name (experiments ...; n samples)".
+std::vector<std::string> unused_observations(const std::vector<Experiment>& experiments,
+                                             const std::vector<Stage>& stages);
+
+namespace calibration_testing {
+// A test seam: when set, called before every sensitivity solve with the experiment's name; returning true makes
+// that solve fail as an integrator failure would (SolverError). Only tests set it.
+extern std::function<bool(const std::string&)> fail_sensitivity_solve;
+}  // namespace calibration_testing
 
 // The residuals of one stage as a function of θ, for tests, Jacobian checks and custom solvers.
 class StageProblem {
