@@ -264,6 +264,9 @@ class Result:
         s["solver"] = {"states": st["states"], "steps": st["steps"], "residuals": st["residuals"],
                        "jacobians": st["jacobians"], "linear_solver": st["linear_solver"],
                        "reinits": st["reinits"], "rtol": self.rtol}
+        for k in ("method", "method_reason"):  # which integrator ran, and why (solver.method: auto)
+            if st.get(k):
+                s["solver"][k] = st[k]
         s["units"] = {"t_end_s": "s", **outputs.STANDARD_SUMMARY_UNITS, **units,
                       "balance": "-", "regularizations": "classes or instances",
                       "grid_end": "mass fraction (d_um: um)", "wall_time_s": "s"}

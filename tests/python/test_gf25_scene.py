@@ -399,3 +399,13 @@ def test_plots_say_when_the_size_grid_clips_a_curve(headline):
     assert clipped_top_um(headline, "bed.d10", "m") is None
     assert clipped_top_um(headline, "gas.T", "K") is None
     assert headline.psd(3600)["mass_fraction"].iloc[-1] > CLIP_FRACTION
+
+
+def test_summary_names_the_integrator_that_ran(headline):
+    """summary.json says which integrator ran and why: the headline scene has algebraic equations (IDAS); the
+    constant-kernel verification scene is a non-stiff ODE (explicit Runge-Kutta under auto, BDF when asked)."""
+    assert headline.summary["solver"]["method"].startswith("bdf (IDAS)")
+    assert "DAE" in headline.summary["solver"]["method_reason"]
+    ode = gf.load(os.path.join(ROOT, "flowsheets", "pbm_constant_kernel.yaml"))
+    assert ode.simulate(warn=False).summary["solver"]["method"].startswith("erk")
+    assert "CVODES" in ode.simulate(method="bdf", warn=False).summary["solver"]["method"]
