@@ -8,7 +8,9 @@ std::vector<ParamSpec> GlassTransitionKernel::params() const {
   namespace d = paper001::defaults;
   const std::string t9 = "paper 001, Table 9";
   std::vector<ParamSpec> v = {
-      {"ln_beta0", "-", d::kLnBeta0, -60.0, 10.0, "ln of the agglomeration rate constant (beta0 in 1/s with d in m)",
+      // Upper bound -5: at -10 the headline bed already agglomerates everything into the top class within the hour,
+      // and from about 0 no run can start (consistent initialization fails on the birth rates).
+      {"ln_beta0", "-", d::kLnBeta0, -60.0, -5.0, "ln of the agglomeration rate constant (beta0 in 1/s with d in m)",
        t9},
       {"tau_spray", "-", d::kTauSpray, 0.0, 1.0, "fraction of particles in the spray zone, Eq. (37)", t9},
       {"gt_k", "-", d::kGordonTaylorK, 0.01, 100.0, "Gordon-Taylor constant, Eq. (54)", t9},
