@@ -235,8 +235,8 @@ def bench_pbm(*, quick: bool = False, repeats: int = 5, scipy: bool = True, case
     framework) and, with ``scipy``, the NumPy/SciPy fixed-pivot baseline tests/bench/scipy_fixed_pivot.py on the
     same cases, grids and tolerances. One dict per run with the keys PBM_KEYS plus ``code`` ("granuflow" or
     "scipy"), solver counters and machine metadata. granuflow runs each scheme with the integrators ``auto``, ``ida``,
-    ``bdf``, ``adams`` and ``erk`` (quick: auto, ida, adams, erk). ``quick``: q in {1, 2, 4}, rtol in {1e-2, 1e-4,
-    1e-6}. Times are medians of ``repeats`` solves; nothing here asserts on time."""
+    ``bdf``, ``adams`` and ``erk`` (quick: auto, ida, adams, erk); q in {1, 2, 3, 4, 6, 8, 12}. ``quick``: q in
+    {1, 2, 4}, rtol in {1e-2, 1e-4, 1e-6}. Times are medians of ``repeats`` solves; nothing here asserts on time."""
     flags = (["--quick"] if quick else []) + ["--repeats", str(int(repeats))] + (["--case", case] if case else [])
     exe = pbm_executable()
     if progress:

@@ -253,7 +253,7 @@ int main(int argc, char** argv) {
                                 {"product", 0.4, 27, agg},
                                 {"growth", 1.0, 19, {"fv_koren", "fv_upwind"}},
                                 {"breakage", 10.0, 27, agg}};
-  const std::vector<int> qs = quick ? std::vector<int>{1, 2, 4} : std::vector<int>{1, 2, 3, 4, 6, 8};
+  const std::vector<int> qs = quick ? std::vector<int>{1, 2, 4} : std::vector<int>{1, 2, 3, 4, 6, 8, 12};
   const std::vector<double> rtols =
       quick ? std::vector<double>{1e-2, 1e-4, 1e-6} : std::vector<double>{1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8};
   if (integrators.empty())

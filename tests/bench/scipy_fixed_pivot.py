@@ -240,7 +240,7 @@ def main():
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--case", choices=sorted(CASES))
     args = ap.parse_args()
-    qs = [1, 2, 4] if args.quick else [1, 2, 3, 4, 6, 8]
+    qs = [1, 2, 4] if args.quick else [1, 2, 3, 4, 6, 8, 12]
     rtols = [1e-2, 1e-4, 1e-6] if args.quick else [1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8]
     m = meta()
     for case in CASES:
