@@ -73,13 +73,14 @@ def plot_heatmaps(result, path: str, times_s=None, unit: str | None = None, lc_m
     ``lc_min`` the line LC = l / (s + l) = lc_min of Eq. (13) is drawn: bins above it are wet."""
     from matplotlib.colors import LogNorm
     from matplotlib.figure import Figure
+    from matplotlib.ticker import NullFormatter, ScalarFormatter
 
     unit = _unit(result, unit)
     if times_s is None:
         times_s = [result.t[0], result.t[len(result.t) // 2], result.t[-1]]
     scale, label = (liquid_unit_m3, "liquid volume / droplet volumes") if liquid_unit_m3 else (1e-9, "liquid / mm3")
-    fig = Figure(figsize=(4.0 * len(times_s), 3.6))
-    axes = fig.subplots(1, len(times_s), squeeze=False)[0]
+    fig = Figure(figsize=(3.3 * len(times_s) + 1.0, 3.4))
+    axes = fig.subplots(1, len(times_s), squeeze=False, sharey=True)[0]
     data = [distribution(result, t, unit) for t in times_s]
     vmax = max(float(N.max()) for *_, N in data)
     vmin = max(vmax * 1e-8, 1e-3)
@@ -88,21 +89,26 @@ def plot_heatmaps(result, path: str, times_s=None, unit: str | None = None, lc_m
         mesh = ax.pcolormesh(_edges(d, True), _edges(ll / scale, False), np.where(N.T > vmin, N.T, np.nan),
                              norm=LogNorm(vmin=vmin, vmax=vmax), shading="flat", cmap="viridis")
         if lc_min is not None:
-            ax.plot(d, s * lc_min / (1 - lc_min) / scale, "w--", lw=1, label=f"LC = {lc_min:g}")
+            ax.plot(d, s * lc_min / (1 - lc_min) / scale, "r--", lw=1, label=f"LC = {lc_min:g}")
             ax.legend(fontsize=7, loc="upper left")
         ax.set_xscale("log")
+        ax.xaxis.set_major_formatter(ScalarFormatter())
+        ax.xaxis.set_minor_formatter(NullFormatter())
+        ax.set_xticks([x for x in (1, 2, 3, 4, 5, 6, 8, 10, 20) if d[0] / 1.2 <= x <= d[-1] * 1.2] or [d[0]])
         ax.set_ylim(0, (ll[-1] + 0.5 * (ll[1] - ll[0])) / scale)
         ax.set_title(f"t = {t:g} s", fontsize=10)
         ax.set_xlabel("solid diameter / mm")
     axes[0].set_ylabel(label)
-    fig.colorbar(mesh, ax=list(axes), label="particles per bin")
+    fig.subplots_adjust(left=0.06, right=0.9, bottom=0.15, top=0.9, wspace=0.08)
+    fig.colorbar(mesh, cax=fig.add_axes([0.915, 0.15, 0.012, 0.75]), label="particles per bin")
     fig.savefig(path, dpi=110)
     return path
 
 
 def marginals(result, t: float, unit: str | None = None, lc_bins: int = 20):
     """At the output time nearest ``t``: (time, solid diameter d_i in m, particles per solid class, liquid-content
-    bin edges, particles per liquid-content bin). The liquid-content distribution bins each bin's LC = l / (s + l)."""
+    bin edges, particles per liquid-content bin). The liquid-content distribution bins each bin's LC = l / (s + l).
+    Both are numbers of particles (multiply the first by s_i for the solid volume per class)."""
     t, s, ll, N = distribution(result, t, unit)
     solid = N.sum(axis=1)
     lc = ll[None, :] / (s[:, None] + ll[None, :])
@@ -112,9 +118,10 @@ def marginals(result, t: float, unit: str | None = None, lc_bins: int = 20):
 
 
 def plot_marginals(result, path: str, times_s=None, unit: str | None = None) -> str:
-    """Two panels: number fraction per solid class over the solid-volume diameter, and the number fraction over
-    the liquid content l / (s + l), at several times."""
+    """Two panels at several times: the solid marginal as the fraction of the solid volume per solid class over the
+    solid-volume diameter (where the aggregates are), and the number fraction over the liquid content l / (s + l)."""
     from matplotlib.figure import Figure
+    from matplotlib.ticker import NullFormatter, ScalarFormatter
 
     unit = _unit(result, unit)
     if times_s is None:
@@ -123,11 +130,13 @@ def plot_marginals(result, path: str, times_s=None, unit: str | None = None) -> 
     a1, a2 = fig.subplots(1, 2)
     for t in times_s:
         tt, d, solid, edges, counts = marginals(result, t, unit)
-        total = solid.sum()
-        a1.semilogx(d * 1e3, solid / total, marker="o", ms=3, label=f"t = {tt:g} s")
+        vol = solid * d ** 3
+        a1.semilogx(d * 1e3, vol / vol.sum(), marker="o", ms=3, label=f"t = {tt:g} s")
         a2.step(edges[:-1], counts / counts.sum(), where="post", label=f"t = {tt:g} s")
+    a1.xaxis.set_major_formatter(ScalarFormatter())
+    a1.xaxis.set_minor_formatter(NullFormatter())
     a1.set_xlabel("solid diameter / mm")
-    a1.set_ylabel("number fraction per solid class")
+    a1.set_ylabel("solid volume fraction per class")
     a1.set_title("solid marginal", fontsize=10)
     a2.set_xlabel("liquid content l / (s + l)")
     a2.set_ylabel("number fraction per 0.05")
