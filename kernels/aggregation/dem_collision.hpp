@@ -61,10 +61,14 @@ class DemCollisionKernel : public PairKernel<DemCollisionKernel> {
   }
   // either: 1 - (1 - w_i)(1 - w_j); both: w_i w_j.
   int efficiency_terms(const double* phi, int n, const double* p, double* h, double* sign) const override;
-  // The wet weight of one partner: 1 or 0 (step), or the logistic (smooth).
+  // The wet weight of one partner: 1 or 0 (step), or the logistic (smooth). The step takes contents within
+  // kContentRoundOff below LC_min as reaching it: grid pivots can sit exactly on the threshold (a 2-D bin of four
+  // primaries and one droplet of their size has LC = 0.2), and the last bit of the pivots' arithmetic must not
+  // decide whether they stick.
+  static constexpr double kContentRoundOff = 1e-9;
   template <class T>
   T wet(const T& lc, const T* p) const {
-    if (shape_ == EfficiencyShape::kStep) return lc < p[1] ? T(0.0) : T(1.0);
+    if (shape_ == EfficiencyShape::kStep) return lc < p[1] - kContentRoundOff ? T(0.0) : T(1.0);
     using std::tanh;
     return T(0.5) * (T(1.0) + tanh((lc - p[1]) / p[2]));
   }
