@@ -257,9 +257,13 @@ class Pbm2D : public UnitBase<Pbm2D> {
     return Status::kOk;
   }
 
+  // The liquid the particles absorb: all that is sprayed while there are particles to meet (deposition sums to Q
+  // whenever the weights' total W > 0), none once the population has left the grid.
   template <class T>
   void quad(const Ctx<T>& c) const {
-    if (q_sprayed_) c.r[q_sprayed_.i] = spraying(c) ? T(c.par(p_rho_l_) * c.par(p_q_)) : T(0.0);
+    if (!q_sprayed_) return;
+    c.r[q_sprayed_.i] = T(0.0);
+    if (spraying(c) && value_of(deposit_terms(c, &c.x(sN_)).W) > 0) c.r[q_sprayed_.i] = c.par(p_rho_l_) * c.par(p_q_);
   }
 
   template <class T>

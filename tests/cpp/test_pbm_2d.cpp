@@ -109,6 +109,8 @@ TEST(Population2D, AggregationConservesNumberSolidAndLiquidVolume) {
       ds += g2.solid_volume(a) * N[a] * d[a], dli += g2.liquid_volume(a) * N[a] * d[a];
     }
     ASSERT_GT(events, 0.0);
+    std::printf("%s: number %+.1e, solid %+.1e, liquid %+.1e (relative to the events and volumes moved)\n", ev,
+                number / events + 1, solid / ds, liquid / dli);
     EXPECT_NEAR(number, -events, 1e-13 * events) << ev;
     EXPECT_NEAR(solid, 0.0, 1e-14 * ds) << ev;
     EXPECT_NEAR(liquid, 0.0, 1e-14 * dli) << ev;
