@@ -85,6 +85,8 @@ def test_bench_pbm2d_measures_what_the_issue_asks():
     ver = [r for r in recs if r["section"] == "verification"]
     red = next(r for r in ver if "reduction" in r["check"])
     assert abs(red["err_M0"]) < 1e-8 and abs(red["marginal_vs_1d_engine"]) < 1e-8 and abs(red["err_M2"]) < 0.05
+    m2 = [r["err_M2"] for r in ver if "reduction" in r["check"]]  # q = 2, 4, 8: the fixed pivot's 1/q^2
+    assert len(m2) == 3 and m2[0] > 3 * m2[1] > 9 * m2[2] > 0
     dense = next(r for r in ver if "dense" in r["check"])
     assert abs(dense["solid_balance"]) < 1e-13 and abs(dense["liquid_balance"]) < 1e-13
     eff = [r for r in recs if r["section"] == "efficiency"]
