@@ -1,7 +1,14 @@
 #include "data_tables.hpp"
 
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstdlib>
+#include <fstream>
 #include <map>
+#include <sstream>
 
 #include "granuflow/errors.hpp"
 
@@ -11,6 +18,24 @@ std::map<std::string, Table>& store() {
   static std::map<std::string, Table> tables;
   return tables;
 }
+
+std::string trim(const std::string& s) {
+  const auto a = s.find_first_not_of(" \t\r");
+  if (a == std::string::npos) return "";
+  const auto b = s.find_last_not_of(" \t\r");
+  return s.substr(a, b - a + 1);
+}
+
+bool is_file(const std::string& path) {
+  struct stat st;
+  return ::stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode);
+}
+
+// One line of a collision file: its number in the file and its fields.
+struct Line {
+  int row = 0;
+  std::vector<std::string> fields;
+};
 }  // namespace
 
 void set_table(const std::string& name, Table t) {
@@ -34,6 +59,153 @@ std::vector<std::string> table_names() {
   std::vector<std::string> v;
   for (const auto& [k, t] : store()) v.push_back(k);
   return v;
+}
+
+int CollisionCounts::class_of(double d) const {
+  if (edges.empty() || d < edges.front() || d > edges.back()) return -1;
+  if (d == edges.back()) return classes() - 1;
+  return static_cast<int>(std::upper_bound(edges.begin(), edges.end(), d) - edges.begin()) - 1;
+}
+
+CollisionCounts parse_collision_counts(const std::string& text, const std::string& path) {
+  auto fail = [&](int row, int col, const std::string& what) -> ConfigError {
+    return ConfigError(path + ": row " + std::to_string(row) + (col > 0 ? ", column " + std::to_string(col) : "") +
+                       ": " + what);
+  };
+  static const char* kKeys = "dt_s, edges_m, particles, counts";
+  std::map<std::string, Line> single;  // dt_s, edges_m, particles
+  std::vector<Line> count_rows;
+  std::istringstream in(text);
+  std::string raw;
+  int row = 0;
+  while (std::getline(in, raw)) {
+    ++row;
+    const std::string s = trim(raw.substr(0, raw.find('#')));
+    if (s.empty()) continue;
+    Line line{row, {}};
+    std::string field;
+    std::istringstream fs(s);
+    while (std::getline(fs, field, ',')) line.fields.push_back(trim(field));
+    if (s.back() == ',') line.fields.emplace_back();
+    const std::string key = line.fields.front();
+    if (key == "counts") {
+      count_rows.push_back(std::move(line));
+    } else if (key == "dt_s" || key == "edges_m" || key == "particles") {
+      if (single.count(key))
+        throw fail(row, 1, "'" + key + "' given twice (first on row " + std::to_string(single[key].row) + ")");
+      single[key] = std::move(line);
+    } else {
+      throw fail(row, 1, "unknown key '" + key + "' (expected one of " + kKeys + ")");
+    }
+  }
+  for (const char* key : {"dt_s", "edges_m", "particles"})
+    if (!single.count(key))
+      throw ConfigError(path + ": no '" + key + "' row (a collision file has the rows " + kKeys +
+                        "; docs/dem_collisions.md)");
+  if (count_rows.empty()) throw ConfigError(path + ": no 'counts' rows (one per class; docs/dem_collisions.md)");
+
+  auto number = [&](const Line& l, size_t k) {
+    const std::string& f = l.fields[k];
+    char* end = nullptr;
+    errno = 0;
+    const double v = f.empty() ? NAN : std::strtod(f.c_str(), &end);
+    if (f.empty() || *end != '\0' || errno == ERANGE || !std::isfinite(v))
+      throw fail(l.row, static_cast<int>(k) + 1, "'" + f + "' is not a finite number");
+    return v;
+  };
+  CollisionCounts c;
+  c.path = path;
+  const Line& dt = single["dt_s"];
+  if (dt.fields.size() != 2)
+    throw fail(dt.row, 0,
+               "dt_s takes one value (the counting window in s), got " + std::to_string(dt.fields.size() - 1));
+  c.dt = number(dt, 1);
+  if (!(c.dt > 0)) throw fail(dt.row, 2, "dt_s = " + fmt_num(c.dt) + " s: the counting window must be > 0");
+
+  const Line& ed = single["edges_m"];
+  if (ed.fields.size() < 3)
+    throw fail(ed.row, 0,
+               "edges_m needs at least two class edges (diameters in m), got " + std::to_string(ed.fields.size() - 1));
+  for (size_t k = 1; k < ed.fields.size(); ++k) {
+    const double e = number(ed, k);
+    if (!(e > 0)) throw fail(ed.row, static_cast<int>(k) + 1, "edge " + fmt_num(e) + " m: diameters must be > 0");
+    if (!c.edges.empty() && !(e > c.edges.back()))
+      throw fail(ed.row, static_cast<int>(k) + 1,
+                 "edge " + fmt_num(e) + " m after " + fmt_num(c.edges.back()) + " m: edges must increase");
+    c.edges.push_back(e);
+  }
+  const size_t n = c.edges.size() - 1;
+
+  const Line& pa = single["particles"];
+  if (pa.fields.size() != n + 1)
+    throw fail(pa.row, 0,
+               std::to_string(pa.fields.size() - 1) + " particle numbers for " + std::to_string(n) +
+                   " classes (edges_m on row " + std::to_string(ed.row) + " gives " + std::to_string(n + 1) +
+                   " edges)");
+  for (size_t k = 1; k <= n; ++k) {
+    const double f = number(pa, k);
+    if (!(f >= 0))
+      throw fail(pa.row, static_cast<int>(k) + 1, "particles " + fmt_num(f) + ": a particle number must be >= 0");
+    c.particles.push_back(f);
+  }
+
+  if (count_rows.size() != n)
+    throw fail(count_rows.back().row, 0,
+               std::to_string(count_rows.size()) + " 'counts' rows for " + std::to_string(n) +
+                   " classes (one row per class, edges_m on row " + std::to_string(ed.row) + ")");
+  c.counts.assign(n * n, 0.0);
+  for (size_t i = 0; i < n; ++i) {
+    const Line& l = count_rows[i];
+    if (l.fields.size() != n + 1)
+      throw fail(l.row, 0,
+                 std::to_string(l.fields.size() - 1) + " counts for " + std::to_string(n) + " classes (class " +
+                     std::to_string(i + 1) + "'s row of the n x n matrix)");
+    for (size_t j = 0; j < n; ++j) {
+      const double v = number(l, j + 1);
+      if (!(v >= 0))
+        throw fail(l.row, static_cast<int>(j) + 2, "count " + fmt_num(v) + ": collision counts must be >= 0");
+      c.counts[i * n + j] = v;
+    }
+  }
+  for (size_t i = 0; i < n; ++i)
+    for (size_t j = 0; j < n; ++j) {
+      const double a = c.counts[i * n + j], b = c.counts[j * n + i];
+      if (j > i && std::abs(a - b) > 1e-9 * std::max(std::abs(a), std::abs(b)))
+        throw fail(count_rows[i].row, static_cast<int>(j) + 2,
+                   "count " + fmt_num(a) + " for classes " + std::to_string(i + 1) + " x " + std::to_string(j + 1) +
+                       " differs from " + fmt_num(b) + " on row " + std::to_string(count_rows[j].row) + ", column " +
+                       std::to_string(i + 2) + ": the matrix must be symmetric");
+      if (a > 0 && (c.particles[i] == 0 || c.particles[j] == 0)) {
+        const size_t e = c.particles[i] == 0 ? i : j;
+        throw fail(count_rows[i].row, static_cast<int>(j) + 2,
+                   "count " + fmt_num(a) + " for classes " + std::to_string(i + 1) + " x " + std::to_string(j + 1) +
+                       ", but class " + std::to_string(e + 1) + " has no particles (row " + std::to_string(pa.row) +
+                       ", column " + std::to_string(e + 2) + ")");
+      }
+    }
+  return c;
+}
+
+CollisionCounts read_collision_counts(const std::string& path) {
+  if (!is_file(path)) throw ConfigError(path + ": cannot open the collision file (no such file)");
+  std::ifstream f(path);
+  if (!f) throw ConfigError(path + ": cannot open the collision file");
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return parse_collision_counts(ss.str(), path);
+}
+
+std::string resolve_data_path(const std::string& where, const std::string& file) {
+  if (file.empty() || file.front() == '/') return file;
+  const auto colon = where.find(": ");
+  if (colon != std::string::npos) {
+    const std::string label = where.substr(0, colon);
+    if (is_file(label)) {
+      const auto slash = label.find_last_of('/');
+      return (slash == std::string::npos ? std::string(".") : label.substr(0, slash)) + "/" + file;
+    }
+  }
+  return file;
 }
 
 }  // namespace granuflow::kernels

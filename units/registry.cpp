@@ -10,6 +10,7 @@
 #include "liquid_product.hpp"
 #include "liquid_splitter.hpp"
 #include "particles.hpp"
+#include "pbm_2d.hpp"
 #include "pbm_batch.hpp"
 #include "solids_feed.hpp"
 #include "solids_product.hpp"
@@ -28,6 +29,7 @@ void register_all(Registry<Unit>& r) {
   register_liquid_product(r);
   register_stirred_tank(r);
   register_pbm_batch(r);
+  register_pbm_2d(r);
   register_chamber_gas(r);
   register_droplet_evaporation(r);
   register_fluid_bed(r);

@@ -3,6 +3,7 @@
 #include <arkode/arkode_erkstep.h>
 #include <cvodes/cvodes.h>
 #include <cvodes/cvodes_ls.h>
+#include <sunlinsol/sunlinsol_spgmr.h>
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
 #include <algorithm>
@@ -30,6 +31,7 @@ namespace {
 struct OdeUser {
   DaeSystem* sys = nullptr;
   bool dense = true;
+  bool gmres = false;  // BDF's Newton systems by GMRES with the units' preconditioners (solver_setup.hpp)
   int n = 0, nq = 0;
   std::vector<int> params;
   std::vector<double> zeros, f, r;
@@ -89,6 +91,27 @@ int cv_jac(realtype t, N_Vector y, N_Vector fy, SUNMatrix J, void* ud, N_Vector,
       u->sys->jacobian(t, yy, yp, 0.0, nullptr, v);
       for (int k = 0; k < pat.nnz(); ++k) v[k] = -v[k];
     }
+    return Status::kOk;
+  });
+}
+
+// CVODE's Newton matrix is I - gamma df/dy = gamma (cj I + dF/dy) with cj = 1 / gamma, F = y' - f: the DAE
+// preconditioner of DaeSystem at cj, its solution scaled by 1 / gamma.
+int cv_psetup(realtype t, N_Vector y, N_Vector, booleantype, booleantype* jcur, realtype gamma, void* ud) {
+  auto* u = static_cast<OdeUser*>(ud);
+  return guarded(u, [&] {
+    u->sys->precondition_setup(t, N_VGetArrayPointer(y), u->zeros.data(), 1.0 / gamma);
+    *jcur = SUNTRUE;
+    return Status::kOk;
+  });
+}
+
+int cv_psolve(realtype t, N_Vector y, N_Vector, N_Vector r, N_Vector z, realtype gamma, realtype, int, void* ud) {
+  auto* u = static_cast<OdeUser*>(ud);
+  return guarded(u, [&] {
+    double* zz = N_VGetArrayPointer(z);
+    u->sys->precondition_solve(t, N_VGetArrayPointer(y), u->zeros.data(), 1.0 / gamma, N_VGetArrayPointer(r), zz);
+    for (int i = 0; i < u->n; ++i) zz[i] /= gamma;
     return Status::kOk;
   });
 }
@@ -170,7 +193,11 @@ class Cvode : public Stepper {
     check(CVodeSetErrHandlerFn(mem_, ode_err, &u), "CVodeSetErrHandlerFn");
     check(CVodeSetMaxNumSteps(mem_, max_steps), "CVodeSetMaxNumSteps");
     if (opt.max_step > 0) check(CVodeSetMaxStep(mem_, opt.max_step), "CVodeSetMaxStep");
-    if (bdf) {
+    if (bdf && u.gmres) {
+      LS_.s = SUNLinSol_SPGMR(y_.v, SUN_PREC_LEFT, kGmresMaxKrylov, ctx);
+      check(CVodeSetLinearSolver(mem_, LS_.s, nullptr), "CVodeSetLinearSolver");
+      check(CVodeSetPreconditioner(mem_, cv_psetup, cv_psolve), "CVodeSetPreconditioner");
+    } else if (bdf) {
       make_linear_solver(u.dense, *u.sys, y_.v, ctx, A_, LS_);
       check(CVodeSetLinearSolver(mem_, LS_.s, A_.m), "CVodeSetLinearSolver");
       check(CVodeSetJacFn(mem_, cv_jac), "CVodeSetJacFn");
@@ -262,6 +289,8 @@ class Cvode : public Stepper {
     add_current(c);
     s.steps += c.steps, s.linear_setups += c.linear_setups, s.nonlinear_iterations += c.nonlinear_iterations;
     s.error_test_failures += c.error_test_failures, s.nonlinear_failures += c.nonlinear_failures;
+    s.linear_iterations += c.linear_iterations, s.preconditioner_setups += c.preconditioner_setups;
+    s.linear_failures += c.linear_failures;
   }
   std::string flag_text(int flag) const override {
     char* name = CVodeGetReturnFlagName(flag);
@@ -280,6 +309,11 @@ class Cvode : public Stepper {
     CVodeGetNumNonlinSolvIters(mem_, &v), s.nonlinear_iterations += v;
     CVodeGetNumErrTestFails(mem_, &v), s.error_test_failures += v;
     CVodeGetNumNonlinSolvConvFails(mem_, &v), s.nonlinear_failures += v;
+    if (bdf_ && u_.gmres) {
+      CVodeGetNumLinIters(mem_, &v), s.linear_iterations += v;
+      CVodeGetNumPrecEvals(mem_, &v), s.preconditioner_setups += v;
+      CVodeGetNumLinConvFails(mem_, &v), s.linear_failures += v;
+    }
   }
   void add_counts() { add_current(done_); }
 
@@ -407,8 +441,9 @@ double spectral_radius(OdeUser& u, double t, const std::vector<double>& y, const
 constexpr double kErkStability = 3.3;
 constexpr double kErkStepBudget = 2000.0;
 
-std::string describe(const std::string& method) {
-  if (method == "bdf") return "bdf (CVODES, Newton with the exact Jacobian)";
+std::string describe(const std::string& method, bool gmres = false) {
+  if (method == "bdf")
+    return gmres ? "bdf (CVODES, Newton with GMRES)" : "bdf (CVODES, Newton with the exact Jacobian)";
   if (method == "adams") return "adams (CVODES, fixed-point iteration)";
   return "erk (ARKODE, Dormand-Prince 5(4))";
 }
@@ -419,9 +454,12 @@ SimResult simulate_ode(Flowsheet& fs, const SimOptions& opt, const std::string& 
   const auto wall0 = std::chrono::steady_clock::now();
   // Explicit units are inlined (their states are no unknowns of an ODE); a Newton matrix over inlined units is the
   // dense Schur complement, so BDF on a system too large for dense algebra goes to IDAS instead.
-  const bool dense = use_dense(fs, opt.linear_solver, opt.dense_limit);
-  if (requested == "bdf" && !dense && fs.n_explicit_states() > 0)
+  const LinearSolverKind kind = choose_linear_solver(fs, opt.linear_solver, opt.dense_limit);
+  const bool dense = kind == LinearSolverKind::kDense, gmres = kind == LinearSolverKind::kGmres;
+  if (requested == "bdf" && kind == LinearSolverKind::kSparse && fs.n_explicit_states() > 0)
     throw NotAnOde("BDF with sparse linear algebra needs the explicit units as unknowns");
+  if (gmres && !opt.sensitivities.empty())
+    throw ConfigError("sensitivities need a direct linear solver (solver.linear_solver: dense or sparse), not gmres");
   DaeSystem sys(fs, true);
   const int n = sys.size(), nq = sys.n_quadratures();
   const std::vector<int> sens_ids = sensitivity_ids(fs, opt);
@@ -441,7 +479,7 @@ SimResult simulate_ode(Flowsheet& fs, const SimOptions& opt, const std::string& 
   check_ode_form(sys, 0.0, y);
 
   OdeUser user;
-  user.sys = &sys, user.dense = dense, user.n = n, user.nq = nq, user.params = sens_ids;
+  user.sys = &sys, user.dense = dense, user.gmres = gmres, user.n = n, user.nq = nq, user.params = sens_ids;
   user.zeros.assign(n, 0.0);
   const auto sc = sys.scales();
 
@@ -459,7 +497,8 @@ SimResult simulate_ode(Flowsheet& fs, const SimOptions& opt, const std::string& 
     } else {
       method = "bdf";
       os << " (stiff)";
-      if (!dense && fs.n_explicit_states() > 0) throw NotAnOde(os.str() + ", too large for a dense Newton matrix");
+      if (kind == LinearSolverKind::kSparse && fs.n_explicit_states() > 0)
+        throw NotAnOde(os.str() + ", too large for a dense Newton matrix");
     }
     reason = os.str();
   } else {
@@ -564,9 +603,10 @@ SimResult simulate_ode(Flowsheet& fs, const SimOptions& opt, const std::string& 
     t0 = t1;
   }
   stepper->add_stats(res.stats);
-  res.stats.method = retired.empty() ? describe(method) : describe(first) + ", then " + describe(method);
+  res.stats.method =
+      retired.empty() ? describe(method, gmres) : describe(first, gmres) + ", then " + describe(method, gmres);
   res.stats.method_reason = reason;
-  res.stats.linear_solver = method == "bdf" ? (dense ? "dense (Eigen LU)" : "sparse (KLU)") : "none";
+  res.stats.linear_solver = method == "bdf" ? linear_solver_name(kind) : "none";
   res.stats.residuals = sys.residual_count();
   res.stats.jacobians = sys.jacobian_count();
   res.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();

@@ -1,5 +1,7 @@
 #include "solver_setup.hpp"
 
+#include <sunlinsol/sunlinsol_spgmr.h>
+
 #include <cstdlib>
 #include <stdexcept>
 
@@ -105,6 +107,30 @@ int ida_jac(realtype t, realtype cj, N_Vector y, N_Vector yp, N_Vector, SUNMatri
   }
 }
 
+int ida_psetup(realtype t, N_Vector y, N_Vector yp, N_Vector, realtype cj, void* ud) {
+  auto* u = static_cast<IdaUser*>(ud);
+  try {
+    u->sys->precondition_setup(t, N_VGetArrayPointer(y), N_VGetArrayPointer(yp), cj);
+    return 0;
+  } catch (const std::exception& e) {
+    u->last_error = e.what();
+    return -1;
+  }
+}
+
+int ida_psolve(realtype t, N_Vector y, N_Vector yp, N_Vector, N_Vector rvec, N_Vector zvec, realtype cj, realtype,
+               void* ud) {
+  auto* u = static_cast<IdaUser*>(ud);
+  try {
+    u->sys->precondition_solve(t, N_VGetArrayPointer(y), N_VGetArrayPointer(yp), cj, N_VGetArrayPointer(rvec),
+                               N_VGetArrayPointer(zvec));
+    return 0;
+  } catch (const std::exception& e) {
+    u->last_error = e.what();
+    return -1;
+  }
+}
+
 void ida_err(int code, const char* module, const char* function, char* msg, void* ud) {
   if (code >= 0) return;  // warnings are not errors
   auto* u = static_cast<IdaUser*>(ud);
@@ -123,6 +149,12 @@ Ida::Ida(SUNContext ctx, IdaUser& user, double t0, const NVec& y, const NVec& yp
   const auto ids = sys.differential_id();
   std::copy(ids.begin(), ids.end(), id.data());
   check(IDASetId(mem, id.v), "IDASetId");
+  if (user.iterative) {
+    LS.s = SUNLinSol_SPGMR(y.v, SUN_PREC_LEFT, kGmresMaxKrylov, ctx);
+    check(IDASetLinearSolver(mem, LS.s, nullptr), "IDASetLinearSolver");
+    check(IDASetPreconditioner(mem, ida_psetup, ida_psolve), "IDASetPreconditioner");
+    return;
+  }
   make_linear_solver(user.dense, sys, y.v, ctx, A, LS);
   check(IDASetLinearSolver(mem, LS.s, A.m), "IDASetLinearSolver");
   check(IDASetJacFn(mem, ida_jac), "IDASetJacFn");
@@ -140,6 +172,30 @@ bool use_dense(const Flowsheet& fs, const std::string& choice, int dense_limit) 
   if (n <= dense_limit) return true;
   if (n > kDenseMax) return false;
   return DaeSystem(fs, false).fill() >= kDenseFill;
+}
+
+}  // namespace granuflow::detail
+
+namespace granuflow::detail {
+
+LinearSolverKind choose_linear_solver(const Flowsheet& fs, const std::string& choice, int dense_limit) {
+  if (choice == "gmres") return LinearSolverKind::kGmres;
+  if (choice == "auto" && fs.n_states() - fs.n_explicit_states() > dense_limit)
+    for (const auto& u : fs.units())
+      if (u.spec.has_preconditioner() && static_cast<int>(u.spec.states().size()) > dense_limit)
+        return LinearSolverKind::kGmres;
+  return use_dense(fs, choice, dense_limit) ? LinearSolverKind::kDense : LinearSolverKind::kSparse;
+}
+
+const char* linear_solver_name(LinearSolverKind k) {
+  switch (k) {
+    case LinearSolverKind::kDense:
+      return "dense (Eigen LU)";
+    case LinearSolverKind::kSparse:
+      return "sparse (KLU)";
+    default:
+      return "gmres (SPGMR, unit preconditioners)";
+  }
 }
 
 }  // namespace granuflow::detail

@@ -42,6 +42,16 @@ struct LinSol {
 
 // Dense: Eigen's blocked LU behind a SUNDenseMatrix; sparse: KLU on the flowsheet's sparsity pattern.
 void make_linear_solver(bool dense, const DaeSystem& sys, N_Vector y, SUNContext ctx, Mat& a, LinSol& ls);
+
+// The linear solvers of the Newton iterations. Direct ones factor the exact Jacobian (dense or sparse); the
+// iterative one (gmres) never forms it: GMRES (SUNDIALS SPGMR) on difference-quotient Jacobian-vector products of
+// the residual, left-preconditioned by the units' blocks (DaeSystem::precondition_setup/solve). It is the only
+// choice for units whose Jacobian is both large and dense (a 2-D population: every bin pair aggregates).
+enum class LinearSolverKind { kDense, kSparse, kGmres };
+// "auto": dense up to dense_limit unknowns; beyond, gmres if a unit preconditions itself, else use_dense().
+LinearSolverKind choose_linear_solver(const Flowsheet& fs, const std::string& choice, int dense_limit);
+const char* linear_solver_name(LinearSolverKind k);
+inline constexpr int kGmresMaxKrylov = 20;  // Krylov dimension (no restarts)
 std::string ida_flag_text(int flag);
 void check(int flag, const char* call);  // throws on a negative SUNDIALS flag
 
@@ -72,11 +82,15 @@ struct IdaUser {
   void* mem = nullptr;  // the IDA integrator, when Jacobians may be reused (simulate, dense)
   JacobianCache cache;
   bool fresh_only = false;  // consistent initialization: Newton from a guess needs the Jacobian of each iterate
+  bool iterative = false;   // GMRES with the units' preconditioners instead of a factored Jacobian
 };
 int ida_res(realtype t, N_Vector y, N_Vector yp, N_Vector r, void* ud);
 int ida_jac(realtype t, realtype cj, N_Vector y, N_Vector yp, N_Vector, SUNMatrix J, void* ud, N_Vector, N_Vector,
             N_Vector);
 void ida_err(int code, const char* module, const char* function, char* msg, void* ud);
+int ida_psetup(realtype t, N_Vector y, N_Vector yp, N_Vector r, realtype cj, void* ud);
+int ida_psolve(realtype t, N_Vector y, N_Vector yp, N_Vector r, N_Vector rvec, N_Vector zvec, realtype cj,
+               realtype delta, void* ud);
 
 // One IDA integrator over a DaeSystem, set up the same way for simulation and for the consistent starting point
 // of a steady-state solve: residual, tolerances, differential/algebraic ids, the linear solver and exact Jacobian.

@@ -26,6 +26,7 @@
 namespace granuflow::kernels {
 
 inline constexpr int kMaxFeatures = kAdChunk / 2;  // E's derivative takes one Jet per pair: 2 m directions
+inline constexpr int kMaxEfficiencyTerms = 4;      // terms of a factored efficiency (efficiency_terms)
 
 class AggregationKernel : public KernelBase {
  public:
@@ -42,6 +43,17 @@ class AggregationKernel : public KernelBase {
   // E for every pair i <= j of n classes, in row-major upper-triangle order (one call per residual).
   virtual void efficiencies(const double* phi, int n, const double* p, double* E) const = 0;
   virtual void efficiencies(const Jet* phi, int n, const Jet* p, Jet* E) const = 0;
+  // The efficiency as a short sum of products, E(phi_i, phi_j) = sum_t sign_t h_t(phi_i) h_t(phi_j) for every pair,
+  // exactly: fills h[t * n + i] for n classes and sign[t] (+1 or -1) and returns the number of terms (at most
+  // kMaxEfficiencyTerms), or 0 when E has no such form. The 2-D population (population/population2d.hpp) then
+  // evaluates aggregation as a few convolutions instead of a loop over every pair of classes. Kernels without
+  // features have E = 1: one term, h = 1.
+  virtual int efficiency_terms(const double* /*phi*/, int n, const double* /*p*/, double* h, double* sign) const {
+    if (n_features() > 0) return 0;
+    for (int i = 0; i < n; ++i) h[i] = 1.0;
+    sign[0] = 1.0;
+    return 1;
+  }
   // beta = K E for all pairs, row-major n x n (for tests and tools; the engine uses the parts).
   void beta(const ClassState<double>& s, const double* p, double* out) const {
     factor(s, p, out);

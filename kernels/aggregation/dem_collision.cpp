@@ -5,21 +5,60 @@
 namespace granuflow::kernels {
 
 void DemCollisionKernel::declare(Settings& s, const std::string& prefix) {
-  auto names = table_names();
-  if (names.empty()) names.push_back("(none loaded)");
-  const std::string t = s.get_choice(prefix + "collisions", names.front(), names,
-                                     "data table of DEM collision frequencies C_ij, 1/s (paper 002, Eq. (12))");
-  frequency_ = &table(t);
   rule_ = s.get_choice(prefix + "wet_rule", "either", {"either", "both"},
                        "which partners must reach lc_min (paper 002, Eq. (13))") == "both"
               ? WetRule::kBoth
               : WetRule::kEither;
+  shape_ = s.get_choice(prefix + "efficiency", "step", {"step", "smooth"},
+                        "efficiency in the liquid content: the step of Eq. (13), paper 002, or a logistic of width "
+                        "lc_width") == "smooth"
+               ? EfficiencyShape::kSmooth
+               : EfficiencyShape::kStep;
+  const std::string file =
+      s.get_choice(prefix + "collisions_file", "", {},
+                   "CSV of collision counts from a DEM run (docs/dem_collisions.md); relative to the scene's folder");
+  if (!file.empty()) {
+    try {
+      counts_ = std::make_shared<const CollisionCounts>(read_collision_counts(resolve_data_path(s.where(), file)));
+    } catch (const ConfigError& e) {  // the file's own message (row, column) after the scene key that named it
+      throw ConfigError(s.where() + "." + prefix + "collisions_file = '" + file + "': " + e.what());
+    }
+    owned_ = std::make_shared<const Table>(collision_frequency_table(*counts_));
+    frequency_ = owned_.get();
+  } else {
+    auto names = table_names();
+    if (names.empty()) names.push_back("(none loaded)");
+    const std::string t = s.get_choice(prefix + "collisions", names.front(), names,
+                                       "data table of DEM collision frequencies C_ij, 1/s (paper 002, Eq. (12)); "
+                                       "used when no collisions_file is given");
+    frequency_ = &table(t);
+  }
 }
 
 void DemCollisionKernel::check(const ClassState<double>& s, const double*, const std::string& where) const {
+  if (counts_) {
+    for (int i = 0; i < s.n; ++i)
+      if (counts_->class_of(s.diameter[i]) < 0)
+        throw ConfigError(where + ": class " + std::to_string(i) + " (pivot diameter " + fmt_num(s.diameter[i]) +
+                          " m) lies outside the DEM classes of " + counts_->path + " (edges " +
+                          fmt_num(counts_->edges.front()) + " to " + fmt_num(counts_->edges.back()) +
+                          " m); widen the file's edges_m or shorten the grid");
+    return;
+  }
   if (frequency_->rows != s.n || frequency_->cols != s.n)
     throw ConfigError(where + ": collision table is " + std::to_string(frequency_->rows) + " x " +
                       std::to_string(frequency_->cols) + ", the grid has " + std::to_string(s.n) + " classes");
+}
+
+int DemCollisionKernel::efficiency_terms(const double* phi, int n, const double* p, double* h, double* sign) const {
+  if (rule_ == WetRule::kBoth) {
+    for (int i = 0; i < n; ++i) h[i] = wet(phi[i], p);
+    sign[0] = 1.0;
+    return 1;
+  }
+  for (int i = 0; i < n; ++i) h[i] = 1.0, h[n + i] = 1.0 - wet(phi[i], p);
+  sign[0] = 1.0, sign[1] = -1.0;
+  return 2;
 }
 
 Table collision_frequency_table(const std::vector<double>& counts, const std::vector<double>& numbers, double dt,
@@ -34,6 +73,10 @@ Table collision_frequency_table(const std::vector<double>& counts, const std::ve
     for (size_t j = 0; j < n; ++j)
       if (numbers[i] > 0 && numbers[j] > 0) t.values[i * n + j] = counts[i * n + j] / (numbers[i] * numbers[j] * dt);
   return t;
+}
+
+Table collision_frequency_table(const CollisionCounts& c) {
+  return collision_frequency_table(c.counts, c.particles, c.dt, c.path);
 }
 
 void register_dem_collision(Registry<AggregationKernel>& r) {

@@ -97,13 +97,15 @@ py::dict simulate(Scene& s, std::optional<double> t_end, std::optional<std::vect
   const auto ns = static_cast<py::ssize_t>(r.state_names.size());
   const auto no = static_cast<py::ssize_t>(r.output_names.size());
   const auto np = static_cast<py::ssize_t>(r.sens_params.size());
-  py::dict stats("steps"_a = r.stats.steps, "residuals"_a = r.stats.residuals, "jacobians"_a = r.stats.jacobians,
-                 "linear_setups"_a = r.stats.linear_setups, "nonlinear_iterations"_a = r.stats.nonlinear_iterations,
-                 "error_test_failures"_a = r.stats.error_test_failures,
-                 "nonlinear_failures"_a = r.stats.nonlinear_failures, "reinits"_a = r.stats.reinits,
-                 "states"_a = r.stats.states, "explicit_states"_a = r.stats.explicit_states,
-                 "quadratures"_a = r.stats.quadratures, "linear_solver"_a = r.stats.linear_solver,
-                 "method"_a = r.stats.method, "method_reason"_a = r.stats.method_reason);
+  py::dict stats(
+      "steps"_a = r.stats.steps, "residuals"_a = r.stats.residuals, "jacobians"_a = r.stats.jacobians,
+      "linear_setups"_a = r.stats.linear_setups, "nonlinear_iterations"_a = r.stats.nonlinear_iterations,
+      "error_test_failures"_a = r.stats.error_test_failures, "nonlinear_failures"_a = r.stats.nonlinear_failures,
+      "reinits"_a = r.stats.reinits, "states"_a = r.stats.states, "explicit_states"_a = r.stats.explicit_states,
+      "quadratures"_a = r.stats.quadratures, "linear_solver"_a = r.stats.linear_solver,
+      "linear_iterations"_a = r.stats.linear_iterations, "preconditioner_setups"_a = r.stats.preconditioner_setups,
+      "linear_failures"_a = r.stats.linear_failures, "method"_a = r.stats.method,
+      "method_reason"_a = r.stats.method_reason);
   return py::dict("t"_a = as_array(r.t, {nt}), "y"_a = as_array(r.y, {nt, ns}), "yp"_a = as_array(r.yp, {nt, ns}),
                   "state_names"_a = r.state_names, "outputs"_a = as_array(r.outputs, {nt, no}),
                   "output_names"_a = r.output_names, "output_roles"_a = output_roles(*s.flowsheet),

@@ -33,6 +33,32 @@ units:
     params: {N0: 1, v0: 1 m3, growth_G: 0.01}
 )";
 
+// The 2-D population with every mechanism: DEM kernel (smooth efficiency), droplets split between liquid pivots,
+// cross-section weighting, drying.
+std::string pbm_2d_scene() {
+  return R"(
+scene: pbm_2d_all_mechanisms
+t_end: 0.5 s
+output: {n: 5}
+solver: {rtol: 1e-8, atol: 1e-8}
+particles: {settings: {grid: geometric, q: 2, classes: 5, v_min: 4e-9}, params: {rho_s: 1030 kg/m3, eps_intra: 0}}
+units:
+  g2:
+    type: pbm_2d
+    settings:
+      liquid_classes: 6
+      liquid_max: 2.4e-8
+      aggregation: dem_collision
+      agg_efficiency: smooth
+      spray: droplets
+      spray_weight: cross_section
+      drying: surface
+      agg_collisions_file: )" +
+         testing::repo_path("flowsheets/data/sen2014_collisions_example.csv") + R"(
+    params: {N0: 1000, d0: 2.1 mm, lc0: 0.2, spray_rate: 4e-6 m3/s, d_drop: 1.5 mm, dry_flux: 1e-6 m/s, agg_psi0: 0.5}
+)";
+}
+
 // Scenes and the unit types each one covers.
 std::vector<std::pair<std::string, Scene>> scenes() {
   std::vector<std::pair<std::string, Scene>> v;
@@ -40,6 +66,7 @@ std::vector<std::pair<std::string, Scene>> scenes() {
   v.emplace_back("demo tanks", scene_from_file("flowsheets/demo_tanks.yaml"));
   v.emplace_back("continuous dryer", scene_from_file("flowsheets/continuous_drying_bed.yaml"));
   v.emplace_back("pbm", scene_from_text(kPbmMechanisms));
+  v.emplace_back("pbm 2d", scene_from_text(pbm_2d_scene()));
   return v;
 }
 

@@ -87,6 +87,13 @@ class DaeSystem {
   // Unit and state name of a global row, for error messages.
   std::string describe_row(int row) const;
 
+  // Preconditioner of the iterative linear solver (block_preconditioner.cpp): block-diagonal over the units, each
+  // block the unit's own (Unit::precondition_setup/solve) or, for a unit without one, its exact own block
+  // dF/dx + cj dF/dx' over its own states (analytic parts and forward AD), LU-factored. Couplings between units are
+  // left to the Krylov iterations. setup() at (t, y, y', cj); solve() writes z = P^-1 r.
+  void precondition_setup(double t, const double* y, const double* yp, double cj);
+  void precondition_solve(double t, const double* y, const double* yp, double cj, const double* r, double* z);
+
   long residual_count() const { return n_res_; }
   long jacobian_count() const { return n_jac_; }
 
@@ -144,6 +151,8 @@ class DaeSystem {
   std::vector<Jet> xj_, xdj_, rj_, jet_scratch_, qj_;
   std::vector<std::vector<Jet>> pj_;  // per unit: parameters as Jets (seeded for sensitivities)
   std::vector<double> rbuf_;
+  struct BlockPreconditioner;
+  std::shared_ptr<BlockPreconditioner> prec_;  // shared_ptr: the type is complete in block_preconditioner.cpp only
   long n_res_ = 0, n_jac_ = 0;
 };
 

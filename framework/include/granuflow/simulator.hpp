@@ -26,7 +26,9 @@ struct SimOptions {
   // the staggered corrector at every step of the state, only without their own step-size control: about
   // half the steps, and accurate to roughly the states' tolerance on smooth problems (calibration Jacobians).
   bool sens_error_control = true;
-  std::string linear_solver = "auto";  // auto | dense | sparse (auto: dense up to dense_limit states)
+  // auto | dense | sparse | gmres (auto: dense up to dense_limit states; beyond, gmres when a unit preconditions
+  // itself, else dense or sparse by the Jacobian's fill)
+  std::string linear_solver = "auto";
   // Integrator: ida (IDAS, BDF: any flowsheet), bdf or adams (CVODES) and erk (ARKODE, Dormand-Prince 5(4)) for
   // flowsheets that are ODEs (every state differential once explicit units are inlined), or auto: IDAS for a DAE,
   // for an ODE by its stiffness (ode_simulator.hpp). SolverStats::method says what ran.
@@ -45,10 +47,13 @@ struct SolverStats {
   long nonlinear_iterations = 0;
   long error_test_failures = 0;
   long nonlinear_failures = 0;
-  long reinits = 0;          // restarts at input breakpoints
-  long states = 0;           // unknowns of the integrator
-  long explicit_states = 0;  // states of explicit units, evaluated inline
-  long quadratures = 0;      // integrals of flows, outside the Newton system
+  long reinits = 0;                // restarts at input breakpoints
+  long states = 0;                 // unknowns of the integrator
+  long explicit_states = 0;        // states of explicit units, evaluated inline
+  long quadratures = 0;            // integrals of flows, outside the Newton system
+  long linear_iterations = 0;      // Krylov iterations (gmres only)
+  long preconditioner_setups = 0;  // (gmres only)
+  long linear_failures = 0;        // Krylov iterations that did not converge (gmres only)
   std::string linear_solver;
   std::string method;         // the integrator that ran (and, if auto switched mid-run, both)
   std::string method_reason;  // why: asked for, or what auto saw

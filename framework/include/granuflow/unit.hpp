@@ -176,6 +176,10 @@ class UnitSpec {
   // grid are declared once per flowsheet.
   void use_shared_params(std::string unit) { shared_ = std::move(unit); }
   const std::string& shared_params() const { return shared_; }
+  // The unit preconditions its own block for the iterative linear solver (Unit::precondition_setup/solve);
+  // `solver.linear_solver: auto` picks that solver for a system past dense_limit that holds such a unit.
+  void set_preconditioner() { preconditioner_ = true; }
+  bool has_preconditioner() const { return preconditioner_; }
 
   const std::vector<StateSpec>& states() const { return states_; }
   const std::vector<ParamSpec>& params() const { return params_; }
@@ -197,6 +201,7 @@ class UnitSpec {
   ClassLayout classes_;
   std::string shared_;
   bool explicit_ = false;
+  bool preconditioner_ = false;
   bool analytic_part_ = false;
   bool analytic_complete_ = false;
 };
@@ -350,6 +355,14 @@ class Unit {
   // The part of the Jacobian the unit supplies itself (UnitSpec::set_analytic_part), dF/dy + cj dF/dy', added to
   // the AD part.
   virtual void analytic_jacobian(const Ctx<double>& /*c*/, double /*cj*/, JacobianSink& /*sink*/) const {}
+  // Iterative linear solver (solver.linear_solver: gmres; UnitSpec::set_preconditioner): an approximation P of the
+  // unit's own block of dF/dx + cj dF/dx' (its rows, the columns of its own states), built at the state in `c` and
+  // kept in the run's workspace (c.work); precondition_solve writes z = P^-1 r over the unit's own states. P need
+  // not be exact (GMRES corrects it), only cheap to apply and close enough that few iterations are needed.
+  virtual void precondition_setup(const Ctx<double>& /*c*/, double /*cj*/) const {}
+  virtual void precondition_solve(const Ctx<double>& /*c*/, double /*cj*/, const double* r, double* z) const {
+    (void)r, (void)z;
+  }
   // Times where the unit's equations change discontinuously (spray start/stop) for the current parameters;
   // the simulator stops and re-initializes there. Inside eval(), use Ctx::t_seg (the start of the current
   // segment) to decide which side of such a time the solver is on.

@@ -1,4 +1,4 @@
-"""granuflow bench core|pbm|scene|sweep: speed against error, never pass/fail on time. Every subcommand honours
+"""granuflow bench core|pbm|pbm2d|scene|sweep: speed against error, never pass/fail on time. Every subcommand honours
 --quick (a reduced set, stated in its help) and --repeats; progress goes to stderr on a terminal only."""
 from __future__ import annotations
 
@@ -21,6 +21,12 @@ def cmd_bench(args) -> int:
                                     scipy=not args.no_scipy,
                                     scipy_repeats=1 if args.quick else max(1, min(3, args.repeats)), progress=progress)
         summary = bench.scene_summary
+    elif args.what == "pbm2d":
+        from .. import bench_2d
+
+        records = bench_2d.bench_pbm2d(quick=args.quick, repeats=args.repeats, scipy=not args.no_scipy,
+                                       progress=progress)
+        summary = bench_2d.summary
     elif args.what == "pbm":
         records = bench.bench_pbm(quick=args.quick, repeats=args.repeats, progress=progress)
         summary = bench.pbm_summary
