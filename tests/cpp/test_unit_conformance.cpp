@@ -113,7 +113,9 @@ TEST(UnitConformance, BalancesCloseAndOutputsAreFinite) {
         if (out.role == OutputRole::kBalanceOut) q[1] += b - a;
         if (out.role == OutputRole::kBalanceHold) q[2] += a, q[3] += b;
       }
-    if (name != "pbm") EXPECT_FALSE(acc.empty());
+    if (name != "pbm") {
+      EXPECT_FALSE(acc.empty());
+    }
     for (const auto& [q, v] : acc) {
       const double scale = std::max({std::abs(v[0]), std::abs(v[1]), std::abs(v[2]), std::abs(v[3])});
       EXPECT_LT(std::abs(v[3] - v[2] - (v[0] - v[1])), 10 * s.options.rtol * scale) << q;
