@@ -37,6 +37,8 @@ void register_schemes(KernelRegistries& r) {
                        [] { return std::make_unique<FvGrowth>(Limiter::kKoren); });
   r.growth_schemes.add("fv_upwind", "finite volumes in diameter, first-order upwind",
                        [] { return std::make_unique<FvGrowth>(Limiter::kNone); });
+  r.growth_schemes.add("fv_van_albada", "finite volumes in diameter, van Albada's smooth slope (differentiable)",
+                       [] { return std::make_unique<FvGrowth>(Limiter::kVanAlbada); });
 }
 }  // namespace
 
