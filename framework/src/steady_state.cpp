@@ -15,10 +15,12 @@
 #include <kinsol/kinsol.h>
 
 #include <Eigen/Dense>
+#include <Eigen/Eigenvalues>
 #include <Eigen/SparseLU>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <complex>
 #include <memory>
 #include <sstream>
 
@@ -383,6 +385,48 @@ int newton(SteadySystem& s, std::vector<double>& y, const SteadyOptions& opt, co
   return flag;
 }
 
+// Eigenvalues of the dynamics linearized at the steady state: with dF/dy' = I on the differential rows, perturbations
+// obey dx' = A dx, A = -(F_dx - F_dz F_zz^-1 F_zx) (algebraic states z eliminated; held accumulators left out, as is
+// one zero eigenvalue per conserved combination). Stores the eigenvalue with the largest real part.
+void stability(SteadySystem& s, const std::vector<double>& y, size_t conserved, SteadyResult& r) {
+  const int n = s.n;
+  std::vector<double> jac(size_t(n) * n);
+  s.sys->jacobian(s.t, y.data(), s.zeros.data(), 0.0, jac.data(), nullptr);
+  Eigen::Map<const Eigen::MatrixXd> J(jac.data(), n, n);
+  const auto id = s.sys->differential_id();
+  std::vector<int> dx, zx;
+  for (int i = 0; i < n; ++i) {
+    if (std::find(s.held.begin(), s.held.end(), i) != s.held.end()) continue;
+    (id[i] > 0 ? dx : zx).push_back(i);
+  }
+  const int nd = static_cast<int>(dx.size()), nz = static_cast<int>(zx.size());
+  if (nd == 0) return;
+  Eigen::MatrixXd A(nd, nd), Fdz(nd, nz), Fzx(nz, nd), Fzz(nz, nz);
+  for (int a = 0; a < nd; ++a) {
+    for (int b = 0; b < nd; ++b) A(a, b) = -J(dx[a], dx[b]);
+    for (int b = 0; b < nz; ++b) Fdz(a, b) = J(dx[a], zx[b]);
+  }
+  for (int a = 0; a < nz; ++a) {
+    for (int b = 0; b < nd; ++b) Fzx(a, b) = J(zx[a], dx[b]);
+    for (int b = 0; b < nz; ++b) Fzz(a, b) = J(zx[a], zx[b]);
+  }
+  if (nz > 0) {
+    Eigen::PartialPivLU<Eigen::MatrixXd> lu(Fzz);
+    A.noalias() += Fdz * lu.solve(Fzx);
+  }
+  Eigen::EigenSolver<Eigen::MatrixXd> es(A, false);
+  if (es.info() != Eigen::Success) return;
+  std::vector<std::complex<double>> ev(es.eigenvalues().data(), es.eigenvalues().data() + nd);
+  // the conserved combinations' zero eigenvalues are the smallest in modulus
+  std::sort(ev.begin(), ev.end(), [](auto a, auto b) { return std::abs(a) < std::abs(b); });
+  if (conserved >= ev.size()) return;
+  ev.erase(ev.begin(), ev.begin() + static_cast<long>(conserved));
+  auto top = std::max_element(ev.begin(), ev.end(), [](auto a, auto b) { return a.real() < b.real(); });
+  r.stability_known = true;
+  r.max_real_eigenvalue = top->real();
+  r.imag_of_max = std::abs(top->imag());
+}
+
 std::string kin_flag_text(int flag) {
   char* name = KINGetReturnFlagName(flag);
   std::string s = name ? name : "KINSOL error";
@@ -470,6 +514,26 @@ SteadyResult solve_steady_state(Flowsheet& fs, const SteadyOptions& opt, const s
   r.y.resize(sys.full_size());
   sys.extend(opt.t, y.data(), s.zeros.data(), r.y.data(), yp_full.data());
   r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  // Outputs and the boundary flows at the steady state: quadratures integrate flows, so their rates are the flows
+  // and their accumulated values have no steady meaning (NaN).
+  std::vector<double> qrate(sys.n_quadratures(), 0.0), qnan(sys.n_quadratures(), std::nan(""));
+  if (sys.n_quadratures() > 0) sys.quadrature(opt.t, y.data(), s.zeros.data(), qrate.data());
+  r.outputs.assign(fs.n_outputs(), 0.0);
+  sys.report(opt.t, r.y.data(), yp_full.data(), qnan.data(), r.outputs.data());
+  for (const auto& u : fs.units()) {
+    const auto& quads = u.spec.quadratures();
+    for (size_t j = 0; j < quads.size(); ++j) {
+      const OutputSpec& o = u.spec.outputs()[quads[j].output.i];
+      if (o.quantity.empty() || (o.role != OutputRole::kBalanceIn && o.role != OutputRole::kBalanceOut)) continue;
+      auto& f = r.boundary_flows[o.quantity];
+      (o.role == OutputRole::kBalanceIn ? f.first : f.second) += qrate[u.quad_offset + j];
+    }
+  }
+  if (opt.stability && dense) {
+    const auto t0 = std::chrono::steady_clock::now();
+    stability(s, y, s.kept.size(), r);
+    r.stability_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
   return r;
 }
 
