@@ -152,7 +152,8 @@ void ParticleChamber::declare(UnitSpec& s, Settings& st) {
     throw ConfigError(st.where() + ": kernels that read particle numbers are not supported in the chamber units");
   if (spray_) {
     const auto& reg = kernels::registries().growth_schemes;
-    fv_ = reg.create(st.get_choice("growth_scheme", "fv_koren", reg.names(), "finite-volume scheme of the layering"),
+    fv_ = reg.create(st.get_choice("growth_scheme", "fv_van_albada", reg.names(),
+                                   "finite-volume scheme of the layering (fv_van_albada: smooth, for the integrator)"),
                      st.where());
     fv_->setup(*grid_);
   }
