@@ -331,6 +331,12 @@ Status ParticleChamber::eval(const Ctx<T>& c) const {
   const T* pm = particle_tables(c, w, sc, pp_, *grid_);
   const T* M = &c.x(sM_);
   const T* W = wet_ ? &c.x(sW_) : nullptr;
+  // A class mass far below zero is no state of a bed (a Newton iterate of a steady-state solve that left the physical
+  // branch, or an integrator step too long): refuse it, so that the step is cut. The integrator's own round-off in
+  // emptied classes stays many orders of magnitude below the threshold.
+  double held = 0.0, lowest = 0.0;
+  for (int i = 0; i < n_; ++i) held += std::abs(value_of(M[i])), lowest = std::min(lowest, value_of(M[i]));
+  if (lowest < -1e-6 * held) return Status::kRecoverable;
   for (int i = 0; i < n_; ++i) {
     sc.N[i] = M[i] / pm[i];
     sc.floor[i] = kMassFloor / pm[i];  // an emptied class carries a finite moisture

@@ -187,6 +187,9 @@ void analyse_structure(SteadySystem& s, const Flowsheet& fs, std::vector<std::st
     row_scale(a) = mx > 0 ? 1.0 / mx : 1.0;  // an all-zero row is itself a null vector
     for (int b = 0; b < m; ++b) Js(a, b) = row_scale(a) * J(keep[a], keep[b]) * scale[keep[b]];
   }
+  // Most flowsheets conserve nothing (continuous processes): a partial-pivoting LU with a condition estimate settles
+  // that in a fraction of the rank-revealing factorization's time.
+  if (Eigen::PartialPivLU<Eigen::MatrixXd>(Js).rcond() > 1e-7) return;
   Eigen::FullPivLU<Eigen::MatrixXd> lu(Js.transpose());
   lu.setThreshold(1e-9);
   if (lu.rank() == m) return;
@@ -342,9 +345,11 @@ long pseudo_transient(SteadySystem& s, std::vector<double>& y, const SteadyOptio
     const double r_new = steady_norm(y);
     // Switched evolution relaxation, but at least doubling while the residual falls: when slow modes dominate the
     // norm (a hold-up relaxing over 1000 s) the residual falls by only dtau / tau per step and plain SER would
-    // creep; backward Euler is stable at any step, so only Newton failures (above) hold the step back.
+    // creep; backward Euler is stable at any step, so only Newton failures (above) hold the step back. Where the
+    // residual rises (the dynamics pass a hump: a loop that overfills before it settles) the step still grows,
+    // by half: shrinking it with the residual would stall in the hump for thousands of steps.
     const double ratio = r_old / std::max(r_new, 1e-300);
-    dtau *= r_new < r_old ? std::min(10.0, std::max(2.0, ratio)) : std::max(0.1, ratio);
+    dtau *= r_new < r_old ? std::min(10.0, std::max(2.0, ratio)) : 1.5;
     r_old = r_new;
   }
   return steps;
@@ -481,7 +486,11 @@ SteadyResult solve_steady_state(Flowsheet& fs, const SteadyOptions& opt, const s
   if (flag < 0) {
     std::string msg = "steady-state solve (KINSOL) failed after " + std::to_string(r.iterations) +
                       " iterations: " + kin_flag_text(flag) + (s.last_error.empty() ? "" : " (" + s.last_error + ")");
-    if (r.pseudo_steps > 0) msg += ", after " + std::to_string(r.pseudo_steps) + " pseudo-transient steps";
+    if (r.pseudo_steps > 0)
+      msg += ", after " + std::to_string(r.pseudo_steps) +
+             " pseudo-transient steps (the dynamics did not settle: the flowsheet may have no steady state, e.g. a "
+             "hold-up that keeps growing once a discharge reaches its capacity, or one that is unstable; simulate "
+             "it in time to see which)";
     // Name the unit with the largest residual at the last iterate (if the residual itself throws there, the
     // solver failure is still what the caller gets).
     std::vector<double> rr(n);

@@ -57,6 +57,12 @@ class Flowsheet:
         return self._scene.output_names()
 
     @property
+    def output_roles(self) -> list[tuple]:
+        """(role, quantity, class, unit) per reported output, in ``output_names`` order (granuflow.outputs reads
+        them: size distributions, balance terms)."""
+        return [tuple(r) for r in self._scene.output_roles()]
+
+    @property
     def text(self) -> str:
         """The scene text the flowsheet was built from (what a remote worker rebuilds it from)."""
         return self._scene.text
