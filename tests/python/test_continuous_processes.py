@@ -278,3 +278,21 @@ def test_tanks_in_series_give_eq_7_31():
         left = 1.0 - gammainc(n, n * (t[-1] - t0 - dt) / tau)  # still in the tanks at the end
         assert np.trapz(E, t) == pytest.approx(1.0 - left, abs=2e-3), n  # every tracer particle leaves once
     assert r.summary["balance"]["solids_rel"] < 1e-9
+
+
+# -- the loop bench ------------------------------------------------------------------------------------------------
+def test_bench_loop_runs_the_same_loop_in_granuflow_and_scipy():
+    """`granuflow bench loop`: the NumPy/SciPy twin (tests/bench/scipy_sieve_mill_loop.py) solves the same equations,
+    so both codes end at the steady state granuflow solves directly; the summary names both ratios."""
+    from granuflow.bench_loop import bench_loop, loop_summary
+
+    (rec,) = bench_loop(classes=(30,), repeats=1)
+    assert rec["steady_method"] == "newton" and rec["steady_solids_balance_rel"] < 1e-9
+    assert rec["dynamic_vs_steady_d50_rel"] < 1e-6 and rec["dynamic_vs_steady_bed_rel"] < 1e-6
+    for k in ("d10_um", "d50_um", "d90_um"):
+        assert rec[f"scipy_{k}"] == pytest.approx(rec[f"steady_{k}"], rel=1e-4), k
+    assert rec["scipy_bed_mass_kg"] == pytest.approx(rec["steady_bed_mass_kg"], rel=1e-4)
+    assert rec["steady_recycle_ratio"] > 1  # most of what leaves the bed returns to it
+    assert rec["speedup_vs_scipy"] > 0 and rec["steady_speedup_vs_dynamic"] > 0
+    text = "\n".join(loop_summary([rec]))
+    assert "SciPy/dyn" in text and "dyn/steady" in text
