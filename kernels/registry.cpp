@@ -12,6 +12,8 @@
 #include "breakage/fragments.hpp"
 #include "breakage/power_law_selection.hpp"
 #include "breakage/vogel_peukert.hpp"
+#include "classification/separation_curves.hpp"
+#include "comminution/comminution_laws.hpp"
 #include "discretization/cell_average.hpp"
 #include "discretization/fixed_pivot.hpp"
 #include "growth/growth_laws.hpp"
@@ -35,6 +37,8 @@ void register_schemes(KernelRegistries& r) {
                        [] { return std::make_unique<FvGrowth>(Limiter::kKoren); });
   r.growth_schemes.add("fv_upwind", "finite volumes in diameter, first-order upwind",
                        [] { return std::make_unique<FvGrowth>(Limiter::kNone); });
+  r.growth_schemes.add("fv_van_albada", "finite volumes in diameter, van Albada's smooth slope (differentiable)",
+                       [] { return std::make_unique<FvGrowth>(Limiter::kVanAlbada); });
 }
 }  // namespace
 
@@ -52,6 +56,8 @@ void register_all(KernelRegistries& r) {
   register_vogel_peukert(r.selection);
   register_fragments(r.fragments);
   register_growth_laws(r.growth);
+  register_separation_curves(r.separation);
+  register_comminution_laws(r.comminution);
   register_schemes(r);
 }
 

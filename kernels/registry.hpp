@@ -1,11 +1,14 @@
 // The one list of built-in population-balance plugins, each family in its own registry: physical kernels
-// (aggregation beta, breakage selection S and fragments b, growth G) and numerical schemes (aggregation,
-// breakage, growth). A scene names one of each by string; unknown names throw ConfigError listing the valid ones.
+// (aggregation beta, breakage selection S and fragments b, growth G), numerical schemes (aggregation,
+// breakage, growth), and the separation curves and comminution laws of classifiers and mills. A scene names one of
+// each by string; unknown names throw ConfigError listing the valid ones.
 // Adding a kernel: its file pair, one call in registry.cpp, one line in CMakeLists.txt.
 #pragma once
 #include "aggregation/aggregation_kernel.hpp"
 #include "breakage/fragment_distribution.hpp"
 #include "breakage/selection_rate.hpp"
+#include "classification/separation_curve.hpp"
+#include "comminution/comminution_law.hpp"
 #include "discretization/aggregation_scheme.hpp"
 #include "discretization/breakage_scheme.hpp"
 #include "discretization/fv_growth.hpp"
@@ -22,6 +25,10 @@ struct KernelRegistries {
   Registry<AggregationScheme> aggregation_schemes{"aggregation scheme"};
   Registry<BreakageScheme> breakage_schemes{"breakage scheme"};
   Registry<FvGrowth> growth_schemes{"growth scheme"};
+  // Classifiers and mills of solids processes (sieve, classifying discharge, mill): not population-balance
+  // mechanisms, but plugins of the same kind.
+  Registry<SeparationCurve> separation{"separation curve"};
+  Registry<ComminutionLaw> comminution{"comminution law"};
 };
 
 void register_all(KernelRegistries& r);

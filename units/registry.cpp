@@ -2,18 +2,25 @@
 
 #include "chamber_gas.hpp"
 #include "droplet_evaporation.hpp"
+#include "drying_compartment.hpp"
 #include "fluid_bed.hpp"
 #include "gas_inlet.hpp"
 #include "gas_outlet.hpp"
+#include "granulator.hpp"
 #include "liquid_feed.hpp"
 #include "liquid_mixer.hpp"
 #include "liquid_product.hpp"
 #include "liquid_splitter.hpp"
+#include "mill.hpp"
 #include "particles.hpp"
 #include "pbm_2d.hpp"
 #include "pbm_batch.hpp"
+#include "sieve.hpp"
 #include "solids_feed.hpp"
+#include "solids_mixer.hpp"
 #include "solids_product.hpp"
+#include "solids_splitter.hpp"
+#include "spray_compartment.hpp"
 #include "spray_nozzle.hpp"
 #include "spray_zone.hpp"
 #include "stirred_tank.hpp"
@@ -40,6 +47,13 @@ void register_all(Registry<Unit>& r) {
   register_spray_nozzle(r);
   register_spray_zone(r);
   register_wall_heat_loss(r);
+  register_granulator(r);
+  register_spray_compartment(r);
+  register_drying_compartment(r);
+  register_sieve(r);
+  register_mill(r);
+  register_solids_mixer(r);
+  register_solids_splitter(r);
 }
 
 const Registry<Unit>& builtin() {

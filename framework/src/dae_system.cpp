@@ -446,38 +446,72 @@ void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj,
   Eigen::Map<Eigen::MatrixXd> out(dense, n_, n_);
   const auto& units = fs_.units();
   const int n_terms = static_cast<int>(n_outer_);
-  Eigen::MatrixXd& z = schur_z_;
+  // Z = J_SS^-1 J_SR, one sparse block of rows per explicit unit. J_SS = I + (blocks where an explicit unit reads
+  // another), block unit-lower-triangular in dependency order: forward substitution over the explicit units. Both
+  // the blocks and Z are sparse (a screen reads its feed class by class, a mill couples every class with the coarser
+  // ones), so the products cost their nonzeros, not the blocks' area; explicit_reads_ lists every read of a unit
+  // after all reads of the units it reads, so Z_v is final when Z_u uses it.
+  schur_zs_.resize(units.size());
+  // Sparse blocks are gathered from the columns a unit reads (its local columns), never by scanning whole blocks.
+  auto gather = [&](int r0, int rows, int u, int c0, int c1, Eigen::SparseMatrix<double>& S) {
+    schur_t_.clear();
+    const auto& cols = local_cols_[u];
+    for (auto it = std::lower_bound(cols.begin(), cols.end(), c0); it != cols.end() && *it < c1; ++it) {
+      const double* col = J.data() + size_t(*it) * n_ext_ + r0;
+      for (int r = 0; r < rows; ++r)
+        if (col[r] != 0.0) schur_t_.emplace_back(r, *it - c0, col[r]);
+    }
+    S.resize(rows, c1 - c0);
+    S.setFromTriplets(schur_t_.begin(), schur_t_.end());
+  };
+  for (int u : explicit_order_)
+    gather(units[u].offset, static_cast<int>(units[u].spec.states().size()), u, 0, n_, schur_zs_[u]);
   Eigen::MatrixXd& zu = schur_u_;
-  z = J.bottomLeftCorner(m, n_);
   zu.setZero(m, n_terms);
   for (int k = 0; k < n_terms; ++k) {
     const OuterTerm& term = outer_[k];
     zu.col(k).segment(units[term.unit].offset - n_, static_cast<Eigen::Index>(term.u.size())) =
         Eigen::Map<const Eigen::VectorXd>(term.u.data(), static_cast<Eigen::Index>(term.u.size()));
   }
-  // J_SS = I + (blocks where an explicit unit reads another), block unit-lower-triangular in dependency order:
-  // Z = J_SS^-1 [D U] by forward substitution over the explicit units, each block row solved once.
   for (const auto& [u, v] : explicit_reads_) {
     const int ou = units[u].offset - n_, nu = static_cast<int>(units[u].spec.states().size());
     const int ov = units[v].offset - n_, nv = static_cast<int>(units[v].spec.states().size());
-    const auto juv = J.block(n_ + ou, n_ + ov, nu, nv);
-    z.middleRows(ou, nu).noalias() -= juv * z.middleRows(ov, nv);
-    if (n_terms > 0) zu.middleRows(ou, nu).noalias() -= juv * zu.middleRows(ov, nv);
+    gather(n_ + ou, nu, u, n_ + ov, n_ + ov + nv, schur_s_);
+    schur_ps_ = schur_s_ * schur_zs_[v];
+    schur_zs_[u] -= schur_ps_;
+    if (n_terms > 0) zu.middleRows(ou, nu).noalias() -= schur_s_ * zu.middleRows(ov, nv);
   }
-  // Only rows of units that read explicit states and columns that explicit units read can change.
+  // Only rows of units that read explicit states and columns that explicit units read can change:
+  // dF_R/dy_R = J_RR - J_RS Z - (J_RS U) W^T, J_RS gathered from the columns those units read.
   out = J.topLeftCorner(n_, n_);
   const int nr = static_cast<int>(schur_rows_.size()), nc = static_cast<int>(schur_cols_.size());
   if (nr == 0 || nc == 0) return;
+  schur_t_.clear();
+  schur_row_of_.resize(nr);
+  for (const auto& [pos, row, len] : schur_row_runs_)
+    for (int k = 0; k < len; ++k) schur_row_of_[pos + k] = row + k;
+  // schur_rows_ holds whole units (every row of an integrated unit that reads an explicit state), in order
+  for (int pos = 0; pos < nr;) {
+    const int row = schur_row_of_[pos], u = fs_.state_unit(row), len = static_cast<int>(units[u].spec.states().size());
+    const auto& cols = local_cols_[u];
+    for (auto it = std::lower_bound(cols.begin(), cols.end(), n_); it != cols.end(); ++it) {
+      const double* col = J.data() + size_t(*it) * n_ext_ + row;
+      for (int r = 0; r < len; ++r)
+        if (col[r] != 0.0) schur_t_.emplace_back(pos + r, *it - n_, col[r]);
+    }
+    pos += len;
+  }
   schur_a_.resize(nr, m);
-  for (const auto& [pos, row, len] : schur_row_runs_) schur_a_.middleRows(pos, len) = J.block(row, n_, len, m);
-  // P = J_RS Z over Z's nonzeros, plus (J_RS U) W^T
-  schur_p_.setZero(nr, nc);
-  for (int j = 0; j < nc; ++j) {
-    const double* zc = z.col(schur_cols_[j]).data();
-    for (int k = 0; k < m; ++k)
-      if (zc[k] != 0.0) schur_p_.col(j).noalias() += zc[k] * schur_a_.col(k);
+  schur_a_.setFromTriplets(schur_t_.begin(), schur_t_.end());
+  for (int u : explicit_order_) {
+    const int ou = units[u].offset - n_, nu = static_cast<int>(units[u].spec.states().size());
+    schur_ps_ = schur_a_.middleCols(ou, nu) * schur_zs_[u];
+    for (int k = 0; k < schur_ps_.outerSize(); ++k)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(schur_ps_, k); it; ++it)
+        out(schur_row_of_[it.row()], it.col()) -= it.value();
   }
   if (n_terms > 0) {
+    schur_p_.setZero(nr, nc);
     schur_au_.noalias() = schur_a_ * zu;
     for (int k = 0; k < n_terms; ++k) {
       const OuterTerm& term = outer_[k];
@@ -489,16 +523,26 @@ void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj,
         schur_p_.col(j).noalias() += term.w[c] * schur_au_.col(k);
       }
     }
+    for (int j = 0; j < nc; ++j)
+      for (const auto& [pos, row, len] : schur_row_runs_)
+        out.col(schur_cols_[j]).segment(row, len) -= schur_p_.col(j).segment(pos, len);
   }
-  for (int j = 0; j < nc; ++j)
-    for (const auto& [pos, row, len] : schur_row_runs_)
-      out.col(schur_cols_[j]).segment(row, len) -= schur_p_.col(j).segment(pos, len);
 }
 
 void DaeSystem::assemble(double t, const double* y, const double* yp, double cj, int dim, double* dense, double* sparse,
                          bool factor_outer) {
   const auto& units = fs_.units();
-  if (dense) std::fill(dense, dense + size_t(dim) * dim, 0.0);
+  if (dense && factor_outer && ext_clean_) {
+    // The inlined path's matrix over every state is mostly structural zeros: clear only the blocks the units write
+    // (each unit's rows in the columns it reads), which are all the entries any evaluation can have made nonzero.
+    for (size_t u = 0; u < units.size(); ++u) {
+      const int off = units[u].offset, ns = static_cast<int>(units[u].spec.states().size());
+      for (int c : local_cols_[u]) std::fill_n(dense + size_t(c) * dim + off, ns, 0.0);
+    }
+  } else if (dense) {
+    std::fill(dense, dense + size_t(dim) * dim, 0.0);
+    ext_clean_ = factor_outer;
+  }
   if (sparse) {
     pattern();  // built on first use
     std::fill(sparse, sparse + pattern_.nnz(), 0.0);

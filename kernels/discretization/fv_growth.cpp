@@ -27,6 +27,18 @@ T koren(const T& a, const T& b, double& da, double& db) {
   return 2.0 * a;
 }
 
+// van Albada's slope ab (a + b) / (a^2 + b^2) from the same jumps, and its derivatives.
+template <class T>
+T van_albada(const T& a, const T& b, double& da, double& db) {
+  const double av = value_of(a), bv = value_of(b), q = av * av + bv * bv;
+  da = db = 0.0;
+  if (!(q > 0.0)) return T(0.0);
+  const double num = av * bv * (av + bv);
+  da = (bv * (2.0 * av + bv) * q - 2.0 * av * num) / (q * q);
+  db = (av * (av + 2.0 * bv) * q - 2.0 * bv * num) / (q * q);
+  return a * b * (a + b) / (a * a + b * b);
+}
+
 }  // namespace
 
 void FvGrowth::setup(const Grid& g) {
@@ -60,7 +72,7 @@ FvGrowth::Face<T> FvGrowth::face(const T* N, int f, bool upward) const {
   const double cd = upward ? cplus_[donor] : cminus_[donor], cu = upward ? cminus_[donor] : cplus_[donor];
   const T a = (N[down] / width_[down] - nd) * cd, b = (nd - N[up] / width_[up]) * cu;
   double da, db;
-  r.phi += 0.5 * koren(a, b, da, db);
+  r.phi += 0.5 * (limiter_ == Limiter::kKoren ? koren(a, b, da, db) : van_albada(a, b, da, db));
   // phi = nd + sigma(a, b)/2, a = (n_down - nd) cd, b = (nd - n_up) cu
   r.cols[1] = down, r.cols[2] = up;
   r.d[0] += 0.5 * (-da * cd + db * cu) / width_[donor];

@@ -330,7 +330,8 @@ void Population::declare(UnitSpec& s, Settings& st, std::shared_ptr<const Grid> 
         st.get_choice("breakage_scheme", o.breakage_scheme, reg.breakage_schemes.names(), "breakage scheme"),
         st.where());
   }
-  const std::string gr = st.get_choice("growth", o.growth, with_none(reg.growth.names()), "growth law");
+  const std::string gr =
+      o.growth.empty() ? kNone : st.get_choice("growth", o.growth, with_none(reg.growth.names()), "growth law");
   growth_ = plugin(s, st, reg.growth, gr, o.growth_prefix, o.growth_settings);
   if (growth_.kernel) {
     growth_scheme_ = reg.growth_schemes.create(

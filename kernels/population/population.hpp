@@ -54,7 +54,7 @@ inline constexpr int kMaxProperties = 8;  // extensive properties a population c
 struct PopulationOptions {
   std::string aggregation = "none", aggregation_scheme = "cell_average";
   std::string breakage = "none", fragments = "uniform_binary", breakage_scheme = "cell_average";
-  std::string growth = "none", growth_scheme = "fv_koren";
+  std::string growth = "none", growth_scheme = "fv_koren";  // growth "": no growth setting (the unit grows itself)
   Outside outside = Outside::kRemove;
   std::string agg_prefix = "agg_", sel_prefix = "sel_", frag_prefix = "frag_", growth_prefix = "growth_";
   std::string agg_settings = "agg_", sel_settings = "sel_", frag_settings = "frag_", growth_settings = "growth_";

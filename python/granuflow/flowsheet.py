@@ -57,6 +57,12 @@ class Flowsheet:
         return self._scene.output_names()
 
     @property
+    def output_roles(self) -> list[tuple]:
+        """(role, quantity, class, unit) per reported output, in ``output_names`` order (granuflow.outputs reads
+        them: size distributions, balance terms)."""
+        return [tuple(r) for r in self._scene.output_roles()]
+
+    @property
     def text(self) -> str:
         """The scene text the flowsheet was built from (what a remote worker rebuilds it from)."""
         return self._scene.text
@@ -212,16 +218,20 @@ class Flowsheet:
 
     # -- simulation -----------------------------------------------------------------------------
     def steady_state(self, *, t: float = 0.0, ftol: float = 1e-10, max_iterations: int = 200,
-                     max_pseudo_steps: int = 2000) -> dict:
+                     max_pseudo_steps: int = 2000, stability: bool = False) -> dict:
         """Steady state F(y, y' = 0) = 0 with inputs evaluated at ``t``: Newton (KINSOL) from consistent initial
         values, pseudo-transient continuation when Newton alone fails. Quantities the equations conserve (a batch
         hold-up) keep their initial values and are listed under ``conserved``. Returns ``{"y": {state: value},
-        "iterations", "residual_norm", "method", "pseudo_steps", "conserved", "warnings", "wall_time_s"}``
-        (``warnings`` names a trivial root, e.g. an emptied population). Raises SolverError when the flowsheet has
-        no steady state (a quantity that changes at a constant rate, such as a batch being sprayed) or none is
-        found, naming the time and the unit."""
+        "iterations", "residual_norm", "method", "pseudo_steps", "conserved", "warnings", "wall_time_s", "outputs",
+        "boundary_flows", "stability"}`` (``warnings`` names a trivial root, e.g. an emptied population; ``outputs``
+        the reported outputs at the steady state, NaN for amounts integrated over time; ``boundary_flows`` per
+        balance quantity the flows in and out of the flowsheet, per second). With ``stability``, ``stability`` holds
+        the eigenvalue of the linearized dynamics with the largest real part (``max_real_eigenvalue``,
+        ``imag_of_max`` in 1/s): positive means the steady state is unstable (the dynamics oscillate around it), else
+        None. Raises SolverError when the flowsheet has no steady state (a quantity that changes at a constant rate,
+        such as a batch being sprayed) or none is found, naming the time and the unit."""
         return self._scene.steady_state(t=float(t), ftol=float(ftol), max_iterations=int(max_iterations),
-                                        max_pseudo_steps=int(max_pseudo_steps))
+                                        max_pseudo_steps=int(max_pseudo_steps), stability=bool(stability))
 
     def simulate(self, t_end: float | None = None, *, t_out: Iterable[float] | None = None,
                  n_out: int | None = None, rtol: float | None = None, atol: float | None = None,

@@ -21,6 +21,8 @@ KERNEL_FAMILIES = {
     "aggregation_scheme": ("aggregation schemes", "`aggregation_scheme:` setting"),
     "breakage_scheme": ("breakage schemes", "`breakage_scheme:` setting"),
     "growth_scheme": ("growth schemes", "`growth_scheme:` setting"),
+    "separation": ("separation curves", "`upper_curve:`, `lower_curve:` of `sieve`, `classifier:` of the chambers"),
+    "comminution": ("comminution laws", "`law:` setting of `mill`"),
 }
 
 

@@ -238,12 +238,13 @@ void register_flowsheet(py::module_& m) {
       .def("time_residual", &time_residual, "repeats"_a = 7, "dense_limit"_a = 400)
       .def(
           "steady_state",
-          [](Scene& s, double t, double ftol, long max_iterations, long max_pseudo_steps) {
+          [](Scene& s, double t, double ftol, long max_iterations, long max_pseudo_steps, bool stability) {
             SteadyOptions o;
             o.t = t;
             o.ftol = ftol;
             o.max_iterations = max_iterations;
             o.max_pseudo_steps = max_pseudo_steps;
+            o.stability = stability;
             SteadyResult r;
             {
               py::gil_scoped_release release;
@@ -252,11 +253,22 @@ void register_flowsheet(py::module_& m) {
             const auto names = s.flowsheet->state_names();
             py::dict y;
             for (size_t i = 0; i < r.y.size(); ++i) y[py::str(names[i])] = r.y[i];
+            const auto onames = s.flowsheet->output_names();
+            py::dict out, flows;
+            for (size_t i = 0; i < r.outputs.size(); ++i) out[py::str(onames[i])] = r.outputs[i];
+            for (const auto& [q, f] : r.boundary_flows)
+              flows[py::str(q)] = py::dict("in"_a = f.first, "out"_a = f.second);
+            py::object stab = py::none();
+            if (r.stability_known)
+              stab = py::dict("max_real_eigenvalue"_a = r.max_real_eigenvalue, "imag_of_max"_a = r.imag_of_max,
+                              "time_s"_a = r.stability_time_s);
             return py::dict("y"_a = y, "iterations"_a = r.iterations, "residual_norm"_a = r.residual_norm,
                             "method"_a = r.method, "pseudo_steps"_a = r.pseudo_steps, "conserved"_a = r.conserved,
-                            "warnings"_a = r.warnings, "wall_time_s"_a = r.wall_time_s);
+                            "warnings"_a = r.warnings, "wall_time_s"_a = r.wall_time_s, "outputs"_a = out,
+                            "boundary_flows"_a = flows, "stability"_a = stab);
           },
-          py::kw_only(), "t"_a = 0.0, "ftol"_a = 1e-10, "max_iterations"_a = 200, "max_pseudo_steps"_a = 2000)
+          py::kw_only(), "t"_a = 0.0, "ftol"_a = 1e-10, "max_iterations"_a = 200, "max_pseudo_steps"_a = 2000,
+          "stability"_a = false)
       .def("simulate", &simulate, py::kw_only(), "t_end"_a = py::none(), "t_out"_a = py::none(), "n_out"_a = py::none(),
            "rtol"_a = py::none(), "atol"_a = py::none(), "sensitivities"_a = std::vector<std::string>{},
            "linear_solver"_a = py::none(), "max_steps"_a = py::none(), "method"_a = py::none());

@@ -134,6 +134,8 @@ py::dict kernel_reference() {
   add_family(out, "aggregation_scheme", r.aggregation_schemes);
   add_family(out, "breakage_scheme", r.breakage_schemes);
   add_family(out, "growth_scheme", r.growth_schemes);
+  add_family(out, "separation", r.separation);
+  add_family(out, "comminution", r.comminution);
   return out;
 }
 

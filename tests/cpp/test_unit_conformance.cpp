@@ -59,6 +59,57 @@ units:
 )";
 }
 
+// Paper 003's continuous units in one loop: a wet granulator with aggregation and a classified discharge held at its
+// set mass, a two-deck sieve (sharp upper deck, Molerus-Hoffmann lower deck), a Vogel-Peukert mill on the oversize,
+// part of the undersize split off, and a mixer returning fines, milled oversize and fresh seeds.
+const char* kSieveMillLoop = R"(
+scene: sieve_mill_loop
+t_end: 2 h
+output: {n: 5}
+solver: {rtol: 1e-8, atol: 1e-10}
+particles: {settings: {classes: 12, d_min: 2.0e-4, d_max: 3.0e-3}, params: {rho_s: 1500, eps_intra: 0.1}}
+units:
+  seed: {type: solids_feed, params: {mdot: 5 kg/h, d50: 400 um, sigma: 1.3, X: 0.02, T: 30 degC}}
+  gran:
+    type: granulator
+    settings: {discharge: classified, bed_mass: controlled, classifier: plitt, drying: first_order,
+               aggregation: constant, aggregation_scheme: fixed_pivot}
+    params: {bed_mass: 20 kg, M_set: 22 kg, tau_c: 120 s, mdot_max: 0.5, d50_0: 800 um, sigma_0: 1.4,
+             m_spray: 60 kg/h, w_spray: 0.3, X0: 0.01, tau_dry: 30 s, X_eq: 0.002, class_d_cut: 900 um, class_m: 4,
+             agg_beta0: 1e-12}
+  sieve:
+    type: sieve
+    settings: {upper_curve: sharp, lower_curve: molerus_hoffmann}
+    params: {upper_d_cut: 1.5 mm, lower_d_cut: 1.0 mm, lower_k: 8}
+  mill: {type: mill, settings: {law: vogel_peukert}, params: {W_m: 300, E_mat: 100, W_min: 20, q: 1.2}}
+  split: {type: solids_splitter, params: {fraction: 0.8}}
+  mix: {type: solids_mixer, settings: {inlets: 3}}
+  product: {type: solids_product}
+  fines_out: {type: solids_product}
+connections: [seed.out -> mix.in1, sieve.undersize -> split.in, split.out1 -> mix.in2, split.out2 -> fines_out.in,
+              mill.out -> mix.in3, mix.out -> gran.feed, gran.discharge -> sieve.in, sieve.oversize -> mill.in,
+              sieve.product -> product.in]
+)";
+
+// The two-compartment bed of paper 003 (Eqs. (7.37)-(7.39)) run continuously: spray zone and drying zone exchanging
+// particles, the drying zone fed and discharged (free hold-up), the water of the spray drying in both zones.
+const char* kTwoZone = R"(
+scene: two_zone_continuous
+t_end: 600 s
+output: {n: 5}
+solver: {rtol: 1e-8, atol: 1e-10}
+particles: {settings: {classes: 15, d_min: 5.0e-4, d_max: 4.0e-3}, params: {rho_s: 1040, eps_intra: 0}}
+units:
+  seed: {type: solids_feed, params: {mdot: 10 kg/h, d50: 1.5 mm, sigma: 1.2}}
+  spray: {type: spray_compartment, settings: {drying: first_order, growth_scheme: fv_upwind},
+          params: {bed_mass: 0.08, tau: 4 s, X0: 0.01, tau_dry: 20 s, d50_0: 1.2 mm, sigma_0: 1.6}}
+  dry: {type: drying_compartment, settings: {drying: first_order, discharge: unclassified},
+        params: {bed_mass: 3.92, tau: 196 s, k_discharge: 1e-3, X0: 0.01, tau_dry: 20 s, d50_0: 1.2 mm,
+                 sigma_0: 1.6}}
+  product: {type: solids_product}
+connections: [spray.out -> dry.in, dry.out -> spray.in, seed.out -> dry.feed, dry.discharge -> product.in]
+)";
+
 // Scenes and the unit types each one covers.
 std::vector<std::pair<std::string, Scene>> scenes() {
   std::vector<std::pair<std::string, Scene>> v;
@@ -67,6 +118,8 @@ std::vector<std::pair<std::string, Scene>> scenes() {
   v.emplace_back("continuous dryer", scene_from_file("flowsheets/continuous_drying_bed.yaml"));
   v.emplace_back("pbm", scene_from_text(kPbmMechanisms));
   v.emplace_back("pbm 2d", scene_from_text(pbm_2d_scene()));
+  v.emplace_back("sieve-mill loop", scene_from_text(kSieveMillLoop));
+  v.emplace_back("two-zone bed", scene_from_text(kTwoZone));
   return v;
 }
 

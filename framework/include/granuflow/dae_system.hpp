@@ -7,6 +7,7 @@
 // every unit's Workspace, so several DaeSystems over one flowsheet can run in parallel threads.
 #pragma once
 #include <Eigen/Dense>
+#include <Eigen/SparseCore>
 #include <memory>
 #include <string>
 #include <tuple>
@@ -134,11 +135,16 @@ class DaeSystem {
   };
   std::vector<OuterTerm> outer_;  // storage reused between Jacobians; the first n_outer_ are current
   size_t n_outer_ = 0;
-  Eigen::MatrixXd schur_z_, schur_u_, schur_a_, schur_au_, schur_p_;
+  Eigen::MatrixXd schur_u_, schur_au_, schur_p_;
+  Eigen::SparseMatrix<double> schur_s_, schur_a_, schur_ps_;  // a block of J_SS, J_RS, a product of sparse blocks
+  std::vector<Eigen::SparseMatrix<double>> schur_zs_;         // per explicit unit: its rows of Z = J_SS^-1 J_SR
+  std::vector<Eigen::Triplet<double>> schur_t_;
+  std::vector<int> schur_row_of_;                          // position in schur_rows_ -> global row
   std::vector<int> schur_rows_, schur_cols_;               // where the Schur correction can be nonzero
   std::vector<int> schur_col_pos_;                         // integrated column -> position in schur_cols_, or -1
   std::vector<std::tuple<int, int, int>> schur_row_runs_;  // (position in schur_rows_, first row, length)
   std::vector<double> y_ext_, yp_ext_, jac_ext_, scratch_;
+  bool ext_clean_ = false;  // jac_ext_ is zero outside the units' blocks (assemble then clears only those)
   double segment_start_ = 0.0;
   std::vector<std::vector<double>> pvals_;      // per unit, at the last fill time
   std::vector<std::vector<double>> pconst_;     // per unit, the run's values at t = 0 (links applied)

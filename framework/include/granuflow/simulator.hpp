@@ -2,7 +2,9 @@
 // breakpoints, output at requested times, forward sensitivities w.r.t. named parameters, and a KINSOL
 // steady-state solve. Failures throw SolverError naming the time, the unit and the worst residual.
 #pragma once
+#include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "granuflow/dae_system.hpp"
@@ -82,6 +84,7 @@ struct SteadyOptions {
   double ftol = 1e-10;           // scaled residual tolerance
   long max_iterations = 200;     // Newton iterations per attempt
   long max_pseudo_steps = 2000;  // pseudo-transient steps when Newton from the start fails (0: none)
+  bool stability = false;        // eigenvalues of the linearization at the steady state (dense systems)
   void validate() const;
 };
 
@@ -94,6 +97,18 @@ struct SteadyResult {
   std::vector<std::string> conserved;  // combinations the start fixes (a batch hold-up ...)
   std::vector<std::string> warnings;   // e.g. the trivial root
   double wall_time_s = 0.0;
+  // Reported outputs at the steady state (fs.output_names() order); outputs that integrate a flow over time
+  // (quadratures: amounts fed or collected) have no steady value and are NaN.
+  std::vector<double> outputs;
+  // Per balance quantity (solids, water, energy): the flows across the flowsheet's boundary at the steady state,
+  // summed over the quadratures declared as balance in / out (per second: kg/s, J/s).
+  std::map<std::string, std::pair<double, double>> boundary_flows;
+  // With SteadyOptions::stability: the eigenvalue of the linearized dynamics (algebraic states eliminated) with the
+  // largest real part; a positive real part with an imaginary part means the steady state is unstable and the
+  // dynamics leave it in growing oscillations of period 2 pi / |imag| (a limit cycle, not a numerical artefact).
+  bool stability_known = false;
+  double max_real_eigenvalue = 0.0, imag_of_max = 0.0;  // 1/s
+  double stability_time_s = 0.0;
 };
 
 // Solves F(y, y' = 0) = 0 from the initial values (or from `guess` when given): conserved combinations kept at their

@@ -1,4 +1,4 @@
-"""Command line: ``granuflow run | sweep | contour | calibrate | describe | units | kernels | docs | bench``.
+"""Command line: ``granuflow run | steady | sweep | contour | calibrate | describe | units | kernels | docs | bench``.
 
 Exit codes: 0 success, 2 bad input (scene, option, parameter), 3 solver failure. A failure prints one line
 on stderr naming what went wrong. Each command's module is imported only when it runs, so that ``granuflow run``
@@ -16,7 +16,8 @@ from .common import EXIT_BAD_INPUT, EXIT_SOLVER, Parser, one_line
 _QUICK = {"core": "tank chains of 100 and 1000 states (not 10000)",
           "pbm": "q 1, 2, 4; rtol 1e-2, 1e-4, 1e-6; integrators auto, ida, adams, erk",
           "scene": "10 classes only, SciPy once", "sweep": "a 9 x 9 map, one repeat, no Dask",
-          "pbm2d": "20x20 and 40x40 bins, dense LU and SciPy at 20x20, the other sections at 20x20"}
+          "pbm2d": "20x20 and 40x40 bins, dense LU and SciPy at 20x20, the other sections at 20x20",
+          "loop": "50 classes only, one repeat"}
 
 
 def _cmd(module: str, name: str):
@@ -58,6 +59,14 @@ def main(argv=None) -> int:
                         "estimated numerical error of every summary output goes to summary.json and the plots")
     r.add_argument("--quiet", action="store_true", help="no output but errors")
     r.set_defaults(func=_cmd("run", "cmd_run"))
+    st = sub.add_parser("steady", help="solve a scene's steady state directly; write steady.json and steady_psd.csv")
+    st.add_argument("scene")
+    st.add_argument("--out", required=True, help="output folder (created)")
+    st.add_argument("--set", action="append", metavar="UNIT.PARAM=VALUE", help="override a parameter (unit allowed)")
+    st.add_argument("--t", help="time at which scheduled inputs are evaluated (s, or with a unit: '70 h'; default 0)")
+    st.add_argument("--no-stability", action="store_true", help="skip the eigenvalues of the linearized dynamics")
+    st.add_argument("--quiet", action="store_true", help="no output but errors")
+    st.set_defaults(func=_cmd("steady", "cmd_steady"))
     w = sub.add_parser("sweep", help="run a sweep file; write sweep.csv and sweep.json")
     w.add_argument("sweepfile")
     w.add_argument("--out", required=True, help="output folder (created)")
@@ -80,6 +89,8 @@ def main(argv=None) -> int:
     k.add_argument("--error-estimate", action="store_true",
                    help="each point also on finer size grids and a tighter tolerance: a map of each output's "
                         "estimated numerical error (contour_<output>_err.png) next to the output's")
+    k.add_argument("--steady", action="store_true",
+                   help="each point's steady state, solved directly (continuous processes), instead of a run")
     k.set_defaults(func=_cmd("contour", "cmd_contour"))
     u = sub.add_parser("units", help="the built-in unit types; with NAME its ports, settings, parameters, outputs")
     u.add_argument("name", nargs="?", help="a unit type (e.g. fluid_bed)")
@@ -98,12 +109,12 @@ def main(argv=None) -> int:
     g.add_argument("--quiet", action="store_true")
     g.set_defaults(func=_cmd("info", "cmd_docs"))
     b = sub.add_parser("bench", help="benchmarks: speed against error (never pass/fail on time)")
-    b.add_argument("what", choices=["core", "pbm", "pbm2d", "scene", "sweep"])
+    b.add_argument("what", choices=["core", "pbm", "pbm2d", "scene", "sweep", "loop"])
     b.add_argument("--json", action="store_true", help="print JSON records")
     b.add_argument("--repeats", type=int, default=7)
     b.add_argument("--quick", action="store_true",
                    help="a reduced set: " + "; ".join(f"{k}: {v}" for k, v in _QUICK.items()))
-    b.add_argument("--no-scipy", action="store_true", help="scene, pbm2d: time granuflow only")
+    b.add_argument("--no-scipy", action="store_true", help="scene, pbm2d, loop: time granuflow only")
     b.add_argument("--quiet", action="store_true", help="no progress lines")
     b.set_defaults(func=_cmd("bench", "cmd_bench"))
     c = sub.add_parser("calibrate", help="staged calibration against experiments; report, tables, parity plots")

@@ -1,5 +1,5 @@
-"""granuflow bench core|pbm|pbm2d|scene|sweep: speed against error, never pass/fail on time. Every subcommand honours
---quick (a reduced set, stated in its help) and --repeats; progress goes to stderr on a terminal only."""
+"""granuflow bench core|pbm|pbm2d|scene|sweep|loop: speed against error, never pass/fail on time. Every subcommand
+honours --quick (a reduced set, stated in its help) and --repeats; progress goes to stderr on a terminal only."""
 from __future__ import annotations
 
 import json
@@ -27,6 +27,13 @@ def cmd_bench(args) -> int:
         records = bench_2d.bench_pbm2d(quick=args.quick, repeats=args.repeats, scipy=not args.no_scipy,
                                        progress=progress)
         summary = bench_2d.summary
+    elif args.what == "loop":  # paper 003's sieve-mill loop to steady state, against SciPy
+        from .. import bench_loop
+
+        records = bench_loop.bench_loop(classes=(50,) if args.quick else (50, 100, 200),
+                                        repeats=1 if args.quick else max(1, min(3, args.repeats)),
+                                        scipy=not args.no_scipy, progress=progress)
+        summary = bench_loop.loop_summary
     elif args.what == "pbm":
         records = bench.bench_pbm(quick=args.quick, repeats=args.repeats, progress=progress)
         summary = bench.pbm_summary

@@ -41,7 +41,8 @@ def cmd_contour(args) -> int:
         client = executor = Client(args.dask)
     try:
         grid = contour_map(fs, args.x, args.y, outputs, fixed=fixed, t_end=t_end, workers=args.workers,
-                           executor=executor, progress=progress_option(args), error_estimate=args.error_estimate)
+                           executor=executor, progress=progress_option(args), error_estimate=args.error_estimate,
+                           steady=args.steady)
     finally:
         if client is not None:
             client.close()
@@ -66,7 +67,8 @@ def cmd_contour(args) -> int:
     meta = {"scene": os.path.abspath(args.scene), "x": {"param": grid.x.param, "unit": grid.x.unit,
                                                         "values": grid.x.values.tolist()},
             "y": {"param": grid.y.param, "unit": grid.y.unit, "values": grid.y.values.tolist()},
-            "outputs": list(grid.outputs), "fixed": fixed, "t_end_s": grid.t_end_s, "n_points": grid.n_simulations,
+            "outputs": list(grid.outputs), "fixed": fixed, "t_end_s": None if args.steady else grid.t_end_s,
+            "steady_state": bool(args.steady), "n_points": grid.n_simulations,
             "n_failed": n_failed, "wall_time_s": grid.wall_time_s,
             "simulations_per_s": json_value(grid.simulations_per_s),
             "constraints": [str(c) for c in cons], "units": dict(df.attrs.get("units", {}))}

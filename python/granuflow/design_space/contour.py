@@ -86,8 +86,10 @@ def grid_points(x: Axis, y: Axis) -> list[dict]:
 def contour_map(flowsheet: Flowsheet, x, y, outputs: Sequence[str] = ("d50_um",), *,
                 fixed: Mapping[str, float | str] | None = None, t_end: float | str | None = None,
                 workers: int | None = None, executor: str | Any = "threads", progress: bool | None = None,
-                simulate: Mapping[str, Any] | None = None, error_estimate: bool = False) -> ContourGrid:
-    """Simulate every point of the grid ``x`` by ``y`` and collect ``outputs`` at the end time.
+                simulate: Mapping[str, Any] | None = None, error_estimate: bool = False,
+                steady: bool = False) -> ContourGrid:
+    """Simulate every point of the grid ``x`` by ``y`` and collect ``outputs`` at the end time (with ``steady``:
+    at the steady state, solved directly for each point; a continuous process needs no long transient).
 
     Parameters
     ----------
@@ -117,7 +119,8 @@ def contour_map(flowsheet: Flowsheet, x, y, outputs: Sequence[str] = ("d50_um",)
     outputs = sweep.check_outputs(fs, list(outputs))
     t0 = time.perf_counter()
     df = sweep.run_sweep(fs, grid_points(ax, ay), outputs, workers=workers, progress=progress, executor=executor,
-                         simulate=map_sim_kwargs(simulate), desc="contour map", error_estimate=error_estimate)
+                         simulate=map_sim_kwargs(simulate), desc="contour map", error_estimate=error_estimate,
+                         steady=steady)
     wall = time.perf_counter() - t0
     shape = (len(ay.values), len(ax.values))
     if error_estimate:

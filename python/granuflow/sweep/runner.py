@@ -93,7 +93,7 @@ def run_sweep(flowsheet: Flowsheet, points: Sequence[Mapping[str, float | str]],
               outputs: Sequence[str] = DEFAULT_OUTPUTS, *, names: Sequence[str] | None = None,
               workers: int | None = None, progress: bool | None = None, executor: str | Any = "threads",
               t_end: float | None = None, raise_errors: bool = False, simulate: Mapping[str, Any] | None = None,
-              desc: str = "sweep", error_estimate: bool = False):
+              desc: str = "sweep", error_estimate: bool = False, steady: bool = False):
     """Simulate ``flowsheet`` once per point and collect ``outputs``.
 
     ``points``: one mapping per run, ``{"unit.param": value}`` with SI floats or strings with a unit; parameters
@@ -108,7 +108,9 @@ def run_sweep(flowsheet: Flowsheet, points: Sequence[Mapping[str, float | str]],
     ``progress``: tqdm bar on stderr (default: only when stderr is a terminal). ``simulate``: keyword arguments
     of ``Flowsheet.simulate`` (``rtol``, ``atol``, ...). ``error_estimate``: every point re-solved as
     ``simulate(error_estimate=True)`` (four solves instead of one), and a column ``<output>_err`` per output with its
-    estimated numerical error (signed: value minus the converged answer; granuflow.accuracy).
+    estimated numerical error (signed: value minus the converged answer; granuflow.accuracy). ``steady``: solve each
+    point's steady state (:func:`granuflow.steady.steady_values`, inputs at t = 0) instead of simulating; a point
+    without one fails (error estimates are not made for steady states).
     """
     import numpy as np
     import pandas as pd
@@ -138,13 +140,23 @@ def run_sweep(flowsheet: Flowsheet, points: Sequence[Mapping[str, float | str]],
             fs.update(point)
             for k in params:
                 row[k] = fs.get(k)
-            res = fs.simulate(**sim_kwargs, warn=False, error_estimate=bool(error_estimate))
-            row.update(final_values(res, outputs))
-            if error_estimate:
-                row.update(final_errors(res, outputs))
-            row["solve_time_s"] = res.wall_time_s
-            # an ok point's message holds what its result warns of (a size grid that clips the distribution)
-            row["status"], row["message"] = STATUS_OK, "; ".join(f"warning: {w}" for w in res.warnings)
+            if steady:
+                from ..steady import steady_values
+
+                t1 = time.perf_counter()
+                row.update(steady_values(fs, outputs))
+                if error_estimate:
+                    row.update({error_column(o): float("nan") for o in outputs})
+                row["solve_time_s"] = time.perf_counter() - t1
+                row["status"], row["message"] = STATUS_OK, ""
+            else:
+                res = fs.simulate(**sim_kwargs, warn=False, error_estimate=bool(error_estimate))
+                row.update(final_values(res, outputs))
+                if error_estimate:
+                    row.update(final_errors(res, outputs))
+                row["solve_time_s"] = res.wall_time_s
+                # an ok point's message holds what its result warns of (a size grid that clips the distribution)
+                row["status"], row["message"] = STATUS_OK, "; ".join(f"warning: {w}" for w in res.warnings)
         except (SolverError, ConfigError) as e:
             if raise_errors:
                 raise

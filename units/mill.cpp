@@ -1,0 +1,146 @@
+// Mill without hold-up (explicit): out_i = sum_k P_ik in_k for the dry solids and for the water they carry, P the
+// comminution law's mass-transfer matrix (kernels/comminution/comminution_law.hpp: columns sum to one, so mass is
+// conserved to round-off); the temperature passes through (the grinding energy is not accounted for).
+//
+// Every outlet class reads every coarser inlet class, so the class-coloured AD of the framework does not apply; the
+// unit supplies its whole Jacobian (the identity on its own states, -P on the inlet), which is the matrix itself.
+#include "mill.hpp"
+
+#include "granuflow/flowsheet.hpp"
+#include "kernels/discretization/psd.hpp"
+#include "kernels/registry.hpp"
+#include "particles.hpp"
+
+namespace granuflow::units {
+namespace {
+
+struct Work : Workspace {
+  std::vector<double> key, P;
+  std::vector<Jet> P_jet, scratch;
+};
+
+class Mill : public UnitBase<Mill> {
+ public:
+  std::string type() const override { return "mill"; }
+  void declare(UnitSpec& s, Settings& st) override {
+    const ParticleSystem& ps = particle_system(s, st);
+    grid_ = ps.grid();
+    n_ = grid_->size();
+    const auto& reg = kernels::registries().comminution;
+    law_ = reg.create(st.get_choice("law", "lognormal", reg.names(), "comminution law"), st.where());
+    law_->declare(st, "");
+    first_ = static_cast<int>(s.params().size());
+    for (const ParamSpec& p : law_->params()) s.add_param(p);
+    count_ = static_cast<int>(s.params().size()) - first_;
+    sM_ = s.add_states("mdot", n_, StateKind::Algebraic, "kg/s", 1e-2);
+    sW_ = s.add_states("water", n_, StateKind::Algebraic, "kg/s", 1e-3);
+    s.set_explicit();
+    s.set_analytic_part(true);
+    const auto& d = grid_->diameter_pivots();
+    in_ = s.add_port("in", streams::solids(), PortDir::In, n_);
+    s.set_port_grid(in_, d);
+    const PortId out = s.add_port("out", streams::solids(), PortDir::Out, n_);
+    s.set_port_grid(out, d);
+    for (int i = 0; i < n_; ++i) {
+      s.provide(out, solids::mdot(i), sM_ + i);
+      s.provide(out, solids::water(n_, i), sW_ + i);
+    }
+    s.forward(out, solids::T(n_), in_, solids::T(n_));
+    o_m_ = s.add_output("mdot", "kg/s");
+    o_d50_in_ = s.add_output("d50_in", "m");
+    o_d50_out_ = s.add_output("d50_out", "m");
+  }
+  std::unique_ptr<Workspace> workspace() const override { return std::make_unique<Work>(); }
+
+  template <class T>
+  Status eval(const Ctx<T>& c) const {
+    const T* P = matrix(c);
+    for (int i = 0; i < n_; ++i) {
+      T m(0.0), w(0.0);
+      for (int k = i; k < n_; ++k) {
+        const T& a = P[size_t(k) * n_ + i];
+        m += a * c.port(in_, solids::mdot(k));
+        w += a * c.port(in_, solids::water(n_, k));
+      }
+      c.res(sM_ + i) = c.x(sM_ + i) - m;
+      c.res(sW_ + i) = c.x(sW_ + i) - w;
+    }
+    return Status::kOk;
+  }
+  void analytic_jacobian(const Ctx<double>& c, double, JacobianSink& sink) const override {
+    const double* P = matrix(c);
+    const auto& ports = *c.port_index;
+    for (int i = 0; i < n_; ++i) {
+      sink.add(sM_.i + i, c.offset + sM_.i + i, 1.0);
+      sink.add(sW_.i + i, c.offset + sW_.i + i, 1.0);
+      for (int k = i; k < n_; ++k) {
+        const double a = P[size_t(k) * n_ + i];
+        if (a == 0.0) continue;
+        const int cm = ports[in_.i][solids::mdot(k)], cw = ports[in_.i][solids::water(n_, k)];
+        if (cm >= 0) sink.add(sM_.i + i, cm, -a);
+        if (cw >= 0) sink.add(sW_.i + i, cw, -a);
+      }
+    }
+  }
+  template <class T>
+  void init(InitCtx<T>& c) const {
+    for (int i = 0; i < n_; ++i) c.x(sM_ + i) = c.x(sW_ + i) = T(0.0);
+  }
+  template <class T>
+  void outputs(const Ctx<T>& c) const {
+    std::vector<T> in(n_), out(n_);
+    T m(0.0);
+    for (int i = 0; i < n_; ++i) in[i] = c.port(in_, solids::mdot(i)), out[i] = c.x(sM_ + i), m += out[i];
+    c.out(o_m_) = m;
+    const auto& de = grid_->diameter_edges();
+    c.out(o_d50_in_) = m > 0.0 ? kernels::characteristic_diameter_of_mass(de, in.data(), 0.5) : T(0.0);
+    c.out(o_d50_out_) = m > 0.0 ? kernels::characteristic_diameter_of_mass(de, out.data(), 0.5) : T(0.0);
+  }
+
+ private:
+  // The law's matrix for this evaluation: cached per parameter values for doubles; recomputed in Jets when a law
+  // parameter carries a derivative.
+  const double* matrix(const Ctx<double>& c) const {
+    Work& w = c.template ws<Work>();
+    refresh(w, c.p + first_);
+    return w.P.data();
+  }
+  const Jet* matrix(const Ctx<Jet>& c) const {
+    Work& w = c.template ws<Work>();
+    bool derivative = false;
+    for (int k = first_; k < first_ + count_; ++k) derivative = derivative || !c.p[k].v.isZero();
+    if (derivative) {
+      w.scratch.resize(size_t(n_) * n_);
+      law_->matrix(grid_->diameter_edges(), grid_->diameter_pivots(), c.p + first_, w.scratch.data());
+      return w.scratch.data();
+    }
+    std::vector<double> v(count_);
+    for (int k = 0; k < count_; ++k) v[k] = c.p[first_ + k].a;
+    refresh(w, v.data());
+    return w.P_jet.data();
+  }
+  void refresh(Work& w, const double* p) const {
+    if (!w.P.empty() && std::equal(w.key.begin(), w.key.end(), p)) return;
+    w.key.assign(p, p + count_);
+    w.P.resize(size_t(n_) * n_);
+    law_->matrix(grid_->diameter_edges(), grid_->diameter_pivots(), p, w.P.data());
+    w.P_jet.resize(w.P.size());
+    for (size_t k = 0; k < w.P.size(); ++k) w.P_jet[k] = Jet(w.P[k]);
+  }
+
+  int n_ = 0, first_ = 0, count_ = 0;
+  std::shared_ptr<const kernels::Grid> grid_;
+  std::unique_ptr<kernels::ComminutionLaw> law_;
+  PortId in_;
+  StateId sM_, sW_;
+  OutputId o_m_, o_d50_in_, o_d50_out_;
+};
+
+}  // namespace
+
+void register_mill(Registry<Unit>& r) {
+  r.add("mill", "mill: a comminution law spreads each class over finer ones, mass conserved exactly (paper 003)",
+        [] { return std::make_unique<Mill>(); });
+}
+
+}  // namespace granuflow::units

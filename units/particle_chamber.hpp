@@ -1,0 +1,107 @@
+// A well-mixed compartment of a spray fluidized bed holding a particle population on the flowsheet's size grid: the
+// shared implementation of the paper-003 units granulator (a whole continuous chamber), spray_compartment and
+// drying_compartment (the two zones of Eqs. (7.37)-(7.39)). Not registered itself; each unit file chooses a Role.
+//
+// States per class i: dry solids M_i (kg), optionally water W_i (kg, setting drying: first_order), and the flows of
+// every outlet (algebraic, kg/s). Mechanisms:
+//  * layering growth from a spray (granulator, spray compartment): the sprayed solids M_sus = m_spray w_spray spread
+//    over the particle surface, G = 2 M_sus / (rho pi mu_2) the same for every particle (paper 003, Eqs.
+//    (7.32)-(7.34)), on the finite-volume scheme of the population engine (kernels/discretization/fv_growth.hpp)
+//    normalized so that the population gains exactly M_sus kg/s; rho is the particles' envelope density, so layer and
+//    core are alike;
+//  * aggregation and breakage by the population engine (settings aggregation, breakage; off by default);
+//  * drying: the sprayed water lands on the classes in proportion to their surface and dries at the rate
+//    (W_i - X_eq M_i) / tau_dry (a lumped first-order drying kinetics), or, with drying: none, evaporates at once;
+//  * outlets (every class leaves at a rate r_i, carrying its water, M_i r_i and W_i r_i):
+//      exchange (compartments): r_i = 1 / tau, the mean residence time of the compartment (Eqs. (7.37), (7.38));
+//      discharge unclassified: r_i = r, classified: r_i = r T_i with the cell fractions T_i of a separation curve
+//      (a classifying discharge: sifter, counter-current tube); r = k_discharge (bed mass free), or, with the bed
+//      mass held by a discharge controller, chosen so that the discharge R = sum_i r_i M_i is
+//          R = min(softplus(u), mdot_max),  u = (inflows + M_sus - other outflows) + (M - M_set) / tau_c,
+//      an ideal level controller (discharge = inflow) with a proportional correction, limited by the capacity of
+//      the discharge; softplus(u) = (u + sqrt(u^2 + eps^2)) / 2, eps = 1e-3 M_set / tau_c, keeps the valve from
+//      opening backwards while the bed fills at start-up and leaves the steady bed mass within eps^2 tau_c / (4 R)
+//      of M_set; the minimum has the same smooth form, min(a, b) = a - softplus(a - b). With a recycle the inflow
+//      includes the recycle, which depends on the discharge: the equations are solved together (an algebraic loop),
+//      and while the bed holds few particles of product size the ideal controller circulates R = M_sus / (product
+//      fraction), which the capacity bounds.
+// The bed is isothermal at T_bed (held by the fluidization gas, which is not modelled): the heat the gas supplies is
+// reported as a balance term (energy in), so the flowsheet's energy balance closes.
+#pragma once
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "classifier.hpp"
+#include "granuflow/unit.hpp"
+#include "kernels/discretization/fv_growth.hpp"
+#include "kernels/population/population.hpp"
+#include "particles.hpp"
+
+namespace granuflow::units {
+
+enum class ChamberRole { kGranulator, kSprayZone, kDryingZone };
+
+class ParticleChamber : public UnitBase<ParticleChamber> {
+ public:
+  explicit ParticleChamber(ChamberRole role) : role_(role) {}
+  std::string type() const override;
+  void declare(UnitSpec& s, Settings& st) override;
+  std::unique_ptr<Workspace> workspace() const override;
+  void configure(const UnitSpec& spec, const double* p, const double* shared, Workspace& ws) const override;
+  void check(const UnitSpec& spec, const double* p) const override;
+  void analytic_jacobian(const Ctx<double>& c, double cj, JacobianSink& sink) const override;
+
+  template <class T>
+  Status eval(const Ctx<T>& c) const;
+  template <class T>
+  void init(InitCtx<T>& c) const;
+  template <class T>
+  void outputs(const Ctx<T>& c) const;
+  template <class T>
+  void quad(const Ctx<T>& c) const;
+
+  enum class Discharge { kNone, kUnclassified, kClassified };
+  struct Work;
+
+ private:
+  struct Outlet {
+    PortId port;
+    StateId m, w;  // per-class flows of solids and water (w: -1 when dry)
+  };
+  // What crosses the flowsheet's boundary in this unit per second (quad(), outputs()).
+  template <class T>
+  struct Boundary {
+    T water_in, vapour, h_spray, h_vapour, energy_in;
+  };
+  template <class T>
+  Boundary<T> boundary(const Ctx<T>& c) const;
+  template <class T>
+  T spray_solids(const Ctx<T>& c) const;
+  template <class T>
+  void growth_rates(const Ctx<T>& c, const T* N, const T* W, const T& amount, T* dM, T* dW) const;
+  template <class T>
+  kernels::Population::State<T> population_state(const Ctx<T>& c, const T* N, const T* floor, T* temp) const;
+
+  ChamberRole role_;
+  int n_ = 0;
+  ParticleParams pp_;
+  std::shared_ptr<const kernels::Grid> grid_;
+  std::unique_ptr<kernels::FvGrowth> fv_;  // layering growth, when the unit sprays
+  kernels::Population pop_;                // aggregation and breakage
+  bool spray_ = false, wet_ = false;
+  Discharge discharge_ = Discharge::kNone;
+  bool controlled_ = false;
+  Classifier classifier_;
+  ParamId p_mass_, p_d50_, p_sigma_, p_x0_, p_t_, p_cpl_;
+  ParamId p_spray_, p_w_, p_tspray_, p_taudry_, p_xeq_, p_tau_, p_k_, p_mset_, p_tauc_, p_rmax_;
+  StateId sM_, sW_, sT_, sZero_;
+  std::vector<PortId> inlets_;
+  Outlet exchange_, discharge_out_;
+  ReductionId r_mass_, r_tm_, r_in_, r_surface_;
+  QuadId q_solids_in_, q_water_in_, q_water_out_, q_energy_in_, q_energy_out_;
+  OutputId o_mass_, o_moisture_, o_d_[3], o_d32_, o_dmean_, o_sigma_, o_g_, o_particles_, o_dis_, o_exch_, o_top_,
+      o_heat_, o_vapour_, o_hold_solids_, o_hold_water_, o_hold_energy_, o_psd_d_, o_psd_m_;
+};
+
+}  // namespace granuflow::units

@@ -1,0 +1,115 @@
+// Two-deck screen (paper 003, section 7.5.1: the product is the fraction between the decks, oversize and undersize
+// are recycled). Zero hold-up, explicit: per size class i with the decks' cell fractions T_up,i and T_lo,i (the
+// separation curves averaged over the class, kernels/classification/separation_curve.hpp),
+//     oversize_i = T_up,i in_i,   product_i = T_lo,i (in_i - oversize_i),   undersize_i = in_i - oversize_i -
+//     product_i,
+// so the three outlets add up to the feed class by class (to one rounding), water goes with the solids of its class,
+// and the temperature passes through. With the sharp curve the decks split exactly at their cut sizes.
+#include "sieve.hpp"
+
+#include "classifier.hpp"
+#include "granuflow/flowsheet.hpp"
+#include "particles.hpp"
+
+namespace granuflow::units {
+namespace {
+
+struct Work : Workspace {
+  Classifier::Cache upper, lower;
+  std::vector<Jet> su, sl;
+};
+
+class Sieve : public UnitBase<Sieve> {
+ public:
+  std::string type() const override { return "sieve"; }
+  void declare(UnitSpec& s, Settings& st) override {
+    const ParticleSystem& ps = particle_system(s, st);
+    grid_ = ps.grid();
+    n_ = grid_->size();
+    upper_.declare(s, st, "upper_curve", "plitt", "upper_", "separation curve of the upper deck (oversize)", grid_,
+                   2e-3);
+    lower_.declare(s, st, "lower_curve", "plitt", "lower_", "separation curve of the lower deck (product)", grid_,
+                   1e-3);
+    in_ = s.add_port("in", streams::solids(), PortDir::In, n_);
+    const char* names[3] = {"oversize", "product", "undersize"};
+    for (int o = 0; o < 3; ++o) {
+      sM_[o] = s.add_states(std::string(names[o]) + "_mdot", n_, StateKind::Algebraic, "kg/s", 1e-2);
+      sW_[o] = s.add_states(std::string(names[o]) + "_water", n_, StateKind::Algebraic, "kg/s", 1e-3);
+    }
+    s.set_explicit();
+    const auto& d = grid_->diameter_pivots();
+    s.set_port_grid(in_, d);
+    for (int o = 0; o < 3; ++o) {
+      const PortId out = s.add_port(names[o], streams::solids(), PortDir::Out, n_);
+      s.set_port_grid(out, d);
+      for (int i = 0; i < n_; ++i) {
+        s.provide(out, solids::mdot(i), sM_[o] + i);
+        s.provide(out, solids::water(n_, i), sW_[o] + i);
+      }
+      s.forward(out, solids::T(n_), in_, solids::T(n_));
+    }
+    s.set_classes(
+        {n_, {sM_[0], sW_[0], sM_[1], sW_[1], sM_[2], sW_[2]}, {{in_, solids::mdot(0)}, {in_, solids::water(n_, 0)}}});
+    for (int o = 0; o < 3; ++o) o_m_[o] = s.add_output(std::string(names[o]) + "_mdot", "kg/s");
+    o_frac_ = s.add_output("product_fraction", "-");
+  }
+  void check(const UnitSpec&, const double* p) const override {
+    if (!(p[lower_.d_cut_index()] < p[upper_.d_cut_index()]))
+      throw ConfigError(violation("lower_d_cut", p[lower_.d_cut_index()], "m",
+                                  "lower_d_cut < upper_d_cut (" + fmt_num(p[upper_.d_cut_index()]) + " m)"));
+  }
+  std::unique_ptr<Workspace> workspace() const override { return std::make_unique<Work>(); }
+
+  template <class T>
+  Status eval(const Ctx<T>& c) const {
+    Work& w = c.template ws<Work>();
+    const T *tu, *tl;
+    if constexpr (std::is_same_v<T, double>)
+      tu = upper_.fractions(c.p, w.upper), tl = lower_.fractions(c.p, w.lower);
+    else
+      tu = upper_.fractions(c.p, w.upper, w.su), tl = lower_.fractions(c.p, w.lower, w.sl);
+    for (int i = 0; i < n_; ++i) {
+      for (int f = 0; f < 2; ++f) {
+        const T& in = c.port(in_, f == 0 ? solids::mdot(i) : solids::water(n_, i));
+        const T over = tu[i] * in;
+        const T prod = tl[i] * (in - over);
+        const StateId* s = f == 0 ? sM_ : sW_;
+        c.res(s[0] + i) = c.x(s[0] + i) - over;
+        c.res(s[1] + i) = c.x(s[1] + i) - prod;
+        c.res(s[2] + i) = c.x(s[2] + i) - (in - over - prod);
+      }
+    }
+    return Status::kOk;
+  }
+  template <class T>
+  void init(InitCtx<T>& c) const {
+    for (int o = 0; o < 3; ++o)
+      for (int i = 0; i < n_; ++i) c.x(sM_[o] + i) = c.x(sW_[o] + i) = T(0.0);
+  }
+  template <class T>
+  void outputs(const Ctx<T>& c) const {
+    T m[3] = {T(0.0), T(0.0), T(0.0)};
+    for (int o = 0; o < 3; ++o)
+      for (int i = 0; i < n_; ++i) m[o] += c.x(sM_[o] + i);
+    for (int o = 0; o < 3; ++o) c.out(o_m_[o]) = m[o];
+    const T total = m[0] + m[1] + m[2];
+    c.out(o_frac_) = total > 0.0 ? T(m[1] / total) : T(0.0);
+  }
+
+ private:
+  int n_ = 0;
+  std::shared_ptr<const kernels::Grid> grid_;
+  Classifier upper_, lower_;
+  PortId in_;
+  StateId sM_[3], sW_[3];
+  OutputId o_m_[3], o_frac_;
+};
+
+}  // namespace
+
+void register_sieve(Registry<Unit>& r) {
+  r.add("sieve", "two-deck screen: oversize, product and undersize by one separation curve per deck (paper 003)",
+        [] { return std::make_unique<Sieve>(); });
+}
+
+}  // namespace granuflow::units

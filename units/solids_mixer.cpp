@@ -1,0 +1,106 @@
+// Adiabatic mixer of solids streams, zero hold-up (explicit): per class, dry solids and water flows add up; the
+// outlet temperature closes the enthalpy balance with constant heat capacities (solid cp_s of the particle system,
+// water cp_l):
+//     T_out - T0 = sum_j C_j (T_j - T0) / sum_j C_j,   C_j = sum_i (m_ji cp_s + w_ji cp_l),
+// with a capacity flow of 1e-12 W/K at the first inlet's temperature added to both sums, so that the temperature of
+// streams that carry nothing (a recycle at start-up) stays finite.
+#include "solids_mixer.hpp"
+
+#include "granuflow/flowsheet.hpp"
+#include "granuflow/properties.hpp"
+#include "kernels/paper001_defaults.hpp"
+#include "particles.hpp"
+
+namespace granuflow::units {
+namespace {
+
+constexpr double kCapacityFloor = 1e-12;  // W/K
+
+class SolidsMixer : public UnitBase<SolidsMixer> {
+ public:
+  std::string type() const override { return "solids_mixer"; }
+  void declare(UnitSpec& s, Settings& st) override {
+    const ParticleSystem& ps = particle_system(s, st);
+    pp_ = ps.params();
+    n_ = ps.grid()->size();
+    const int inlets = static_cast<int>(st.get_int("inlets", 2, 2, 16, "number of inlet ports in1..inN"));
+    p_cpl_ = s.add_param({"cp_l", "J/(kg K)", kernels::paper001::defaults::kLiquidCp, 100.0, 1e4,
+                          "heat capacity of the water carried", "paper 001, Table 6"});
+    sM_ = s.add_states("mdot", n_, StateKind::Algebraic, "kg/s", 1e-2);
+    sW_ = s.add_states("water", n_, StateKind::Algebraic, "kg/s", 1e-3);
+    sT_ = s.add_state("T", StateKind::Algebraic, "K", 300.0);
+    s.set_explicit();
+    const auto& d = ps.grid()->diameter_pivots();
+    ClassLayout layout{n_, {sM_, sW_}, {}};
+    for (int j = 0; j < inlets; ++j) {
+      const PortId p = s.add_port("in" + std::to_string(j + 1), streams::solids(), PortDir::In, n_);
+      s.set_port_grid(p, d);
+      in_.push_back(p);
+      layout.field_blocks.push_back({p, solids::mdot(0)});
+      layout.field_blocks.push_back({p, solids::water(n_, 0)});
+    }
+    const PortId out = s.add_port("out", streams::solids(), PortDir::Out, n_);
+    s.set_port_grid(out, d);
+    s.provide_all(out, sM_);
+    s.set_classes(layout);
+    r_capacity_ = s.add_reduction("capacity flow");
+    r_enthalpy_ = s.add_reduction("enthalpy flow");
+    o_m_ = s.add_output("mdot", "kg/s");
+  }
+  template <class T>
+  Status eval(const Ctx<T>& c) const {
+    for (int i = 0; i < n_; ++i) {
+      T m(0.0), w(0.0);
+      for (PortId p : in_) m += c.port(p, solids::mdot(i)), w += c.port(p, solids::water(n_, i));
+      c.res(sM_ + i) = c.x(sM_ + i) - m;
+      c.res(sW_ + i) = c.x(sW_ + i) - w;
+    }
+    const T cp_s = c.sh(pp_.cp_s);
+    const T& cp_l = c.par(p_cpl_);
+    auto capacity = [&](PortId p, int i) {
+      return c.port(p, solids::mdot(i)) * cp_s + c.port(p, solids::water(n_, i)) * cp_l;
+    };
+    const T cap = c.reduce(r_capacity_, n_, [&](int i) {
+      T v(0.0);
+      for (PortId p : in_) v += capacity(p, i);
+      return v;
+    });
+    const T h = c.reduce(r_enthalpy_, n_, [&](int i) {
+      T v(0.0);
+      for (PortId p : in_) v += capacity(p, i) * (c.port(p, solids::T(n_)) - props::kT0);
+      return v;
+    });
+    const T t_first = c.port(in_[0], solids::T(n_)) - props::kT0;
+    c.res(sT_) = c.x(sT_) - (props::kT0 + (h + kCapacityFloor * t_first) / (cap + kCapacityFloor));
+    return Status::kOk;
+  }
+  template <class T>
+  void init(InitCtx<T>& c) const {
+    for (int i = 0; i < n_; ++i) c.x(sM_ + i) = c.x(sW_ + i) = T(0.0);
+    c.x(sT_) = T(props::kT0 + 20.0);
+  }
+  template <class T>
+  void outputs(const Ctx<T>& c) const {
+    T m(0.0);
+    for (int i = 0; i < n_; ++i) m += c.x(sM_ + i);
+    c.out(o_m_) = m;
+  }
+
+ private:
+  int n_ = 0;
+  ParticleParams pp_;
+  ParamId p_cpl_;
+  std::vector<PortId> in_;
+  StateId sM_, sW_, sT_;
+  ReductionId r_capacity_, r_enthalpy_;
+  OutputId o_m_;
+};
+
+}  // namespace
+
+void register_solids_mixer(Registry<Unit>& r) {
+  r.add("solids_mixer", "adiabatic mixer of solids streams (class flows add, enthalpy balance for T)",
+        [] { return std::make_unique<SolidsMixer>(); });
+}
+
+}  // namespace granuflow::units

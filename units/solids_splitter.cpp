@@ -1,0 +1,71 @@
+// Splitter of a solids stream, zero hold-up (explicit): out1 takes the fraction `fraction` of every class's solids
+// and water, out2 the rest (computed as the difference, so the two add up to the inlet to one rounding); the
+// temperature passes through to both.
+#include "solids_splitter.hpp"
+
+#include "granuflow/flowsheet.hpp"
+#include "particles.hpp"
+
+namespace granuflow::units {
+namespace {
+
+class SolidsSplitter : public UnitBase<SolidsSplitter> {
+ public:
+  std::string type() const override { return "solids_splitter"; }
+  void declare(UnitSpec& s, Settings& st) override {
+    const ParticleSystem& ps = particle_system(s, st);
+    n_ = ps.grid()->size();
+    p_f_ = s.add_param({"fraction", "-", 0.5, 0.0, 1.0, "fraction of the inlet sent to out1", "operating input"});
+    const auto& d = ps.grid()->diameter_pivots();
+    in_ = s.add_port("in", streams::solids(), PortDir::In, n_);
+    s.set_port_grid(in_, d);
+    for (int o = 0; o < 2; ++o) {
+      sM_[o] = s.add_states("out" + std::to_string(o + 1) + "_mdot", n_, StateKind::Algebraic, "kg/s", 1e-2);
+      sW_[o] = s.add_states("out" + std::to_string(o + 1) + "_water", n_, StateKind::Algebraic, "kg/s", 1e-3);
+    }
+    s.set_explicit();
+    for (int o = 0; o < 2; ++o) {
+      const PortId out = s.add_port("out" + std::to_string(o + 1), streams::solids(), PortDir::Out, n_);
+      s.set_port_grid(out, d);
+      for (int i = 0; i < n_; ++i) {
+        s.provide(out, solids::mdot(i), sM_[o] + i);
+        s.provide(out, solids::water(n_, i), sW_[o] + i);
+      }
+      s.forward(out, solids::T(n_), in_, solids::T(n_));
+    }
+    s.set_classes({n_, {sM_[0], sW_[0], sM_[1], sW_[1]}, {{in_, solids::mdot(0)}, {in_, solids::water(n_, 0)}}});
+  }
+  template <class T>
+  Status eval(const Ctx<T>& c) const {
+    const T& f = c.par(p_f_);
+    for (int i = 0; i < n_; ++i) {
+      const T& m = c.port(in_, solids::mdot(i));
+      const T& w = c.port(in_, solids::water(n_, i));
+      c.res(sM_[0] + i) = c.x(sM_[0] + i) - f * m;
+      c.res(sW_[0] + i) = c.x(sW_[0] + i) - f * w;
+      c.res(sM_[1] + i) = c.x(sM_[1] + i) - (m - f * m);
+      c.res(sW_[1] + i) = c.x(sW_[1] + i) - (w - f * w);
+    }
+    return Status::kOk;
+  }
+  template <class T>
+  void init(InitCtx<T>& c) const {
+    for (int o = 0; o < 2; ++o)
+      for (int i = 0; i < n_; ++i) c.x(sM_[o] + i) = c.x(sW_[o] + i) = T(0.0);
+  }
+
+ private:
+  int n_ = 0;
+  ParamId p_f_;
+  PortId in_;
+  StateId sM_[2], sW_[2];
+};
+
+}  // namespace
+
+void register_solids_splitter(Registry<Unit>& r) {
+  r.add("solids_splitter", "splits a solids stream in two by a fixed fraction, every class alike",
+        [] { return std::make_unique<SolidsSplitter>(); });
+}
+
+}  // namespace granuflow::units
