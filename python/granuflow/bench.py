@@ -26,7 +26,8 @@ import time
 HERE = os.path.dirname(os.path.abspath(__file__))
 
 
-def _repo_root() -> str:
+def repo_root() -> str:
+    """The repository: the working folder when it holds flowsheets/, else the one holding python/granuflow."""
     # the working folder when run from the repository, else the repository holding python/granuflow
     for cand in (os.getcwd(), os.path.abspath(os.path.join(HERE, "..", "..", ".."))):
         if os.path.exists(os.path.join(cand, "flowsheets")):
@@ -34,8 +35,9 @@ def _repo_root() -> str:
     return os.getcwd()
 
 
-def _meta() -> dict:
-    root = _repo_root()
+def meta() -> dict:
+    """Machine, CPU, cores, Python, commit and date for a benchmark record."""
+    root = repo_root()
     try:
         commit = subprocess.run(["git", "-C", root, "rev-parse", "--short", "HEAD"], capture_output=True,
                                 text=True, timeout=10).stdout.strip()
@@ -72,8 +74,8 @@ def bench_core(repeats: int, quick: bool = False, progress: bool = False) -> lis
         records.append({"bench": "residual", "states": t["states"], "units": n_tanks + 2,
                         "residual_ns_per_state": t["residual_s"] / t["states"] * 1e9,
                         "jacobian_over_residual": t["jacobian_s"] / t["residual_s"],
-                        "jacobian_storage": "dense" if t["dense"] else "sparse", "nnz": t["nnz"], **_meta()})
-    demo = os.path.join(_repo_root(), "flowsheets", "demo_tanks.yaml")
+                        "jacobian_storage": "dense" if t["dense"] else "sparse", "nnz": t["nnz"], **meta()})
+    demo = os.path.join(repo_root(), "flowsheets", "demo_tanks.yaml")
     fs = load(demo)
     walls = []
     for _ in range(repeats):
@@ -83,7 +85,7 @@ def bench_core(repeats: int, quick: bool = False, progress: bool = False) -> lis
     records.append({"bench": "demo_flowsheet", "scene": demo, "states": len(res.state_names),
                     "wall_ms_median": statistics.median(walls) * 1e3, "solve_ms_median_inside": res.wall_time_s * 1e3,
                     "steps": res.stats["steps"], "repeats": repeats,
-                    "command": "granuflow bench core", **_meta()})
+                    "command": "granuflow bench core", **meta()})
     return records
 
 
@@ -106,7 +108,7 @@ def scene_variant_text(path: str, classes: int, breakage: bool = True) -> str:
     return yaml.safe_dump(doc, sort_keys=False)
 
 
-def _bench_script(name: str, what: str, hint: str) -> str:
+def bench_script(name: str, what: str, hint: str) -> str:
     """tests/bench/<name> of the source tree; FileNotFoundError naming ``what`` and ``hint`` if missing."""
     script = os.path.join(_source_dir(_build_dir()), "tests", "bench", name)
     if not os.path.exists(script):
@@ -116,8 +118,8 @@ def _bench_script(name: str, what: str, hint: str) -> str:
 
 def scipy_scene_script() -> str:
     """tests/bench/scipy_gf25_batch.py of the source tree; FileNotFoundError if missing."""
-    return _bench_script("scipy_gf25_batch.py", "the SciPy implementation of the headline scene",
-                         "pass scipy=False to time granuflow only")
+    return bench_script("scipy_gf25_batch.py", "the SciPy implementation of the headline scene",
+                        "pass scipy=False to time granuflow only")
 
 
 def bench_scene(repeats: int, classes=(10, 20, 40), scipy: bool = True, scipy_repeats: int = 3,
@@ -127,7 +129,7 @@ def bench_scene(repeats: int, classes=(10, 20, 40), scipy: bool = True, scipy_re
     it (median of ``scipy_repeats``), its results and the speed ratio measured in this run."""
     from .flowsheet import load_text
 
-    scene = os.path.join(_repo_root(), "flowsheets", "stoeckl_gf25_batch.yaml")
+    scene = os.path.join(repo_root(), "flowsheets", "stoeckl_gf25_batch.yaml")
     script = scipy_scene_script() if scipy else None
     records = []
     for n in classes:
@@ -153,11 +155,11 @@ def bench_scene(repeats: int, classes=(10, 20, 40), scipy: bool = True, scipy_re
                 **{k: summary[k] for k in ("d10_um", "d50_um", "d90_um", "bed_moisture", "T_gas_out_K")},
                 "issue_reference_ms": ref * 1e3 if ref else None,
                 "speedup_vs_issue_reference": ref / wall if ref else None,
-                "command": "granuflow bench scene", **_meta()}
+                "command": "granuflow bench scene", **meta()}
             if script:
                 flags = ["--classes", str(n), "--repeats", str(int(scipy_repeats))] + \
                                           ([] if breakage else ["--no-breakage"])
-                sp = _json_lines([sys.executable, script, "--json", *flags], "scipy_gf25_batch.py")[0]
+                sp = json_lines([sys.executable, script, "--json", *flags], "scipy_gf25_batch.py")[0]
                 rec.update({"scipy_ms_median": sp["wall_s_median"] * 1e3, "scipy_nfev": sp.get("nfev"),
                             "scipy_njev": sp.get("njev"), "speedup_vs_scipy": sp["wall_s_median"] / wall,
                             **{f"scipy_{k}": sp[k] for k in ("d10_um", "d50_um", "d90_um", "bed_moisture",
@@ -198,7 +200,7 @@ def _build_dir() -> str:
 
 def _source_dir(build: str) -> str:
     """The source tree the build folder was configured from (CMakeCache.txt), else the repository found by
-    _repo_root()."""
+    repo_root()."""
     try:
         with open(os.path.join(build, "CMakeCache.txt")) as f:
             for line in f:
@@ -206,7 +208,12 @@ def _source_dir(build: str) -> str:
                     return line.split("=", 1)[1].strip()
     except OSError:
         pass
-    return _repo_root()
+    return repo_root()
+
+
+def source_dir() -> str:
+    """The source tree of the running package's build (benchmark scripts and scenes live there)."""
+    return _source_dir(_build_dir())
 
 
 def pbm_executable() -> str:
@@ -221,7 +228,8 @@ def pbm_executable() -> str:
     return exe
 
 
-def _json_lines(cmd: list[str], label: str) -> list[dict]:
+def json_lines(cmd: list[str], label: str) -> list[dict]:
+    """The JSON records a benchmark process prints one per line; RuntimeError naming ``label`` if it fails."""
     proc = subprocess.run(cmd, capture_output=True, text=True)
     if proc.returncode != 0:
         tail = " ".join(proc.stderr.split()[-60:])
@@ -241,12 +249,12 @@ def bench_pbm(*, quick: bool = False, repeats: int = 5, scipy: bool = True, case
     exe = pbm_executable()
     if progress:
         print(f"running {exe} {' '.join(flags)}", file=sys.stderr, flush=True)
-    records = _json_lines([exe, "--json", *flags], "granuflow_bench_pbm")
+    records = json_lines([exe, "--json", *flags], "granuflow_bench_pbm")
     if scipy:
-        script = _bench_script("scipy_fixed_pivot.py", "the SciPy baseline", "pass scipy=False to run granuflow only")
+        script = bench_script("scipy_fixed_pivot.py", "the SciPy baseline", "pass scipy=False to run granuflow only")
         if progress:
             print(f"running {sys.executable} {script} {' '.join(flags)}", file=sys.stderr, flush=True)
-        records += _json_lines([sys.executable, script, "--json", *flags], "scipy_fixed_pivot.py")
+        records += json_lines([sys.executable, script, "--json", *flags], "scipy_fixed_pivot.py")
     return records
 
 
@@ -473,7 +481,7 @@ def bench_sweep(*, n: int = 25, repeats: int = 3, workers: int = 2, dask: bool =
     from . import design_space as ds
     from .flowsheet import load
 
-    scene = os.path.join(_repo_root(), "flowsheets", "stoeckl_gf25_batch.yaml")
+    scene = os.path.join(repo_root(), "flowsheets", "stoeckl_gf25_batch.yaml")
     fs = load(scene)
     kw = dict(x=("inlet.T", "degC", 40, 80, n), y=("nozzle.mdot", "g/min", 60, 120, n), outputs=["d50_um"],
               progress=False)
@@ -527,7 +535,7 @@ def bench_sweep(*, n: int = 25, repeats: int = 3, workers: int = 2, dask: bool =
             "same_values_as_1_worker": bool(np.array_equal(d50[name], d50["threads"], equal_nan=True)),
             "dask_startup_s": dask_startup if name.startswith("dask") else None,
             "loadavg_before": list(load_before), "loadavg_after": list(load_after), "scene": scene,
-            "command": "granuflow bench sweep", **_meta()})
+            "command": "granuflow bench sweep", **meta()})
     return records
 
 

@@ -19,32 +19,19 @@ from __future__ import annotations
 import json
 import math
 import os
-import platform
 import statistics
 import subprocess
 import sys
 import tempfile
 import time
 
+from . import bench
+
 S0 = math.pi / 6 * 2e-3 ** 3  # primary particle and droplet volume of the scene, m3
-HERE = os.path.dirname(os.path.abspath(__file__))
 
 
 def source_dir() -> str:
-    """The source tree: the one the build folder of this package (<build>/python/granuflow) was configured from,
-    else the working folder when it holds flowsheets/."""
-    build = os.path.abspath(os.path.join(HERE, "..", ".."))
-    try:
-        with open(os.path.join(build, "CMakeCache.txt")) as f:
-            for line in f:
-                if line.startswith("CMAKE_HOME_DIRECTORY:"):
-                    return line.split("=", 1)[1].strip()
-    except OSError:
-        pass
-    for cand in (os.getcwd(), os.path.abspath(os.path.join(HERE, "..", "..", ".."))):
-        if os.path.exists(os.path.join(cand, "flowsheets")):
-            return cand
-    return os.getcwd()
+    return bench.source_dir()
 
 
 def scene_path() -> str:
@@ -53,20 +40,11 @@ def scene_path() -> str:
 
 def scipy_script() -> str:
     """tests/bench/scipy_pbm2d.py of the source tree; FileNotFoundError if missing."""
-    script = os.path.join(source_dir(), "tests", "bench", "scipy_pbm2d.py")
-    if not os.path.exists(script):
-        raise FileNotFoundError(f"the SciPy baseline {script} does not exist; pass --no-scipy to time granuflow only")
-    return script
+    return bench.bench_script("scipy_pbm2d.py", "the SciPy baseline", "pass --no-scipy to time granuflow only")
 
 
 def machine() -> dict:
-    try:
-        commit = subprocess.run(["git", "-C", source_dir(), "rev-parse", "--short", "HEAD"], capture_output=True,
-                                text=True, timeout=10).stdout.strip()
-    except Exception:  # noqa: BLE001 - metadata only
-        commit = ""
-    return {"machine": platform.node(), "cores": os.cpu_count(), "python": sys.version.split()[0], "commit": commit,
-            "date": time.strftime("%Y-%m-%d %H:%M:%S")}
+    return bench.meta()
 
 
 def scene_text(size: int, settings: dict | None = None) -> str:

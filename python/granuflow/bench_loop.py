@@ -29,7 +29,7 @@ def loop_flowsheet(classes: int):
 
     from .flowsheet import load_text
 
-    path = os.path.join(bench._repo_root(), "flowsheets", "continuous_layering_sieve_mill.yaml")
+    path = os.path.join(bench.repo_root(), "flowsheets", "continuous_layering_sieve_mill.yaml")
     text = open(path).read()
     if "classes: 100" not in text:
         raise ValueError(f"{path}: particles: settings: classes: 100 not found (the bench varies it)")
@@ -55,8 +55,8 @@ def bench_loop(*, classes=(50, 100, 200), repeats: int = 3, scipy: bool = True, 
     """One record per class count (see the module's docstring)."""
     from .steady import steady_report
 
-    script = bench._bench_script("scipy_sieve_mill_loop.py", "the SciPy implementation of the sieve-mill loop",
-                                 "use --no-scipy to time granuflow only") if scipy else None
+    script = bench.bench_script("scipy_sieve_mill_loop.py", "the SciPy implementation of the sieve-mill loop",
+                                "use --no-scipy to time granuflow only") if scipy else None
     records = []
     for n in classes:
         if progress:
@@ -89,10 +89,10 @@ def bench_loop(*, classes=(50, 100, 200), repeats: int = 3, scipy: bool = True, 
                "steady_solids_balance_rel": rep["balance"]["solids"]["rel"],
                "dynamic_vs_steady_d50_rel": abs(dyn["d50_um"] / st["d50_um"] - 1.0),
                "dynamic_vs_steady_bed_rel": abs(dyn["bed_mass_kg"] / st["bed_mass_kg"] - 1.0),
-               "steady_speedup_vs_dynamic": wall / swall, "command": "granuflow bench loop", **bench._meta()}
+               "steady_speedup_vs_dynamic": wall / swall, "command": "granuflow bench loop", **bench.meta()}
         if script:
-            sp = bench._json_lines([sys.executable, script, "--json", "--classes", str(n), "--t-end", str(T_END_H),
-                                    "--repeats", str(int(scipy_repeats))], "scipy_sieve_mill_loop.py")[0]
+            sp = bench.json_lines([sys.executable, script, "--json", "--classes", str(n), "--t-end", str(T_END_H),
+                                   "--repeats", str(int(scipy_repeats))], "scipy_sieve_mill_loop.py")[0]
             rec.update({"scipy_s_median": sp["wall_s_median"], "scipy_nfev": sp.get("nfev"),
                         "scipy_njev": sp.get("njev"), "scipy_nlu": sp.get("nlu"),
                         **{f"scipy_{k}": sp[k] for k in ("d10_um", "d50_um", "d90_um", "bed_mass_kg")},
