@@ -40,10 +40,7 @@ struct Work : Workspace {
   Scratch<Jet> sj;
   template <class T>
   Scratch<T>& scratch() {
-    if constexpr (std::is_same_v<T, double>)
-      return sd;
-    else
-      return sj;
+    return per_scalar<T>(sd, sj);
   }
   kernels::Population::Map map;  // the engine's inputs and rates in the unit's Jacobian (built on first use)
   bool mapped = false;

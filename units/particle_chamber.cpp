@@ -33,10 +33,7 @@ struct ParticleChamber::Work : Workspace {
   Scratch<Jet> sj;
   template <class T>
   Scratch<T>& scratch() {
-    if constexpr (std::is_same_v<T, double>)
-      return sd;
-    else
-      return sj;
+    return per_scalar<T>(sd, sj);
   }
   std::vector<double> dF;        // growth flux Jacobian, (n + 1) x n
   kernels::Population::Map map;  // the engine's inputs and rates in the unit's Jacobian (built on first use)

@@ -151,10 +151,7 @@ struct Population::Work {
   Scratch<Jet> sj;
   template <class T>
   Scratch<T>& scratch() {
-    if constexpr (std::is_same_v<T, double>)
-      return sd;
-    else
-      return sj;
+    return per_scalar<T>(sd, sj);
   }
   // Jacobian work
   std::vector<double> D, G, dB, dV, dQ, dF, jinv, map_factors, map_scales;

@@ -4,6 +4,8 @@
 #pragma once
 #include <ceres/jet.h>
 
+#include <type_traits>
+
 namespace granuflow {
 
 inline constexpr int kAdChunk = 8;
@@ -13,6 +15,16 @@ inline double value_of(double x) { return x; }
 template <int N>
 double value_of(const ceres::Jet<double, N>& x) {
   return x.a;
+}
+
+// The one of two work objects that belongs to scalar type T (d for double evaluations, j for Jet ones): units and
+// the engine keep separate work arrays per scalar type so that an AD sweep never overwrites a residual's.
+template <class T, class D, class J>
+auto& per_scalar(D& d, J& j) {
+  if constexpr (std::is_same_v<T, double>)
+    return d;
+  else
+    return j;
 }
 
 }  // namespace granuflow
