@@ -83,10 +83,7 @@ int cv_jac(realtype t, N_Vector y, N_Vector fy, SUNMatrix J, void* ud, N_Vector,
       for (size_t k = 0, m = size_t(u->n) * u->n; k < m; ++k) a[k] = -a[k];
     } else {
       const auto& pat = u->sys->pattern();
-      sunindextype* cp = SUNSparseMatrix_IndexPointers(J);
-      sunindextype* ri = SUNSparseMatrix_IndexValues(J);
-      for (int c = 0; c <= pat.n; ++c) cp[c] = pat.col_ptr[c];
-      for (int k = 0; k < pat.nnz(); ++k) ri[k] = pat.row_idx[k];
+      set_sparse_pattern(pat, J);
       double* v = SUNSparseMatrix_Data(J);
       u->sys->jacobian(t, yy, yp, 0.0, nullptr, v);
       for (int k = 0; k < pat.nnz(); ++k) v[k] = -v[k];

@@ -30,6 +30,13 @@ std::string ida_flag_text(int flag) {
   return s;
 }
 
+void set_sparse_pattern(const SparsityPattern& pat, SUNMatrix J) {
+  sunindextype* cp = SUNSparseMatrix_IndexPointers(J);
+  sunindextype* ri = SUNSparseMatrix_IndexValues(J);
+  for (int c = 0; c <= pat.n; ++c) cp[c] = pat.col_ptr[c];
+  for (int k = 0; k < pat.nnz(); ++k) ri[k] = pat.row_idx[k];
+}
+
 void check(int flag, const char* call) {
   if (flag < 0) throw std::runtime_error(std::string(call) + " failed with flag " + std::to_string(flag));
 }
@@ -93,11 +100,7 @@ int ida_jac(realtype t, realtype cj, N_Vector y, N_Vector yp, N_Vector, SUNMatri
         k.valid = true;
       }
     } else {
-      const auto& pat = u->sys->pattern();
-      sunindextype* cp = SUNSparseMatrix_IndexPointers(J);
-      sunindextype* ri = SUNSparseMatrix_IndexValues(J);
-      for (int c = 0; c <= pat.n; ++c) cp[c] = pat.col_ptr[c];
-      for (int k = 0; k < pat.nnz(); ++k) ri[k] = pat.row_idx[k];
+      set_sparse_pattern(u->sys->pattern(), J);
       u->sys->jacobian(t, N_VGetArrayPointer(y), N_VGetArrayPointer(yp), cj, nullptr, SUNSparseMatrix_Data(J));
     }
     return 0;

@@ -54,6 +54,9 @@ const char* linear_solver_name(LinearSolverKind k);
 inline constexpr int kGmresMaxKrylov = 20;  // Krylov dimension (no restarts)
 std::string ida_flag_text(int flag);
 void check(int flag, const char* call);  // throws on a negative SUNDIALS flag
+// The flowsheet's sparsity pattern into a compressed-column SUNMatrix (column pointers and row indices; SUNDIALS
+// lets a Jacobian callback rewrite them, and KLU reads them at every factorization).
+void set_sparse_pattern(const SparsityPattern& pat, SUNMatrix J);
 
 // A dense Jacobian kept for reuse, the way CVODE keeps df/dy: IDA sets its Newton matrix up again whenever
 // cj = alpha / h moves by 25 %, and with every differential state's residual of the form y'_k - f(y) (all

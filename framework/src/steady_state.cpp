@@ -108,9 +108,7 @@ int kin_jac(N_Vector u, N_Vector, SUNMatrix J, void* ud, N_Vector, N_Vector) {
     if (k->s->dense) {
       k->s->jacobian_dense(N_VGetArrayPointer(u), k->s->zeros.data(), 0.0, SUNDenseMatrix_Data(J));
     } else {
-      const auto& pat = k->s->sys->pattern();
-      for (int c = 0; c <= pat.n; ++c) SUNSparseMatrix_IndexPointers(J)[c] = pat.col_ptr[c];
-      for (int i = 0; i < pat.nnz(); ++i) SUNSparseMatrix_IndexValues(J)[i] = pat.row_idx[i];
+      set_sparse_pattern(k->s->sys->pattern(), J);
       k->s->jacobian_sparse(N_VGetArrayPointer(u), k->s->zeros.data(), 0.0, SUNSparseMatrix_Data(J));
     }
     return 0;
