@@ -1,6 +1,7 @@
 #include "particle_chamber.hpp"
 
 #include <cmath>
+#include <tuple>
 #include <type_traits>
 
 #include "granuflow/errors.hpp"
@@ -228,10 +229,7 @@ void ParticleChamber::declare(UnitSpec& s, Settings& st) {
   o_hold_solids_ = s.add_output("balance_solids_hold", "kg", OutputRole::kBalanceHold, "solids");
   o_hold_water_ = s.add_output("balance_water_hold", "kg", OutputRole::kBalanceHold, "water");
   o_hold_energy_ = s.add_output("balance_energy_hold", "J", OutputRole::kBalanceHold, "energy");
-  o_psd_d_ = s.add_output("psd_d_0", "m", OutputRole::kSizeDiameter, "", 0);
-  for (int i = 1; i < n_; ++i) s.add_output("psd_d_" + std::to_string(i), "m", OutputRole::kSizeDiameter, "", i);
-  o_psd_m_ = s.add_output("psd_m_0", "kg", OutputRole::kSizeMass, "", 0);
-  for (int i = 1; i < n_; ++i) s.add_output("psd_m_" + std::to_string(i), "kg", OutputRole::kSizeMass, "", i);
+  std::tie(o_psd_d_, o_psd_m_) = s.add_size_distribution(n_);
 }
 
 std::unique_ptr<Workspace> ParticleChamber::workspace() const {

@@ -94,6 +94,14 @@ OutputId UnitSpec::add_output(std::string name, std::string unit, OutputRole rol
   return {static_cast<int>(outputs_.size()) - 1};
 }
 
+std::pair<OutputId, OutputId> UnitSpec::add_size_distribution(int n) {
+  const OutputId d{static_cast<int>(outputs_.size())};
+  for (int i = 0; i < n; ++i) add_output("psd_d_" + std::to_string(i), "m", OutputRole::kSizeDiameter, "", i);
+  const OutputId m{static_cast<int>(outputs_.size())};
+  for (int i = 0; i < n; ++i) add_output("psd_m_" + std::to_string(i), "kg", OutputRole::kSizeMass, "", i);
+  return {d, m};
+}
+
 QuadId UnitSpec::add_quadrature(std::string name, std::string unit, double scale, OutputRole role,
                                 std::string quantity) {
   if (!(scale > 0) || !std::isfinite(scale)) throw std::logic_error("quadrature '" + name + "' needs a positive scale");

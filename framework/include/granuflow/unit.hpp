@@ -151,6 +151,9 @@ class UnitSpec {
   void forward(PortId port, int field, PortId in_port, int in_field);
   OutputId add_output(std::string name, std::string unit, OutputRole role = OutputRole::kValue,
                       std::string quantity = "", int cls = -1);
+  // The size distribution of n classes as outputs psd_d_i (pivot diameter, m) then psd_m_i (class mass, kg), with
+  // their roles; returns the ids of psd_d_0 and psd_m_0 (class i is at + i).
+  std::pair<OutputId, OutputId> add_size_distribution(int n);
   // A quantity integrated by the solver's quadrature rule (IDAS quadratures): dQ/dt = Unit::quadrature(). It is
   // not an unknown of the Newton system; it is reported as an output of the same name, unit and role.
   QuadId add_quadrature(std::string name, std::string unit, double scale, OutputRole role = OutputRole::kValue,
