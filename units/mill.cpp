@@ -17,6 +17,12 @@ namespace {
 struct Work : Workspace {
   std::vector<double> key, P;
   std::vector<Jet> P_jet, scratch;
+  template <class T>
+  struct Flows {
+    std::vector<T> in_m, in_w, m, w;  // inlet classes read once per evaluation; the outlet sums
+  };
+  Flows<double> fd;
+  Flows<Jet> fj;
 };
 
 class Mill : public UnitBase<Mill> {
@@ -55,15 +61,19 @@ class Mill : public UnitBase<Mill> {
   template <class T>
   Status eval(const Ctx<T>& c) const {
     const T* P = matrix(c);
+    auto& f = per_scalar<T>(c.template ws<Work>().fd, c.template ws<Work>().fj);
+    f.in_m.resize(n_), f.in_w.resize(n_);
+    f.m.assign(n_, T(0.0)), f.w.assign(n_, T(0.0));
+    for (int k = 0; k < n_; ++k)
+      f.in_m[k] = c.port(in_, solids::mdot(k)), f.in_w[k] = c.port(in_, solids::water(n_, k));
+    // column by column (P is column-major): parent class k feeds classes i <= k; each sum still runs over k upwards
+    for (int k = 0; k < n_; ++k) {
+      const T* col = P + size_t(k) * n_;
+      for (int i = 0; i <= k; ++i) f.m[i] += col[i] * f.in_m[k], f.w[i] += col[i] * f.in_w[k];
+    }
     for (int i = 0; i < n_; ++i) {
-      T m(0.0), w(0.0);
-      for (int k = i; k < n_; ++k) {
-        const T& a = P[size_t(k) * n_ + i];
-        m += a * c.port(in_, solids::mdot(k));
-        w += a * c.port(in_, solids::water(n_, k));
-      }
-      c.res(sM_ + i) = c.x(sM_ + i) - m;
-      c.res(sW_ + i) = c.x(sW_ + i) - w;
+      c.res(sM_ + i) = c.x(sM_ + i) - f.m[i];
+      c.res(sW_ + i) = c.x(sW_ + i) - f.w[i];
     }
     return Status::kOk;
   }
