@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "granuflow/dae_system.hpp"
+#include "serial_vector_ops.hpp"
 
 namespace granuflow::detail {
 
@@ -23,7 +24,11 @@ struct Context {
 };
 struct NVec {
   N_Vector v = nullptr;
-  NVec(int n, SUNContext ctx) : v(N_VNew_Serial(n, ctx)) { N_VConst(0.0, v); }
+  // Optimized arithmetic (serial_vector_ops.hpp), which the integrators' clones of v inherit.
+  NVec(int n, SUNContext ctx) : v(N_VNew_Serial(n, ctx)) {
+    install_serial_vector_ops(v);
+    N_VConst(0.0, v);
+  }
   ~NVec() { N_VDestroy(v); }
   double* data() const { return N_VGetArrayPointer(v); }
 };
