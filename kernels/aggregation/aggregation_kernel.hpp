@@ -27,12 +27,20 @@ namespace granuflow::kernels {
 
 inline constexpr int kMaxFeatures = kAdChunk / 2;  // E's derivative takes one Jet per pair: 2 m directions
 inline constexpr int kMaxEfficiencyTerms = 4;      // terms of a factored efficiency (efficiency_terms)
+inline constexpr int kMaxFactorTerms = 4;          // terms of a separable size factor (factor_terms)
 
 class AggregationKernel : public KernelBase {
  public:
   // K[i * n + j] for all classes (row-major, symmetric), 1/s.
   virtual void factor(const ClassState<double>& s, const double* p, double* K) const = 0;
   virtual void factor(const ClassState<Jet>& s, const Jet* p, Jet* K) const = 0;
+  // K as a short sum of separable terms, K_ij = sum_t a[t * n + i] b[t * n + j] for every pair, exactly (not an
+  // approximation): fills a and b (kMaxFactorTerms x n each) and returns the number of terms, or 0 when K has no such
+  // form. The engine then sums the aggregation of a size-only kernel with prefix sums, O(n) per term instead of
+  // O(n^2) per right-hand side (population.cpp, aggregate_separable).
+  virtual int factor_terms(const ClassState<double>& /*s*/, const double* /*p*/, double* /*a*/, double* /*b*/) const {
+    return 0;
+  }
   // Number of features per class; 0: beta = K.
   virtual int n_features() const { return 0; }
   // phi[i * m + k] for every class.

@@ -14,6 +14,10 @@ class ConstantKernel : public PairKernel<ConstantKernel> {
   T factor(const ClassState<T>&, int, int, const T* p) const {
     return p[0];
   }
+  int factor_terms(const ClassState<double>& s, const double* p, double* a, double* b) const override {
+    for (int i = 0; i < s.n; ++i) a[i] = p[0], b[i] = 1.0;
+    return 1;
+  }
 };
 
 void register_constant(Registry<AggregationKernel>& r);

@@ -16,6 +16,10 @@ class ProductKernel : public PairKernel<ProductKernel> {
   T factor(const ClassState<T>& s, int i, int j, const T* p) const {
     return p[0] * (s.volume[i] / p[1]) * (s.volume[j] / p[1]);
   }
+  int factor_terms(const ClassState<double>& s, const double* p, double* a, double* b) const override {
+    for (int i = 0; i < s.n; ++i) a[i] = p[0] * (s.volume[i] / p[1]), b[i] = s.volume[i] / p[1];
+    return 1;
+  }
 };
 
 void register_product(Registry<AggregationKernel>& r);

@@ -16,6 +16,11 @@ class SumKernel : public PairKernel<SumKernel> {
   T factor(const ClassState<T>& s, int i, int j, const T* p) const {
     return p[0] * (s.volume[i] + s.volume[j]) / p[1];
   }
+  int factor_terms(const ClassState<double>& s, const double* p, double* a, double* b) const override {
+    const double c = p[0] / p[1];  // K_ij = (c u_i) 1 + c u_j
+    for (int i = 0; i < s.n; ++i) a[i] = c * s.volume[i], b[i] = 1.0, a[s.n + i] = c, b[s.n + i] = s.volume[i];
+    return 2;
+  }
 };
 
 void register_sum(Registry<AggregationKernel>& r);

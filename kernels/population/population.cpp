@@ -138,6 +138,14 @@ struct Population::Work {
   std::vector<double> Km, Am, Bm, Fm, Gm, Cm, Vc;
   std::vector<double> Kd;  // h K of the pairs (k - d, k) at [d n + k], for the scheme's diagonals
   std::vector<std::pair<size_t, std::pair<int, int>>> rest;  // pairs on neither a run nor a diagonal: (pair, (j, k))
+  // Separable size factor (AggregationKernel::factor_terms) and no carried properties: K_jk = sum_t a_t(j) b_t(k).
+  // Row k's run partners are then a prefix j <= J(k) (aggregates placed on k and k + 1 with w_hi = x_j / (x_{k+1} -
+  // x_k), affine in x_j, or kept in cell k), so their births and all deaths are prefix sums: O(n) per term. No
+  // matrices are built; Kd and rest cover the other pairs as above.
+  int terms = 0;
+  std::vector<double> ta, tb, cum;  // a and b (terms x n), prefix sums (2 per term, n each)
+  std::vector<int> prefix_end;      // J(k); -1: no prefix
+  std::vector<double> inv_gap;      // fixed pivot: 1 / (x_{k+1} - x_k), x_n the virtual pivot above the grid
   // Breakage with the selection rates folded in: BN = A diag(S) ((n + 3) x n) moves numbers, BQ = (x_r / x_k) BN
   // ((n + 1) x n: class rows, then the volume below) moves a property with its parent's share of volume.
   std::vector<double> BN, BQ;
@@ -159,6 +167,57 @@ struct Population::Work {
   std::vector<Jet> jp, jN, jq, jf, jphi;
 };
 
+// The near-equal partners of the scheme's diagonals (one shift and one set of weights per diagonal on a geometric
+// grid) as vector loops over k, and the few pairs left (the top of the grid, irregular grids) one by one.
+template <class Scratch, class Place>
+void aggregate_diagonals(const Population::Work& w, Scratch& sc, const double* N, int n, int P,
+                         const FixedPivotAggregation* fp, const CellAverageAggregation* ca, const Grid& g, double* dN,
+                         double* dq, Place&& place) {
+  const double* pi = sc.pi.data();
+  double* rt = sc.mv.data() + 4 * n;
+  const int nd = fp ? static_cast<int>(fp->diagonals().size()) : static_cast<int>(ca->diagonals().size());
+  const auto& x = g.pivots();
+  for (int d = 0; d < nd; ++d) {
+    const int last = fp ? fp->diagonals()[d].last : ca->diagonals()[d].last;
+    const int s = fp ? fp->diagonals()[d].shift : ca->diagonals()[d].shift;
+    const double* kd = w.Kd.data() + size_t(d) * n;
+#pragma omp simd
+    for (int k = d; k <= last; ++k) rt[k] = kd[k] * N[k - d] * N[k];
+    if (fp) {
+      const auto& t = fp->diagonals()[d];
+      double* lo = dN + s;
+#pragma omp simd
+      for (int k = d; k <= last; ++k) lo[k] += t.w_lo * rt[k];
+      double* hi = dN + s + 1;
+#pragma omp simd
+      for (int k = d; k <= last; ++k) hi[k] += t.w_hi * rt[k];
+      for (int p = 0; p < P; ++p) {
+        const double* pp = pi + size_t(p) * n;
+        double* dqp = dq + size_t(p) * n;
+        for (int k = d; k <= last; ++k) {
+          const double c = rt[k] * (pp[k - d] + pp[k]);
+          dqp[k + s] += t.f_lo * c, dqp[k + s + 1] += t.f_hi * c;
+        }
+      }
+    } else {
+      double *B = sc.B.data() + s, *V = sc.V.data() + s;
+#pragma omp simd
+      for (int k = d; k <= last; ++k) B[k] += rt[k];
+#pragma omp simd
+      for (int k = d; k <= last; ++k) V[k] += (x[k - d] + x[k]) * rt[k];
+      for (int p = 0; p < P; ++p) {
+        const double* pp = pi + size_t(p) * n;
+        double* Qp = sc.Q.data() + size_t(p) * (n + 1) + s;
+        for (int k = d; k <= last; ++k) Qp[k] += rt[k] * (pp[k - d] + pp[k]);
+      }
+    }
+  }
+  for (const auto& [pr, jk] : w.rest) {
+    const int j = jk.first, k = jk.second;
+    if (N[j] != 0.0 && N[k] != 0.0) place(pr, j, k, w.Kh[pr] * N[j] * N[k]);
+  }
+}
+
 // Aggregation of a size-only kernel (Work::matrices) without a loop over pairs: deaths N_k (K N)_k over all pairs
 // (K symmetric, its lower triangle read); the pairs of the scheme's runs through A, Bm, F, G (fixed pivot) or C, Vc
 // (cell average: the packets B, V, Q of cell k), lower-triangular matrix-vector products; the near-equal partners
@@ -174,7 +233,6 @@ void aggregate_by_matrices(const Population::Work& w, Scratch& sc, const double*
   const Eigen::Map<const Eigen::VectorXd> Nv(N, n);
   sc.mv.resize(size_t(5) * n);
   Vec kN(sc.mv.data(), n), u(sc.mv.data() + n, n), v(sc.mv.data() + 2 * n, n), r(sc.mv.data() + 3 * n, n);
-  double* rt = sc.mv.data() + 4 * n;
   if (w.folded) {  // fixed pivot without properties: births on k and deaths in one product, (A - K) N
     u.noalias() = matrix(w.Am) * Nv;
     v.noalias() = matrix(w.Bm).template triangularView<Eigen::Lower>() * Nv;
@@ -217,49 +275,63 @@ void aggregate_by_matrices(const Population::Work& w, Scratch& sc, const double*
       for (int k = 0; k < n; ++k) sc.Q[size_t(p) * (n + 1) + k] += carried(p, k);
     }
   }
-  // near-equal partners, diagonal by diagonal
-  const int nd = fp ? static_cast<int>(fp->diagonals().size()) : static_cast<int>(ca->diagonals().size());
+  aggregate_diagonals(w, sc, N, n, P, fp, ca, g, dN, dq, place);
+}
+
+// Aggregation of a separable size-only kernel without carried properties (Work::terms): with S_t(J) = sum_{j <= J}
+// a_t(j) N_j and X_t(J) = sum_{j <= J} a_t(j) N_j x_j, the run pairs of row k give, per term, N_k b_t(k) times
+//   fixed pivot (Kumar & Ramkrishna 1996, Eq. (9) with v = x_j + x_k in [x_k, x_{k+1})):
+//     births on k: S_t - X_t / (x_{k+1} - x_k),   births on k + 1 (or above the grid): X_t / (x_{k+1} - x_k);
+//   cell average (Kumar et al. 2006, Eq. (13)): packet number S_t and volume X_t + x_k S_t in cell k;
+// and the deaths of class k are N_k sum_t b_t(k) S_t(n - 1). Then the diagonals and the rest as above.
+template <class Scratch, class Place>
+void aggregate_separable(const Population::Work& w, Scratch& sc, const double* N, int n,
+                         const FixedPivotAggregation* fp, const CellAverageAggregation* ca, const Grid& g, double* dN,
+                         double* out, Place&& place) {
   const auto& x = g.pivots();
-  for (int d = 0; d < nd; ++d) {
-    const int last = fp ? fp->diagonals()[d].last : ca->diagonals()[d].last;
-    const int s = fp ? fp->diagonals()[d].shift : ca->diagonals()[d].shift;
-    const double* kd = w.Kd.data() + size_t(d) * n;
-#pragma omp simd
-    for (int k = d; k <= last; ++k) rt[k] = kd[k] * N[k - d] * N[k];
-    if (fp) {
-      const auto& t = fp->diagonals()[d];
-      double* lo = dN + s;
-#pragma omp simd
-      for (int k = d; k <= last; ++k) lo[k] += t.w_lo * rt[k];
-      double* hi = dN + s + 1;
-#pragma omp simd
-      for (int k = d; k <= last; ++k) hi[k] += t.w_hi * rt[k];
-      for (int p = 0; p < P; ++p) {
-        const double* pp = pi + size_t(p) * n;
-        double* dqp = dq + size_t(p) * n;
-        for (int k = d; k <= last; ++k) {
-          const double c = rt[k] * (pp[k - d] + pp[k]);
-          dqp[k + s] += t.f_lo * c, dqp[k + s + 1] += t.f_hi * c;
-        }
-      }
-    } else {
-      double *B = sc.B.data() + s, *V = sc.V.data() + s;
-#pragma omp simd
-      for (int k = d; k <= last; ++k) B[k] += rt[k];
-#pragma omp simd
-      for (int k = d; k <= last; ++k) V[k] += (x[k - d] + x[k]) * rt[k];
-      for (int p = 0; p < P; ++p) {
-        const double* pp = pi + size_t(p) * n;
-        double* Qp = sc.Q.data() + size_t(p) * (n + 1) + s;
-        for (int k = d; k <= last; ++k) Qp[k] += rt[k] * (pp[k - d] + pp[k]);
-      }
+  sc.mv.resize(size_t(5) * n);
+  double* sum0 = sc.mv.data();        // per row: sum_t b_t(k) S_t(J(k))
+  double* sum1 = sum0 + n;            // sum_t b_t(k) X_t(J(k))
+  double* death = sum0 + 2 * n;       // sum_t b_t(k) S_t(n - 1)
+  double* cs = sc.mv.data() + 3 * n;  // S_t, then X_t below (2 n)
+  for (int k = 0; k < n; ++k) sum0[k] = sum1[k] = death[k] = 0.0;
+  for (int t = 0; t < w.terms; ++t) {
+    const double* a = w.ta.data() + size_t(t) * n;
+    const double* b = w.tb.data() + size_t(t) * n;
+    double* S = cs;
+    double* X = cs + n;
+    double s0 = 0.0, s1 = 0.0;
+    for (int j = 0; j < n; ++j) {
+      const double aN = a[j] * N[j];
+      s0 += aN, s1 += aN * x[j];
+      S[j] = s0, X[j] = s1;
+    }
+    for (int k = 0; k < n; ++k) {
+      death[k] += b[k] * s0;
+      const int J = w.prefix_end[k];
+      if (J >= 0) sum0[k] += b[k] * S[J], sum1[k] += b[k] * X[J];
     }
   }
-  // the rest, pair by pair
-  for (const auto& [pr, jk] : w.rest) {
-    const int j = jk.first, k = jk.second;
-    if (N[j] != 0.0 && N[k] != 0.0) place(pr, j, k, w.Kh[pr] * N[j] * N[k]);
+  if (fp) {
+    const double* gap = w.inv_gap.data();
+    for (int k = 0; k < n; ++k) {
+      const double up = N[k] * sum1[k] * gap[k];
+      dN[k] += N[k] * (sum0[k] - death[k]) - up;
+      if (k + 1 < n) {
+        dN[k + 1] += up;
+      } else {
+        out[kOutNumberAbove] += up;
+        out[kOutVolumeAbove] += up * g.upper_virtual();
+      }
+    }
+  } else {
+    for (int k = 0; k < n; ++k) {
+      dN[k] -= N[k] * death[k];
+      sc.B[k] += N[k] * sum0[k];
+      sc.V[k] += N[k] * (sum1[k] + x[k] * sum0[k]);
+    }
   }
+  aggregate_diagonals(w, sc, N, n, 0, fp, ca, g, dN, nullptr, place);
 }
 
 // The Jet copies of the tables, for evaluations that carry derivatives (sensitivities, AD Jacobians).
@@ -340,6 +412,10 @@ void Population::declare(UnitSpec& s, Settings& st, std::shared_ptr<const Grid> 
     if (needs_.field(static_cast<Field>(f))) field_index_.push_back(f);
 }
 
+std::string Population::aggregation_evaluation(const Work& w) const {
+  return !agg_.kernel ? "none" : w.terms > 0 ? "separable" : w.matrices ? "matrices" : "pairs";
+}
+
 Population::WorkPtr Population::make_work() const { return WorkPtr(new Work()); }
 void Population::WorkDeleter::operator()(Work* w) const { delete w; }
 
@@ -370,12 +446,19 @@ void Population::configure(Work& w, const double* p, const std::string& where) c
 }
 
 // The matrices of Work::matrices from the pair table Kh (see there).
-void Population::pair_matrices(Work& w) const {
+void Population::pair_matrices(Work& w, const ClassState<double>& cs, const double* p) const {
   const int n = n_;
   const auto* fp = dynamic_cast<const FixedPivotAggregation*>(agg_scheme_.get());
   const auto* ca = dynamic_cast<const CellAverageAggregation*>(agg_scheme_.get());
   w.matrices = (fp || ca) && agg_.kernel->n_features() == 0;
+  w.terms = 0;
   if (!w.matrices) return;
+  if (properties() == 0) {
+    w.ta.assign(size_t(kMaxFactorTerms) * n, 0.0), w.tb.assign(size_t(kMaxFactorTerms) * n, 0.0);
+    w.terms = agg_.kernel->factor_terms(cs, p, w.ta.data(), w.tb.data());
+    if (w.terms > 0 && separable_tables(w, fp, ca)) return;
+    w.terms = 0;
+  }
   const size_t nn = size_t(n) * n;
   w.Km.assign(w.K.begin(), w.K.end());  // K is symmetric: row-major = column-major
   auto zero = [nn](std::vector<double>& m, bool used) { used ? m.assign(nn, 0.0) : m.clear(); };
@@ -421,6 +504,50 @@ void Population::pair_matrices(Work& w) const {
     }
 }
 
+// Work::prefix_end, inv_gap, rest and Kd for a separable kernel: row k's prefix is the longest run of partners j = 0,
+// 1, ... off the diagonals whose aggregates the scheme places like a run pair (fixed pivot: on k and k + 1, or on k
+// and above the grid for the top class; cell average: in cell k); every other pair off the diagonals is in `rest`.
+// False (use the matrices) if a prefix pair's table weights differ from the affine form the prefix sums assume.
+bool Population::separable_tables(Work& w, const FixedPivotAggregation* fp, const CellAverageAggregation* ca) const {
+  const int n = n_;
+  const Grid& g = *grid_;
+  auto pair = [n](int j, int k) { return size_t(j) * n - size_t(j) * (j - 1) / 2 + (k - j); };
+  const int nd = fp ? static_cast<int>(fp->diagonals().size()) : static_cast<int>(ca->diagonals().size());
+  auto on_diagonal = [&](int j, int k) {
+    const int d = k - j;
+    return d < nd && k <= (fp ? fp->diagonals()[d].last : ca->diagonals()[d].last);
+  };
+  w.prefix_end.assign(n, -1);
+  w.inv_gap.assign(n, 0.0);
+  for (int k = 0; k < n; ++k) {
+    const double gap = g.pivot_ext(k + 1) - g.pivot(k);
+    w.inv_gap[k] = 1.0 / gap;
+    int J = -1;
+    for (int j = 0; j < k && !on_diagonal(j, k); ++j) {
+      const size_t pr = pair(j, k);
+      if (fp) {
+        const auto& t = fp->target(pr);
+        if (t.lo != k || t.hi != (k + 1 < n ? k + 1 : -1)) break;
+        if (std::abs(t.w_hi - g.pivot(j) / gap) > 1e-12) return false;
+      } else if (ca->cell(pr) != k) {
+        break;
+      }
+      J = j;
+    }
+    w.prefix_end[k] = J;
+  }
+  w.rest.clear();
+  for (int j = 0; j < n; ++j)
+    for (int k = j; k < n; ++k)
+      if (j > w.prefix_end[k] && !on_diagonal(j, k)) w.rest.push_back({pair(j, k), {j, k}});
+  w.Kd.assign(size_t(nd) * n, 0.0);
+  for (int d = 0; d < nd; ++d)
+    for (int k = d; k < n; ++k) w.Kd[size_t(d) * n + k] = w.Kh[pair(k - d, k)];
+  w.Km.clear(), w.Am.clear(), w.Bm.clear(), w.Fm.clear(), w.Gm.clear(), w.Cm.clear(), w.Vc.clear();
+  w.folded = false;
+  return true;
+}
+
 // Re-evaluates the tables when a kernel parameter value changed since the last evaluation (a time-dependent input).
 void Population::refresh(Work& w, const double* p) const {
   bool same = w.fresh && w.snapshot.size() == kernel_params_.size();
@@ -438,7 +565,7 @@ void Population::refresh(Work& w, const double* p) const {
     w.K.resize(size_t(n_) * n_);
     agg_.kernel->factor(cs, p + agg_.first, w.K.data());
     pack_pairs(w.K, n_, w.Kh);
-    pair_matrices(w);
+    pair_matrices(w, cs, p + agg_.first);
   }
   if (sel_.kernel) {
     w.A.resize(size_t(n_ + kOutsideRows) * n_);
@@ -571,7 +698,12 @@ void Population::rates_t(Work& w, const State<T>& s, const Rates<T>& r, bool fol
     bool by_matrices = false;
     if constexpr (std::is_same_v<T, double>) by_matrices = w.matrices && !E;
     if (by_matrices) {
-      if constexpr (std::is_same_v<T, double>) aggregate_by_matrices(w, sc, N, n, P, fp, ca, *grid_, dN, dq, place);
+      if constexpr (std::is_same_v<T, double>) {
+        if (w.terms > 0)
+          aggregate_separable(w, sc, N, n, fp, ca, *grid_, dN, out, place);
+        else
+          aggregate_by_matrices(w, sc, N, n, P, fp, ca, *grid_, dN, dq, place);
+      }
     } else {
       // Row j of the pair triangle (partners k >= j, contiguous in the pair tables): the event rates in one
       // vectorizable pass, the deaths, then the births. Most partners place their aggregate on k and k + 1 (fixed

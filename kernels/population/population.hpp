@@ -46,6 +46,8 @@ class Settings;
 
 namespace granuflow::kernels {
 
+class FixedPivotAggregation;
+class CellAverageAggregation;
 enum class Outside { kFold, kRemove };
 inline constexpr int kMaxProperties = 8;  // extensive properties a population carries per class
 
@@ -129,6 +131,10 @@ class Population {
   // Once per run: the kernels' checks (naming `where`) and the tables that depend on parameters only.
   void configure(Work& w, const double* p, const std::string& where) const;
 
+  // How double evaluations sum aggregation after configure(): "separable" (prefix sums over the kernel's
+  // factor_terms), "matrices" (pair matrices of a size-only kernel), "pairs" (the pair loop) or "none".
+  std::string aggregation_evaluation(const Work& w) const;
+
   void rates(Work& w, const State<double>& s, const Rates<double>& r) const;
   void rates(Work& w, const State<Jet>& s, const Rates<Jet>& r) const;
   // Adds d(rates)/d(inputs), mapped by `m`, to the sink.
@@ -150,7 +156,8 @@ class Population {
   template <class T>
   bool fresh_tables(const Work& w, const T* p, int first, int count) const;
   void refresh(Work& w, const double* p) const;
-  void pair_matrices(Work& w) const;
+  void pair_matrices(Work& w, const ClassState<double>& cs, const double* p) const;
+  bool separable_tables(Work& w, const FixedPivotAggregation* fp, const CellAverageAggregation* ca) const;
   void analytic_jacobian(Work& w, const State<double>& s, std::vector<double>& D) const;
   void ad_jacobian(Work& w, const State<double>& s, std::vector<double>& D) const;
   void fold_rows(double* D, int cols) const;

@@ -2,7 +2,7 @@
 // (N0 = v0 = 1, n(v, 0) = exp(-v)), through the full framework (Flowsheet + pbm_batch + simulate() on IDAS).
 //
 //   granuflow_bench_pbm [--json] [--repeats R] [--quick] [--case constant|sum|product|growth|breakage]
-//                       [--integrators auto,ida,bdf,adams,erk]
+//                       [--integrators auto,ida,bdf,adams,erk] [--q Q] [--rtol R] [--scheme NAME]
 //   (wired as `granuflow bench pbm --json`; baseline: /usr/bin/python3 tests/bench/scipy_fixed_pivot.py --json)
 //
 // One record per (case, method, integrator, q, rtol) with keys case, method (the scheme), integrator (solver.method
@@ -220,7 +220,9 @@ int main(int argc, char** argv) {
   using namespace granuflow;
   bool json = false, quick = false;
   int repeats = 5;
-  std::string only;
+  std::string only, scheme;
+  int only_q = 0;
+  double only_rtol = 0;
   std::vector<std::string> integrators;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -232,6 +234,12 @@ int main(int argc, char** argv) {
       repeats = std::max(1, std::atoi(argv[++i]));
     else if (a == "--case" && i + 1 < argc)
       only = argv[++i];
+    else if (a == "--q" && i + 1 < argc)
+      only_q = std::atoi(argv[++i]);
+    else if (a == "--rtol" && i + 1 < argc)
+      only_rtol = std::atof(argv[++i]);
+    else if (a == "--scheme" && i + 1 < argc)
+      scheme = argv[++i];
     else if (a == "--integrators" && i + 1 < argc) {
       integrators.clear();
       std::string list = argv[++i];
@@ -243,7 +251,7 @@ int main(int argc, char** argv) {
     } else {
       std::fprintf(stderr,
                    "usage: granuflow_bench_pbm [--json] [--repeats R] [--quick] [--case NAME] "
-                   "[--integrators auto,ida,bdf,adams,erk]\n");
+                   "[--integrators auto,ida,bdf,adams,erk] [--q Q] [--rtol R] [--scheme NAME]\n");
       return 2;
     }
   }
@@ -265,7 +273,9 @@ int main(int argc, char** argv) {
     for (const auto& m : c.methods)
       for (const auto& integrator : integrators)
         for (int q : qs)
-          for (double rtol : rtols) print(run(c, m, integrator, q, rtol, repeats), json, repeats, meta);
+          for (double rtol : rtols)
+            if ((scheme.empty() || m == scheme) && (!only_q || q == only_q) && (!only_rtol || rtol == only_rtol))
+              print(run(c, m, integrator, q, rtol, repeats), json, repeats, meta);
   }
   return 0;
 }
