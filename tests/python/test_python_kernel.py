@@ -40,13 +40,25 @@ def assert_same_states(a, b, rel=1e-10):
     assert np.max(np.abs(a.y - b.y) / scale) <= rel
 
 
+def assert_same_solution(a, b, rtol=1e-8, atol=1e-11, factor=300.0):
+    """Two runs of one problem whose right-hand sides differ in rounding (the compiled constant and sum kernels sum
+    with prefix sums, a Python kernel through its pair matrix), so their step sequences differ: the states agree
+    within a few hundred times the scene's tolerance (the cell average's packet split is discontinuous in the
+    state, which lets step-sequence differences grow), and the number and characteristic sizes to 1e-6. A kernel
+    off by 0.1 % misses both by orders of magnitude."""
+    assert a.state_names == b.state_names
+    assert np.max(np.abs(a.y - b.y) / (rtol * np.abs(a.y) + atol)) <= factor
+    for m in ("pbm.number", "pbm.d50", "pbm.d90"):
+        assert b[m] == pytest.approx(a[m], rel=1e-6)
+
+
 @pytest.mark.parametrize("scheme", ["cell_average", "fixed_pivot"])
 def test_python_constant_kernel_reproduces_the_compiled_one(scheme):
     name = unique("constant")
     gf.register_kernel(name, lambda d, v: np.ones((d.size, d.size)), description="beta = 1 1/s")
     compiled = scene("constant", scheme).simulate()
     python = scene(name, scheme).simulate()
-    assert_same_states(compiled, python)
+    assert_same_solution(compiled, python)
     assert python["pbm.number"][-1] == pytest.approx(1 / 51, rel=2e-3)  # Scott: N0 / (1 + tau / 2), tau = 100
     assert name in gf.aggregation_kernels() and "beta = 1 1/s" in gf.aggregation_kernels()[name]
 
@@ -62,7 +74,7 @@ def test_python_sum_kernel_gets_the_pivot_sizes():
     gf.register_kernel(name, golovin)
     compiled = scene("sum", "cell_average", t_end=3.0).simulate()
     python = scene(name, "cell_average", t_end=3.0).simulate()
-    assert_same_states(compiled, python)
+    assert_same_solution(compiled, python)
     v = 2.0 ** -12 * 2.0 ** np.arange(28)  # the scene's doubling grid; pivots at the volume midpoints
     np.testing.assert_allclose(seen["v"], 0.5 * (v[:-1] + v[1:]), rtol=1e-14)
     np.testing.assert_allclose(np.pi / 6 * seen["d"] ** 3, seen["v"], rtol=1e-12)
