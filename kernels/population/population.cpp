@@ -152,7 +152,7 @@ struct Population::Work {
   std::vector<Jet> BN_jet, BQ_jet;
   template <class T>
   struct Scratch {
-    std::vector<T> K, Kh, S, A, BN, BQ, phi, E, pi, B, V, Q, shape, amount, F, rows, dq, rate, up, mv;
+    std::vector<T> K, Kh, S, A, BN, BQ, phi, E, pi, B, V, Q, shape, amount, F, rows, dq, rate, up, mv, split;
     std::vector<int> donor;
   };
   Scratch<double> sd;
@@ -778,23 +778,27 @@ void Population::rates_t(Work& w, const State<T>& s, const Rates<T>& r, bool fol
     }
     if (ca) {
       // Each packet split on the side of its mean volume (Kumar et al. 2006, Eq. (15)); properties follow the volume.
-      std::vector<T> split(n + kOutsideRows);
+      // A packet touches at most classes a and a + 1 and the outside rows: only those entries of `split` are
+      // read and then cleared, so the loop costs O(n), not O(n^2).
+      sc.split.assign(n + kOutsideRows, T(0.0));
+      T* split = sc.split.data();
       for (int c = 0; c < n; ++c) {
         if (is_empty(sc.B[c])) continue;
         const int a = ca->side(*grid_, c, sc.B[c], sc.V[c]);
-        std::fill(split.begin(), split.end(), T(0.0));
-        split_between(*grid_, a, sc.B[c], sc.V[c], split.data());
-        for (int i = 0; i < n; ++i) dN[i] += split[i];
+        const int lo = std::max(a, 0), hi = std::min(a + 1, n - 1);
+        split_between(*grid_, a, sc.B[c], sc.V[c], split);
+        for (int i = lo; i <= hi; ++i) dN[i] += split[i];
         out[kOutNumberAbove] += split[n + kNumberAbove];
         out[kOutVolumeAbove] += split[n + kVolumeAbove];
         out[kOutVolumeBelow] += split[n + kVolumeBelow];
         for (int p = 0; p < P && value_of(sc.V[c]) != 0.0; ++p) {
           const T per_volume = sc.Q[size_t(p) * (n + 1) + c] / sc.V[c];
-          for (int i = std::max(a, 0); i <= std::min(a + 1, n - 1); ++i)
-            dq[size_t(p) * n + i] += per_volume * x[i] * split[i];
+          for (int i = lo; i <= hi; ++i) dq[size_t(p) * n + i] += per_volume * x[i] * split[i];
           out[out_property_above(p)] += per_volume * split[n + kVolumeAbove];
           out[out_property_below(p)] += per_volume * split[n + kVolumeBelow];
         }
+        for (int i = lo; i <= hi; ++i) split[i] = T(0.0);
+        for (int i = n; i < n + kOutsideRows; ++i) split[i] = T(0.0);
       }
       out[kOutNumberAbove] += sc.B[n];  // aggregates beyond the top edge leave whole
       out[kOutVolumeAbove] += sc.V[n];
