@@ -49,7 +49,7 @@ def test_fit_scene_is_the_two_zone_scene_and_the_truth_its_values(setup):
         assert fs.get(name) == pytest.approx(value, rel=1e-12)
 
 
-def test_staged_calibration_recovers_the_truth_within_its_standard_errors(setup, staged):
+def test_staged_calibration_recovers_the_truth_within_its_standard_errors(setup, staged, tmp_path):
     exps, fs, plan = setup
     assert staged.status == "ok" and not staged.flagged
     assert [s["name"] for s in staged.stages] == ["growth", "broadening", "all"]
@@ -68,6 +68,9 @@ def test_staged_calibration_recovers_the_truth_within_its_standard_errors(setup,
     # the Table 7.7 batch (validation) is predicted to within the noise: mean |rel. error| near the sigmas
     assert fit.loc[("validation", "drying.d50"), "mean_abs_rel"] < 0.02
     assert fit.loc[("validation", "drying.sigma"), "mean_abs_rel"] < 0.05
+    # observables outside paper 001's groups get parity plots of their own
+    written = sorted(os.path.basename(f) for f in rep.parity_plots(str(tmp_path)))
+    assert written == ["parity_drying.d50.png", "parity_drying.sigma.png"]
 
 
 def test_noise_free_data_give_the_truth(setup):

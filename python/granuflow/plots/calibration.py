@@ -13,10 +13,16 @@ from .series import figure
 
 def parity_plots(predictions: dict, fit_rows: list[dict], out_dir: str, *, units: dict) -> list[str]:
     """One PNG per observable group (size, moisture, outlet gas temperature) with the data sets of ``predictions``
-    (set name -> predictions) as markers and R² from ``fit_rows`` in the legend; ``units``: SI unit per observable."""
+    (set name -> predictions) as markers and R² from ``fit_rows`` in the legend; ``units``: SI unit per observable.
+    Observables outside those groups (another scene's, e.g. ``drying.sigma`` of paper 003's two-zone bed) get one
+    PNG each, lengths shown in µm."""
     os.makedirs(out_dir, exist_ok=True)
     written = []
-    for group, members in outputs.OBSERVABLE_GROUPS.items():
+    grouped = {m for members in outputs.OBSERVABLE_GROUPS.values() for m in members}
+    others = sorted({p["observable"] for preds in predictions.values() for p in preds} - grouped)
+    panels = [(g, members, outputs.GROUP_TITLES[g]) for g, members in outputs.OBSERVABLE_GROUPS.items()]
+    panels += [(o, (o,), o) for o in others]
+    for group, members, title in panels:
         fig, ax = figure((4.6, 4.4))
         lo, hi, any_pts = math.inf, -math.inf, False
         shown = ""
@@ -25,7 +31,7 @@ def parity_plots(predictions: dict, fit_rows: list[dict], out_dir: str, *, units
             for p in preds:
                 if p["observable"] in members:
                     si = units.get(p["observable"], "")
-                    shown = outputs.OBSERVABLE_DISPLAY.get(p["observable"], si) if si else ""
+                    shown = outputs.OBSERVABLE_DISPLAY.get(p["observable"], "um" if si == "m" else si) if si else ""
                     d.append(from_si(p["data"], shown, si))
                     m.append(from_si(p["model"], shown, si))
             if not d:
@@ -39,7 +45,7 @@ def parity_plots(predictions: dict, fit_rows: list[dict], out_dir: str, *, units
         ax.plot([lo, hi], [lo, hi], "k-", lw=0.8)
         ax.set_xlabel(f"measured / {pretty(shown)}" if shown else "measured")
         ax.set_ylabel(f"model / {pretty(shown)}" if shown else "model")
-        ax.set_title(outputs.GROUP_TITLES[group])
+        ax.set_title(title)
         ax.legend(fontsize=8)
         fig.tight_layout()
         name = os.path.join(out_dir, f"parity_{group}.png")
