@@ -100,14 +100,30 @@ def test_sensitivities_agree_with_central_differences(setup):
         assert out["sensitivities"][n] == pytest.approx(out["central_differences"][n], rel=1e-2)
 
 
-def test_spray_zone_residence_time_is_not_identifiable_beside_the_drying_zone(setup, staged):
-    """The width grows with the time between visits to the spray zone; the 4 s spent in it change that by only
-    tau_s / (tau_s + tau_d) = 2 %. Freed together with drying.tau (covariance at the staged estimates, one
-    iteration), spray.tau is flagged and its error bar spans its value."""
+def fisher_rel_se(fs, exps, at, h=1e-3):
+    """Relative standard errors from the Fisher information J^T J of the weighted residuals, J by central differences
+    in ln p of plain predictions (cal.predict), the sigmas held at their values at ``at``: independent of the
+    calibration's own Jacobian."""
+    sig = np.concatenate([p["sigma"] for p in cal.predict(fs, exps, at)])
+
+    def model(params):
+        return np.concatenate([p["model"] for p in cal.predict(fs, exps, params)]) / sig
+
+    J = np.column_stack([(model({**at, n: at[n] * math.exp(h)}) - model({**at, n: at[n] * math.exp(-h)})) / (2 * h)
+                         for n in at])
+    return dict(zip(at, np.sqrt(np.diag(np.linalg.inv(J.T @ J)))))
+
+
+def test_standard_errors_are_the_linearized_ones_and_spray_tau_is_not_identifiable(setup, staged):
+    """At the estimates, the calibration's standard errors equal those of the Fisher information built from plain
+    predictions. Adding the spray zone's own residence time: the width grows with the time between visits to the
+    spray zone, and the 4 s spent in it change that by only tau_s / (tau_s + tau_d) = 2 %, so its relative standard
+    error exceeds 1 (several hundred per cent) while drying.tau's stays bounded."""
     exps, fs, plan = setup
-    free = list(plan.stages[-1].free) + [cal.FreeParameter("spray.tau", "log", 0.1, 100.0)]
-    res = cal.calibrate(fs, exps.calibration, [cal.Stage("three", free, [])], start=staged.parameters,
-                        options={**plan.options, "max_iterations": 1})
-    e = res.estimate("spray.tau")
-    assert not e["identifiable"] and e["rel_se"] > 1.0
-    assert res.estimate("drying.tau")["rel_se"] < 0.2 * e["rel_se"]
+    at = {n: staged.parameters[n] for n in TRUTH}
+    rel = fisher_rel_se(fs, exps.calibration, at)
+    for n in TRUTH:
+        assert rel[n] == pytest.approx(staged.estimate(n)["rel_se"], rel=0.02)
+    rel3 = fisher_rel_se(fs, exps.calibration, {**at, "spray.tau": 4.0})
+    assert rel3["spray.tau"] > 3.0
+    assert rel3["drying.tau"] < 0.1 * rel3["spray.tau"]
