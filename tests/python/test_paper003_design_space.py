@@ -30,6 +30,8 @@ def steady_map():
 def test_map_points_are_the_direct_steady_solves(steady_map):
     base, grid = steady_map
     assert grid.n_simulations == 6
+    # labelled as steady states, not as the state at the scene's end time
+    assert grid.steady and grid.when == "at the steady state" and grid.to_dataframe().attrs["steady_state"]
     d50 = np.asarray(grid.values["d50_um"])
     assert np.all(np.isfinite(d50))
     for i, j in ((0, 0), (1, 2), (0, 1)):  # (cut index, spray index): corners and a middle point

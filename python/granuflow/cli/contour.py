@@ -67,7 +67,7 @@ def cmd_contour(args) -> int:
     meta = {"scene": os.path.abspath(args.scene), "x": {"param": grid.x.param, "unit": grid.x.unit,
                                                         "values": grid.x.values.tolist()},
             "y": {"param": grid.y.param, "unit": grid.y.unit, "values": grid.y.values.tolist()},
-            "outputs": list(grid.outputs), "fixed": fixed, "t_end_s": None if args.steady else grid.t_end_s,
+            "outputs": list(grid.outputs), "fixed": fixed, "t_end_s": None if grid.steady else grid.t_end_s,
             "steady_state": bool(args.steady), "n_points": grid.n_simulations,
             "n_failed": n_failed, "wall_time_s": grid.wall_time_s,
             "simulations_per_s": json_value(grid.simulations_per_s),

@@ -30,7 +30,7 @@ class ContourGrid:
     message: np.ndarray
     scene: str
     fixed: dict = field(default_factory=dict)
-    t_end_s: float = math.nan
+    t_end_s: float = math.nan  # NaN for a map of steady states
     wall_time_s: float = math.nan
     solve_time_s: float = math.nan
     units: dict = field(default_factory=dict)  # unit of each output's values
@@ -44,6 +44,16 @@ class ContourGrid:
     @property
     def shape(self) -> tuple[int, int]:
         return len(self.y.values), len(self.x.values)
+
+    @property
+    def steady(self) -> bool:
+        """The values are steady states (solved directly), not the state at an end time."""
+        return math.isnan(self.t_end_s)
+
+    @property
+    def when(self) -> str:
+        """When the values hold, for titles: "at the steady state" or "after 60 min"."""
+        return "at the steady state" if self.steady else f"after {self.t_end_s / 60:g} min"
 
     @property
     def ok(self) -> np.ndarray:
@@ -74,7 +84,7 @@ class ContourGrid:
         data["message"] = self.message.ravel()
         df = pd.DataFrame(data)
         df.attrs.update({"scene": self.scene, "x": self.x.param, "y": self.y.param, "fixed": dict(self.fixed),
-                         "t_end_s": self.t_end_s, "outputs": list(self.outputs),
+                         "t_end_s": self.t_end_s, "steady_state": self.steady, "outputs": list(self.outputs),
                          "units": {o: self.units.get(o, "") for o in self.outputs}})
         return df
 
@@ -130,7 +140,7 @@ def contour_map(flowsheet: Flowsheet, x, y, outputs: Sequence[str] = ("d50_um",)
         values={o: df[o].to_numpy(dtype=float).reshape(shape) for o in outputs},
         status=df["status"].to_numpy(dtype=object).reshape(shape),
         message=df["message"].to_numpy(dtype=object).reshape(shape),
-        scene=fs.name, fixed=dict(fixed or {}), t_end_s=fs.t_end, wall_time_s=wall,
+        scene=fs.name, fixed=dict(fixed or {}), t_end_s=math.nan if steady else fs.t_end, wall_time_s=wall,
         solve_time_s=float(np.nansum(df["solve_time_s"].to_numpy(dtype=float))),
         units={o: df.attrs["units"].get(o, "") for o in outputs})
 

@@ -81,7 +81,7 @@ def plot_contour(grid, output: str, path: str | None = None, *, ax=None, levels:
         ax.plot(X[~grid.ok], Y[~grid.ok], "rx", ms=5, label="failed")
     ax.set_xlabel(grid.x.label)
     ax.set_ylabel(grid.y.label)
-    ax.set_title(title if title is not None else f"{label.split(' / ')[0]} after {grid.t_end_s / 60:g} min")
+    ax.set_title(title if title is not None else f"{label.split(' / ')[0]} {grid.when}")
     return _finish(fig, ax, path, own)
 
 
@@ -99,7 +99,7 @@ def _profile(fig, ax, path, own, grid, output, label, z, title, window):
     ax.set_ylabel(label)
     ax.grid(alpha=0.3)
     note = f"{held.param} = {held.values[0]:g} {held.unit}".strip()
-    ax.set_title(title if title is not None else f"{label.split(' / ')[0]} after {grid.t_end_s / 60:g} min ({note})",
+    ax.set_title(title if title is not None else f"{label.split(' / ')[0]} {grid.when} ({note})",
                  fontsize=10)
     return _finish(fig, ax, path, own)
 
