@@ -245,7 +245,8 @@ Evaluation evaluate(const std::string& kernel, const std::string& scheme, const 
 
 // Kernels with a separable size factor (constant, sum, product) sum aggregation with prefix sums (O(n) per term)
 // instead of the pair table: on geometric grids of 1 to 4 classes per volume doubling, both schemes, both outside
-// rules, the rates equal those of the loop over every pair to round-off, the outside rows included.
+// rules, and on an irregular grid, the rates equal those of the loop over every pair to round-off, the outside rows
+// included.
 TEST(PbmAggregation, SeparableKernelsGiveThePairLoopsRates) {
   for (int q : {1, 2, 3, 4}) {
     const auto g = std::make_shared<const kernels::Grid>(kernels::Grid::geometric(std::exp2(-12.0), q, 14 * q));
@@ -259,6 +260,19 @@ TEST(PbmAggregation, SeparableKernelsGiveThePairLoopsRates) {
                 << kernel << " " << scheme << " " << outside << " q=" << q << " row " << i;
         }
   }
+  // An irregular grid (edges growing by ratios between 1.3 and 2.6): the near-equal partners no longer line up along
+  // diagonals, so more pairs are summed one by one, and the prefixes must still hold exactly the run pairs.
+  std::vector<double> edges{1e-3};
+  for (int i = 0; i < 40; ++i) edges.push_back(edges.back() * (1.3 + 1.3 * std::abs(std::sin(1.7 * i))));
+  const auto g = std::make_shared<const kernels::Grid>(kernels::Grid::from_edges(edges));
+  for (const char* kernel : {"constant", "sum", "product"})
+    for (const char* scheme : {"fixed_pivot", "cell_average"}) {
+      const auto e = separable::evaluate(kernel, scheme, "remove", g, 5u);
+      EXPECT_EQ(e.path, "separable") << kernel << " " << scheme << " (irregular grid)";
+      for (size_t i = 0; i < e.fast.size(); ++i)
+        EXPECT_NEAR(e.fast[i], e.loop[i], 1e-13 * e.scale[i] + 1e-300)
+            << kernel << " " << scheme << " (irregular grid) row " << i;
+    }
 }
 
 // Kernels without a separable factor, or populations carrying properties, keep the pair matrices.
