@@ -4,14 +4,56 @@
 #include <sunmatrix/sunmatrix_dense.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
+#include <vector>
 
 namespace granuflow::detail {
 namespace {
 
 struct Content {
-  Eigen::PartialPivLU<Eigen::MatrixXd> lu;
+  Eigen::PartialPivLU<Eigen::MatrixXd> lu;  // the whole matrix (one group)
+  std::vector<std::vector<int>> groups;     // more than one: the states of each independent group
+  std::vector<Eigen::PartialPivLU<Eigen::MatrixXd>> group_lu;
+  std::vector<int> parent;
+  Eigen::MatrixXd sub;
+  Eigen::VectorXd rhs;
   long last_flag = 0;
 };
+
+int root(std::vector<int>& parent, int i) {
+  while (parent[i] != i) i = parent[i] = parent[parent[i]];
+  return i;
+}
+
+// The connected components of the nonzero pattern of m (rows and columns joined by every nonzero off the diagonal),
+// each as its sorted states; one component leaves `groups` empty.
+void find_groups(const Eigen::Map<const Eigen::MatrixXd>& m, Content& c) {
+  const int n = static_cast<int>(m.rows());
+  c.parent.resize(n);
+  for (int i = 0; i < n; ++i) c.parent[i] = i;
+  int count = n;  // components so far: a coupled matrix stops the scan as soon as it is one
+  for (int j = 0; j < n && count > 1; ++j) {
+    const double* col = m.data() + size_t(j) * n;
+    for (int i = 0; i < n; ++i)
+      if (col[i] != 0.0 && i != j) {
+        const int a = root(c.parent, i), b = root(c.parent, j);
+        if (a != b) c.parent[std::max(a, b)] = std::min(a, b), --count;
+      }
+  }
+  c.groups.clear();
+  if (count == 1) return;
+  std::vector<int> slot(n, -1);
+  for (int i = 0; i < n; ++i) {
+    int& g = slot[root(c.parent, i)];
+    if (g < 0) g = static_cast<int>(c.groups.size()), c.groups.emplace_back();
+    c.groups[g].push_back(i);
+  }
+}
+
+bool pivots_ok(const Eigen::PartialPivLU<Eigen::MatrixXd>& lu) {
+  const auto diag = lu.matrixLU().diagonal();
+  return diag.allFinite() && diag.cwiseAbs().minCoeff() > 0.0;
+}
 
 Content* content(SUNLinearSolver s) { return static_cast<Content*>(s->content); }
 
@@ -22,21 +64,49 @@ int initialize(SUNLinearSolver) { return 0; }
 int setup(SUNLinearSolver s, SUNMatrix a) {
   const auto n = SUNDenseMatrix_Rows(a);
   Eigen::Map<const Eigen::MatrixXd> m(SUNDenseMatrix_Data(a), n, n);  // column-major, like SUNDenseMatrix
-  content(s)->lu.compute(m);
+  Content& c = *content(s);
+  find_groups(m, c);  // n^2 reads: a few per cent of the factorization at any size
   // A zero or non-finite pivot makes the step fail recoverably: the integrator retries with a smaller step.
   // (A condition estimate would cost as much as a third of the factorization.)
-  const auto diag = content(s)->lu.matrixLU().diagonal();
-  content(s)->last_flag = (diag.allFinite() && diag.cwiseAbs().minCoeff() > 0.0) ? 0 : 1;
-  return static_cast<int>(content(s)->last_flag);
+  bool ok = true;
+  if (c.groups.empty()) {
+    c.lu.compute(m);
+    ok = pivots_ok(c.lu);
+  } else {
+    c.group_lu.resize(c.groups.size());
+    for (size_t g = 0; g < c.groups.size(); ++g) {
+      const auto& idx = c.groups[g];
+      const int k = static_cast<int>(idx.size());
+      c.sub.resize(k, k);
+      for (int j = 0; j < k; ++j)
+        for (int i = 0; i < k; ++i) c.sub(i, j) = m(idx[i], idx[j]);
+      c.group_lu[g].compute(c.sub);
+      ok = ok && pivots_ok(c.group_lu[g]);
+    }
+  }
+  c.last_flag = ok ? 0 : 1;
+  return static_cast<int>(c.last_flag);
 }
 
 int solve(SUNLinearSolver s, SUNMatrix a, N_Vector x, N_Vector b, realtype) {
   const auto n = SUNDenseMatrix_Rows(a);
+  Content& c = *content(s);
   Eigen::Map<const Eigen::VectorXd> bv(N_VGetArrayPointer(b), n);
   Eigen::Map<Eigen::VectorXd> xv(N_VGetArrayPointer(x), n);
-  xv = content(s)->lu.solve(bv);
-  if (!xv.allFinite()) return content(s)->last_flag = 1;
-  return content(s)->last_flag = 0;
+  if (c.groups.empty()) {
+    xv = c.lu.solve(bv);
+  } else {
+    for (size_t g = 0; g < c.groups.size(); ++g) {  // x and b may be one vector: each group reads its b first
+      const auto& idx = c.groups[g];
+      const int k = static_cast<int>(idx.size());
+      c.rhs.resize(k);
+      for (int i = 0; i < k; ++i) c.rhs[i] = bv[idx[i]];
+      c.rhs = c.group_lu[g].solve(c.rhs);
+      for (int i = 0; i < k; ++i) xv[idx[i]] = c.rhs[i];
+    }
+  }
+  if (!xv.allFinite()) return c.last_flag = 1;
+  return c.last_flag = 0;
 }
 
 sunindextype last_flag(SUNLinearSolver s) { return content(s)->last_flag; }
@@ -50,6 +120,8 @@ int free_solver(SUNLinearSolver s) {
 }
 
 }  // namespace
+
+int eigen_dense_groups(SUNLinearSolver s) { return std::max<int>(1, static_cast<int>(content(s)->groups.size())); }
 
 SUNLinearSolver make_eigen_dense_solver(SUNContext ctx) {
   SUNLinearSolver s = SUNLinSolNewEmpty(ctx);

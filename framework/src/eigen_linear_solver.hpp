@@ -1,5 +1,8 @@
 // A SUNDIALS direct linear solver backed by Eigen's blocked partial-pivoting LU on a SUNDenseMatrix.
-// SUNDIALS' own dense LU is unblocked; at 100+ states it dominates the solve time.
+// SUNDIALS' own dense LU is unblocked; at 100+ states it dominates the solve time. A matrix whose nonzeros fall into
+// independent groups of states (flowsheets that hold separate processes side by side, such as a two-zone bed beside
+// a one-zone one) is factored group by group: the LU of blocks of sizes n_1 + n_2 costs n_1^3 + n_2^3, not (n_1 +
+// n_2)^3.
 #pragma once
 #include <sundials/sundials_context.h>
 #include <sundials/sundials_linearsolver.h>
@@ -7,5 +10,7 @@
 namespace granuflow::detail {
 
 SUNLinearSolver make_eigen_dense_solver(SUNContext ctx);
+// The number of independent groups the last setup factored (1: the matrix as a whole).
+int eigen_dense_groups(SUNLinearSolver s);
 
 }  // namespace granuflow::detail

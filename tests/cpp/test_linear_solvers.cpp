@@ -1,11 +1,17 @@
 // The linear solvers of the Newton iterations: the iterative one (solver.linear_solver: gmres, GMRES on
 // difference-quotient Jacobian-vector products with the block preconditioner of DaeSystem) gives the answer of the
 // direct ones on flowsheets built for those (units without their own preconditioner get their exact own block), and
-// says what it cannot do.
+// says what it cannot do. The dense solver factors independent groups of states separately and gives the whole
+// matrix's answer.
 #include <gtest/gtest.h>
+#include <nvector/nvector_serial.h>
+#include <sunmatrix/sunmatrix_dense.h>
 
+#include <Eigen/Dense>
 #include <cmath>
+#include <random>
 
+#include "eigen_linear_solver.hpp"
 #include "granuflow/errors.hpp"
 #include "scene_helpers.hpp"
 
@@ -72,6 +78,49 @@ TEST(LinearSolvers, GmresRefusesSensitivitiesAndUnknownChoicesAreNamed) {
   } catch (const ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("auto, dense, sparse, gmres"), std::string::npos) << e.what();
   }
+}
+
+// A matrix whose states fall into independent groups, interleaved in the state order (as two processes side by side
+// in one flowsheet are, with their accumulators between them): the dense solver factors each group on its own and
+// returns the solution of the whole system, also when x and b are one vector; a singular group fails the setup.
+TEST(LinearSolvers, DenseSolverFactorsIndependentGroupsSeparately) {
+  SUNContext ctx = nullptr;
+  SUNContext_Create(nullptr, &ctx);
+  const int n = 9;
+  const std::vector<std::vector<int>> groups{{0, 3, 5, 8}, {1, 2, 6}, {4}, {7}};
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  SUNMatrix A = SUNDenseMatrix(n, n, ctx);
+  Eigen::Map<Eigen::MatrixXd> a(SUNDenseMatrix_Data(A), n, n);
+  a.setZero();
+  for (const auto& g : groups)
+    for (int i : g)
+      for (int j : g) a(i, j) = u(rng) + (i == j ? 3.0 : 0.0);
+  a(3, 0) = 0.0;  // a structural zero inside a group does not split it
+  const Eigen::MatrixXd full = a;
+  N_Vector b = N_VNew_Serial(n, ctx), x = N_VNew_Serial(n, ctx);
+  Eigen::Map<Eigen::VectorXd> bv(N_VGetArrayPointer(b), n), xv(N_VGetArrayPointer(x), n);
+  for (int i = 0; i < n; ++i) bv[i] = u(rng);
+  const Eigen::VectorXd want = full.partialPivLu().solve(Eigen::VectorXd(bv));
+  SUNLinearSolver s = detail::make_eigen_dense_solver(ctx);
+  ASSERT_EQ(SUNLinSolSetup(s, A), 0);
+  EXPECT_EQ(detail::eigen_dense_groups(s), 4);
+  ASSERT_EQ(SUNLinSolSolve(s, A, x, b, 0.0), 0);
+  EXPECT_LT((xv - want).cwiseAbs().maxCoeff(), 1e-13 * want.cwiseAbs().maxCoeff());
+  EXPECT_LT((full * xv - bv).cwiseAbs().maxCoeff(), 1e-13);
+  ASSERT_EQ(SUNLinSolSolve(s, A, b, b, 0.0), 0);  // in place
+  EXPECT_LT((bv - want).cwiseAbs().maxCoeff(), 1e-13 * want.cwiseAbs().maxCoeff());
+  // a group that is singular on its own (one state whose equation does not depend on it)
+  a(4, 4) = 0.0;
+  EXPECT_NE(SUNLinSolSetup(s, A), 0);
+  // coupled groups are one: the whole matrix is factored as before
+  a(4, 4) = 2.0, a(0, 1) = 0.5, a(4, 7) = 0.25, a(2, 4) = -0.5;
+  ASSERT_EQ(SUNLinSolSetup(s, A), 0);
+  EXPECT_EQ(detail::eigen_dense_groups(s), 1);
+  SUNLinSolFree(s);
+  N_VDestroy(b), N_VDestroy(x);
+  SUNMatDestroy(A);
+  SUNContext_Free(&ctx);
 }
 
 }  // namespace
