@@ -11,8 +11,11 @@ namespace granuflow::detail {
 namespace {
 
 struct Content {
-  Eigen::PartialPivLU<Eigen::MatrixXd> lu;  // the whole matrix (one group)
+  Eigen::PartialPivLU<Eigen::MatrixXd> lu;  // the whole matrix (one group, or one that holds nearly every state)
   std::vector<std::vector<int>> groups;     // more than one: the states of each independent group
+  std::vector<int> group_of;                // with groups: each state's group
+  bool split = false;                       // factored group by group
+  long unsplit_setups = 0;                  // setups since the groups were last looked for, while not split
   std::vector<Eigen::PartialPivLU<Eigen::MatrixXd>> group_lu;
   std::vector<int> parent;
   Eigen::MatrixXd sub;
@@ -43,11 +46,27 @@ void find_groups(const Eigen::Map<const Eigen::MatrixXd>& m, Content& c) {
   c.groups.clear();
   if (count == 1) return;
   std::vector<int> slot(n, -1);
+  c.group_of.resize(n);
   for (int i = 0; i < n; ++i) {
     int& g = slot[root(c.parent, i)];
     if (g < 0) g = static_cast<int>(c.groups.size()), c.groups.emplace_back();
     c.groups[g].push_back(i);
+    c.group_of[i] = g;
   }
+}
+
+// Whether the groups of the last setup still separate m (no nonzero joins two of them): a scan without the
+// union-find, and the structure rarely changes between setups.
+bool groups_hold(const Eigen::Map<const Eigen::MatrixXd>& m, const Content& c) {
+  const int n = static_cast<int>(m.rows());
+  if (c.groups.empty() || static_cast<int>(c.group_of.size()) != n) return false;
+  for (int j = 0; j < n; ++j) {
+    const double* col = m.data() + size_t(j) * n;
+    const int g = c.group_of[j];
+    for (int i = 0; i < n; ++i)
+      if (col[i] != 0.0 && c.group_of[i] != g) return false;
+  }
+  return true;
 }
 
 bool pivots_ok(const Eigen::PartialPivLU<Eigen::MatrixXd>& lu) {
@@ -65,11 +84,23 @@ int setup(SUNLinearSolver s, SUNMatrix a) {
   const auto n = SUNDenseMatrix_Rows(a);
   Eigen::Map<const Eigen::MatrixXd> m(SUNDenseMatrix_Data(a), n, n);  // column-major, like SUNDenseMatrix
   Content& c = *content(s);
-  find_groups(m, c);  // n^2 reads: a few per cent of the factorization at any size
+  // Looking for groups reads all n^2 entries, as much as half of a small LU: a split factorization checks on every
+  // setup that its groups still hold (it would be wrong otherwise), a whole one looks again only every 16th setup
+  // (missing a split costs time, never accuracy).
+  const bool look = c.split ? !groups_hold(m, c) : c.unsplit_setups++ % 16 == 0;
+  if (look) {
+    find_groups(m, c);
+    // Splitting pays when no group holds nearly every state (a group of 90 % still costs 73 % of the whole LU;
+    // the whole matrix keeps the factorization, and so the results, of a coupled flowsheet with a few loose states).
+    size_t largest = 0;
+    for (const auto& g : c.groups) largest = std::max(largest, g.size());
+    c.split = c.groups.size() > 1 && double(largest) <= 0.9 * double(n);
+    c.unsplit_setups = c.split ? 0 : 1;
+  }
   // A zero or non-finite pivot makes the step fail recoverably: the integrator retries with a smaller step.
   // (A condition estimate would cost as much as a third of the factorization.)
   bool ok = true;
-  if (c.groups.empty()) {
+  if (!c.split) {
     c.lu.compute(m);
     ok = pivots_ok(c.lu);
   } else {
@@ -93,7 +124,7 @@ int solve(SUNLinearSolver s, SUNMatrix a, N_Vector x, N_Vector b, realtype) {
   Content& c = *content(s);
   Eigen::Map<const Eigen::VectorXd> bv(N_VGetArrayPointer(b), n);
   Eigen::Map<Eigen::VectorXd> xv(N_VGetArrayPointer(x), n);
-  if (c.groups.empty()) {
+  if (!c.split) {
     xv = c.lu.solve(bv);
   } else {
     for (size_t g = 0; g < c.groups.size(); ++g) {  // x and b may be one vector: each group reads its b first
@@ -121,7 +152,9 @@ int free_solver(SUNLinearSolver s) {
 
 }  // namespace
 
-int eigen_dense_groups(SUNLinearSolver s) { return std::max<int>(1, static_cast<int>(content(s)->groups.size())); }
+int eigen_dense_groups(SUNLinearSolver s) {
+  return content(s)->split ? static_cast<int>(content(s)->groups.size()) : 1;
+}
 
 SUNLinearSolver make_eigen_dense_solver(SUNContext ctx) {
   SUNLinearSolver s = SUNLinSolNewEmpty(ctx);

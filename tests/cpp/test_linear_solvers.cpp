@@ -118,6 +118,18 @@ TEST(LinearSolvers, DenseSolverFactorsIndependentGroupsSeparately) {
   ASSERT_EQ(SUNLinSolSetup(s, A), 0);
   EXPECT_EQ(detail::eigen_dense_groups(s), 1);
   SUNLinSolFree(s);
+  SUNMatDestroy(A);
+  // a coupled block of 30 states beside one loose state: not worth splitting, factored whole
+  const int m = 31;
+  A = SUNDenseMatrix(m, m, ctx);
+  Eigen::Map<Eigen::MatrixXd> c(SUNDenseMatrix_Data(A), m, m);
+  c.setZero();
+  c.topLeftCorner(30, 30) = Eigen::MatrixXd::Random(30, 30) + 4.0 * Eigen::MatrixXd::Identity(30, 30);
+  c(30, 30) = 1.0;
+  s = detail::make_eigen_dense_solver(ctx);
+  ASSERT_EQ(SUNLinSolSetup(s, A), 0);
+  EXPECT_EQ(detail::eigen_dense_groups(s), 1);
+  SUNLinSolFree(s);
   N_VDestroy(b), N_VDestroy(x);
   SUNMatDestroy(A);
   SUNContext_Free(&ctx);
