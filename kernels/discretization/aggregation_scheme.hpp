@@ -24,5 +24,6 @@ class AggregationScheme {
 
 // Pair-index arithmetic of the upper triangle j <= k, row-major.
 inline size_t pair_count(int n) { return size_t(n) * (n + 1) / 2; }
+inline size_t pair_index(int j, int k, int n) { return size_t(j) * n - size_t(j) * (j - 1) / 2 + (k - j); }
 
 }  // namespace granuflow::kernels

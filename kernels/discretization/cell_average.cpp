@@ -20,7 +20,7 @@ void CellAverageAggregation::setup(const Grid& g) {
     if (k < n - 1) run_first_[j] = k + 1, run_last_[j] = n - 1;
   }
   diagonals_.clear();
-  auto pair = [n](int j, int k) { return size_t(j) * n - size_t(j) * (j - 1) / 2 + (k - j); };
+  auto pair = [n](int j, int k) { return pair_index(j, k, n); };
   for (int d = 0; d < n; ++d) {
     if (run_first_[0] <= d && d <= run_last_[0]) break;  // the runs start here
     Diagonal g{cell_[pair(0, d)] - d, d - 1};

@@ -34,7 +34,7 @@ void FixedPivotAggregation::setup(const Grid& g) {
   }
   // Diagonals below the runs: shift and weights of the first pair, kept while every pair along it agrees.
   diagonals_.clear();
-  auto pair = [n](int j, int k) { return size_t(j) * n - size_t(j) * (j - 1) / 2 + (k - j); };
+  auto pair = [n](int j, int k) { return pair_index(j, k, n); };
   for (int d = 0; d < n; ++d) {
     const Target& t0 = targets_[pair(0, d)];
     if (run_first_[0] <= d && d <= run_last_[0]) break;  // the runs start here

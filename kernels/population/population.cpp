@@ -39,15 +39,6 @@ std::vector<std::string> with_none(std::vector<std::string> names) {
   return names;
 }
 
-// Skips empty classes in double evaluations only: with Jets a zero value may still carry a derivative.
-template <class T>
-bool is_empty(const T& v) {
-  if constexpr (std::is_same_v<T, double>)
-    return v == 0.0;
-  else
-    return false;
-}
-
 bool has_derivative(const double*, int, int) { return false; }
 bool has_derivative(const Jet* p, int first, int count) {
   for (int k = first; k < first + count; ++k)
@@ -500,7 +491,7 @@ void Population::pair_matrices(Work& w, const ClassState<double>& cs, const doub
   for (size_t d = 0; d < nd; ++d)
     for (int k = static_cast<int>(d); k < n; ++k) {
       const int j = k - static_cast<int>(d);
-      w.Kd[d * n + k] = w.Kh[size_t(j) * n - size_t(j) * (j - 1) / 2 + d];
+      w.Kd[d * n + k] = w.Kh[pair_index(j, k, n)];
     }
 }
 
@@ -511,7 +502,7 @@ void Population::pair_matrices(Work& w, const ClassState<double>& cs, const doub
 bool Population::separable_tables(Work& w, const FixedPivotAggregation* fp, const CellAverageAggregation* ca) const {
   const int n = n_;
   const Grid& g = *grid_;
-  auto pair = [n](int j, int k) { return size_t(j) * n - size_t(j) * (j - 1) / 2 + (k - j); };
+  auto pair = [n](int j, int k) { return pair_index(j, k, n); };
   const int nd = fp ? static_cast<int>(fp->diagonals().size()) : static_cast<int>(ca->diagonals().size());
   auto on_diagonal = [&](int j, int k) {
     const int d = k - j;

@@ -15,18 +15,6 @@ namespace granuflow::kernels {
 namespace {
 using Complex = std::complex<double>;
 
-// Skips empty bins in double evaluations only: with Jets a zero value may still carry a derivative.
-template <class T>
-bool is_empty(const T& v) {
-  if constexpr (std::is_same_v<T, double>)
-    return v == 0.0;
-  else
-    return false;
-}
-
-size_t pair_index(int i, int k, int n) {  // row-major upper triangle, i <= k
-  return size_t(i) * n - size_t(i) * (i - 1) / 2 + (k - i);
-}
 }  // namespace
 
 // Everything one run computes: the tables that depend on parameters only (refreshed when one changes) and the FFT

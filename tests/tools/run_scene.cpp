@@ -6,6 +6,7 @@
 // then sees the core with its symbols, which the stripped Python module hides.
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
@@ -16,18 +17,27 @@
 #include "granuflow/simulator.hpp"
 #include "units/registry.hpp"
 
+namespace {
+// The whole argument as a number, or false (no silent 0 from "abc", no 3 from "3x").
+bool parse(const char* a, double& v) {
+  char* end = nullptr;
+  v = std::strtod(a, &end);
+  return end != a && *end == '\0' && std::isfinite(v);
+}
+}  // namespace
+
 int main(int argc, char** argv) {
   using namespace granuflow;
   const char* usage =
       "usage: granuflow_run_scene SCENE [t_end_s] [--repeat N] [--linear-solver dense|sparse|gmres|auto] "
       "[--method auto|ida|bdf|adams|erk]\n";
   std::string path, linear_solver, method;
-  double t_end = -1.0;
-  int repeat = 1;
-  for (int i = 1; i < argc; ++i) {
+  double t_end = -1.0, repeats = 1.0;
+  bool ok = true;
+  for (int i = 1; i < argc && ok; ++i) {
     const std::string a = argv[i];
     if (a == "--repeat" && i + 1 < argc) {
-      repeat = std::atoi(argv[++i]);
+      ok = parse(argv[++i], repeats) && repeats >= 1 && repeats == std::floor(repeats) && repeats <= 1e6;
     } else if (a == "--linear-solver" && i + 1 < argc) {
       linear_solver = argv[++i];
     } else if (a == "--method" && i + 1 < argc) {
@@ -35,16 +45,17 @@ int main(int argc, char** argv) {
     } else if (path.empty() && a.rfind("--", 0) != 0) {
       path = a;
     } else if (t_end < 0 && a.rfind("--", 0) != 0) {
-      t_end = std::atof(a.c_str());
+      ok = parse(argv[i], t_end) && t_end > 0;
     } else {
-      std::fprintf(stderr, "%s", usage);
-      return 2;
+      ok = false;
     }
+    if (!ok) std::fprintf(stderr, "granuflow_run_scene: '%s' (argument %d): not allowed here\n", argv[i], i);
   }
-  if (path.empty() || repeat < 1) {
-    std::fprintf(stderr, "%s", usage);
+  if (!ok || path.empty()) {
+    std::fprintf(stderr, "%s  t_end_s > 0 (s); N a whole number >= 1\n", usage);
     return 2;
   }
+  const int repeat = static_cast<int>(repeats);
   try {
     Scene s = load_scene(path, units::builtin());
     if (t_end > 0) s.options.t_end = t_end, s.options.t_out.clear();
