@@ -230,15 +230,28 @@ int main(int argc, char** argv) {
       json = true;
     else if (a == "--quick")
       quick = true;
-    else if (a == "--repeats" && i + 1 < argc)
-      repeats = std::max(1, std::atoi(argv[++i]));
-    else if (a == "--case" && i + 1 < argc)
+    else if (a == "--repeats" && i + 1 < argc) {
+      char* end = nullptr;
+      const long r = std::strtol(argv[++i], &end, 10);
+      if (end == argv[i] || *end != '\0' || r < 1 || r > 100000) {
+        std::fprintf(stderr, "granuflow_bench_pbm: --repeats '%s': not a whole number from 1 to 100000\n", argv[i]);
+        return 2;
+      }
+      repeats = static_cast<int>(r);
+    } else if (a == "--case" && i + 1 < argc)
       only = argv[++i];
-    else if (a == "--q" && i + 1 < argc)
-      only_q = std::atoi(argv[++i]);
-    else if (a == "--rtol" && i + 1 < argc)
-      only_rtol = std::atof(argv[++i]);
-    else if (a == "--scheme" && i + 1 < argc)
+    else if ((a == "--q" || a == "--rtol") && i + 1 < argc) {
+      char* end = nullptr;
+      const double v = std::strtod(argv[++i], &end);
+      if (end == argv[i] || *end != '\0' || !(v > 0)) {  // a value matching no grid is refused below
+        std::fprintf(stderr, "granuflow_bench_pbm: %s '%s': not a positive number\n", a.c_str(), argv[i]);
+        return 2;
+      }
+      if (a == "--q")
+        only_q = v == std::floor(v) ? static_cast<int>(v) : -1;  // -1: selects no grid
+      else
+        only_rtol = v;
+    } else if (a == "--scheme" && i + 1 < argc)
       scheme = argv[++i];
     else if (a == "--integrators" && i + 1 < argc) {
       integrators.clear();
@@ -267,15 +280,36 @@ int main(int argc, char** argv) {
   if (integrators.empty())
     integrators = quick ? std::vector<std::string>{"auto", "ida", "adams", "erk"}
                         : std::vector<std::string>{"auto", "ida", "bdf", "adams", "erk"};
+  // The filters select among the runs; one that selects none is an error, not an empty benchmark.
+  auto selected = [&](const Case& c, const std::string& m, int q, double rtol) {
+    return (only.empty() || c.name == only) && (scheme.empty() || m == scheme) && (!only_q || q == only_q) &&
+           (!only_rtol || rtol == only_rtol);
+  };
+  size_t count = 0;
+  for (const auto& c : cases)
+    for (const auto& m : c.methods)
+      for (int q : qs)
+        for (double rtol : rtols) count += selected(c, m, q, rtol);
+  if (count == 0) {
+    std::fprintf(stderr,
+                 "granuflow_bench_pbm: --case/--scheme/--q/--rtol select no run (cases constant, sum, product, growth, "
+                 "breakage; schemes cell_average, fixed_pivot, fv_koren, fv_upwind; q in {%s}; rtol in {%s})\n",
+                 quick ? "1, 2, 4" : "1, 2, 3, 4, 6, 8, 12", quick ? "1e-2, 1e-4, 1e-6" : "1e-2, 1e-3, ..., 1e-8");
+    return 2;
+  }
+  for (const auto& integrator : integrators)
+    if (integrator != "auto" && integrator != "ida" && integrator != "bdf" && integrator != "adams" &&
+        integrator != "erk") {
+      std::fprintf(stderr, "granuflow_bench_pbm: --integrators '%s': not one of auto, ida, bdf, adams, erk\n",
+                   integrator.c_str());
+      return 2;
+    }
   const std::string meta = meta_json();
-  for (const auto& c : cases) {
-    if (!only.empty() && c.name != only) continue;
+  for (const auto& c : cases)
     for (const auto& m : c.methods)
       for (const auto& integrator : integrators)
         for (int q : qs)
           for (double rtol : rtols)
-            if ((scheme.empty() || m == scheme) && (!only_q || q == only_q) && (!only_rtol || rtol == only_rtol))
-              print(run(c, m, integrator, q, rtol, repeats), json, repeats, meta);
-  }
+            if (selected(c, m, q, rtol)) print(run(c, m, integrator, q, rtol, repeats), json, repeats, meta);
   return 0;
 }
