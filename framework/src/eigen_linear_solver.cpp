@@ -156,6 +156,14 @@ int eigen_dense_groups(SUNLinearSolver s) {
   return content(s)->split ? static_cast<int>(content(s)->groups.size()) : 1;
 }
 
+int eigen_dense_largest_block(SUNLinearSolver s) {
+  const Content& c = *content(s);
+  if (!c.split) return static_cast<int>(c.lu.rows());
+  size_t largest = 0;
+  for (const auto& g : c.groups) largest = std::max(largest, g.size());
+  return static_cast<int>(largest);
+}
+
 SUNLinearSolver make_eigen_dense_solver(SUNContext ctx) {
   SUNLinearSolver s = SUNLinSolNewEmpty(ctx);
   if (!s) return nullptr;

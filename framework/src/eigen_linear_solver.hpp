@@ -13,5 +13,7 @@ SUNLinearSolver make_eigen_dense_solver(SUNContext ctx);
 // The number of independent groups the last setup factored (1: the matrix as a whole, also when one group holds
 // more than 90 % of the states).
 int eigen_dense_groups(SUNLinearSolver s);
+// The size of the largest matrix the last setup factored: the whole matrix, or its largest group (0 before any setup).
+int eigen_dense_largest_block(SUNLinearSolver s);
 
 }  // namespace granuflow::detail

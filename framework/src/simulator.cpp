@@ -326,6 +326,7 @@ SimResult simulate_ida(Flowsheet& fs, const SimOptions& opt, const std::string& 
     user.fresh_only = false;
     if (flag < 0) fail(flag, "consistent initialization (IDACalcIC)");
     check(IDAGetConsistentIC(mem, y.v, yp.v), "IDAGetConsistentIC");
+    ida.tune_refactoring();    // from the blocks IDACalcIC factored
     user.cache.valid = false;  // evaluated at IDACalcIC's iterates
     if (ns > 0) sens_initial_conditions(t0);
     while (iout < t_out.size() && t_out[iout] <= t0 + 1e-12 * std::max(1.0, t0)) {

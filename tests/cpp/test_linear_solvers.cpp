@@ -103,8 +103,10 @@ TEST(LinearSolvers, DenseSolverFactorsIndependentGroupsSeparately) {
   for (int i = 0; i < n; ++i) bv[i] = u(rng);
   const Eigen::VectorXd want = full.partialPivLu().solve(Eigen::VectorXd(bv));
   SUNLinearSolver s = detail::make_eigen_dense_solver(ctx);
+  EXPECT_EQ(detail::eigen_dense_largest_block(s), 0);  // nothing factored yet
   ASSERT_EQ(SUNLinSolSetup(s, A), 0);
   EXPECT_EQ(detail::eigen_dense_groups(s), 4);
+  EXPECT_EQ(detail::eigen_dense_largest_block(s), 4);  // what decides how long IDA keeps a factorization
   ASSERT_EQ(SUNLinSolSolve(s, A, x, b, 0.0), 0);
   EXPECT_LT((xv - want).cwiseAbs().maxCoeff(), 1e-13 * want.cwiseAbs().maxCoeff());
   EXPECT_LT((full * xv - bv).cwiseAbs().maxCoeff(), 1e-13);
@@ -117,6 +119,7 @@ TEST(LinearSolvers, DenseSolverFactorsIndependentGroupsSeparately) {
   a(4, 4) = 2.0, a(0, 1) = 0.5, a(4, 7) = 0.25, a(2, 4) = -0.5;
   ASSERT_EQ(SUNLinSolSetup(s, A), 0);
   EXPECT_EQ(detail::eigen_dense_groups(s), 1);
+  EXPECT_EQ(detail::eigen_dense_largest_block(s), n);
   SUNLinSolFree(s);
   SUNMatDestroy(A);
   // a coupled block of 30 states beside one loose state: not worth splitting, factored whole
@@ -129,6 +132,7 @@ TEST(LinearSolvers, DenseSolverFactorsIndependentGroupsSeparately) {
   s = detail::make_eigen_dense_solver(ctx);
   ASSERT_EQ(SUNLinSolSetup(s, A), 0);
   EXPECT_EQ(detail::eigen_dense_groups(s), 1);
+  EXPECT_EQ(detail::eigen_dense_largest_block(s), m);
   SUNLinSolFree(s);
   N_VDestroy(b), N_VDestroy(x);
   SUNMatDestroy(A);

@@ -103,11 +103,14 @@ def test_sensitivities_agree_with_central_differences(setup):
 def fisher_rel_se(fs, exps, at, h=1e-3):
     """Relative standard errors from the Fisher information J^T J of the weighted residuals, J by central differences
     in ln p of plain predictions (cal.predict), the sigmas held at their values at ``at``: independent of the
-    calibration's own Jacobian."""
-    sig = np.concatenate([p["sigma"] for p in cal.predict(fs, exps, at)])
+    calibration's own Jacobian. The predictions are integrated at rtol 1e-8: a difference quotient over 2h = 2e-3
+    amplifies the integration error 500-fold, and at the scene's 1e-6 that noise swamps the weak direction
+    (spray.tau's relative SE came out between 1 and 3 depending on the solver's step sequence, against about 20)."""
+    opts = {"rtol": 1e-8}
+    sig = np.concatenate([p["sigma"] for p in cal.predict(fs, exps, at, options=opts)])
 
     def model(params):
-        return np.concatenate([p["model"] for p in cal.predict(fs, exps, params)]) / sig
+        return np.concatenate([p["model"] for p in cal.predict(fs, exps, params, options=opts)]) / sig
 
     J = np.column_stack([(model({**at, n: at[n] * math.exp(h)}) - model({**at, n: at[n] * math.exp(-h)})) / (2 * h)
                          for n in at])
@@ -118,12 +121,12 @@ def test_standard_errors_are_the_linearized_ones_and_spray_tau_is_not_identifiab
     """At the estimates, the calibration's standard errors equal those of the Fisher information built from plain
     predictions. Adding the spray zone's own residence time: the width grows with the time between visits to the
     spray zone, and the 4 s spent in it change that by only tau_s / (tau_s + tau_d) = 2 %, so its relative standard
-    error exceeds 1 (several hundred per cent) while drying.tau's stays bounded."""
+    error exceeds 1 (about 2000 per cent) while drying.tau's stays bounded."""
     exps, fs, plan = setup
     at = {n: staged.parameters[n] for n in TRUTH}
     rel = fisher_rel_se(fs, exps.calibration, at)
     for n in TRUTH:
         assert rel[n] == pytest.approx(staged.estimate(n)["rel_se"], rel=0.02)
     rel3 = fisher_rel_se(fs, exps.calibration, {**at, "spray.tau": 4.0})
-    assert rel3["spray.tau"] > 3.0
+    assert rel3["spray.tau"] > 10.0
     assert rel3["drying.tau"] < 0.1 * rel3["spray.tau"]
