@@ -452,20 +452,59 @@ void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj,
   // ones), so the products cost their nonzeros, not the blocks' area; explicit_reads_ lists every read of a unit
   // after all reads of the units it reads, so Z_v is final when Z_u uses it.
   schur_zs_.resize(units.size());
-  // Sparse blocks are gathered from the columns a unit reads (its local columns), never by scanning whole blocks.
-  auto gather = [&](int r0, int rows, int u, int c0, int c1, Eigen::SparseMatrix<double>& S) {
-    schur_t_.clear();
+  zs_triplets_.resize(units.size());
+  read_blocks_.resize(explicit_reads_.size());
+  const int nu_all = static_cast<int>(units.size());
+  if (read_index_.empty()) {
+    read_index_.assign(size_t(nu_all) * nu_all, -1);
+    for (size_t k = 0; k < explicit_reads_.size(); ++k)
+      read_index_[size_t(explicit_reads_[k].first) * nu_all + explicit_reads_[k].second] = static_cast<int>(k);
+    schur_row_of_.resize(schur_rows_.size());
+    for (const auto& [pos, row, len] : schur_row_runs_)
+      for (int k = 0; k < len; ++k) schur_row_of_[pos + k] = row + k;
+  }
+  out = J.topLeftCorner(n_, n_);
+  double* const base = jac_ext_.data();
+  for (int c = 0; c < n_; ++c) std::fill_n(base + size_t(c) * n_ext_, n_, 0.0);
+  // J_RS on the rows that read explicit states (whole units, in order), scanned over the columns they read: these
+  // blocks are dense in practice (a bed's aggregation reads every class's wetted fraction), so a scan costs no more
+  // than listing their entries would. Each entry is cleared once read.
+  schur_t_.clear();
+  for (int pos = 0, nr = static_cast<int>(schur_rows_.size()); pos < nr;) {
+    const int row = schur_row_of_[pos], u = fs_.state_unit(row), len = static_cast<int>(units[u].spec.states().size());
     const auto& cols = local_cols_[u];
-    for (auto it = std::lower_bound(cols.begin(), cols.end(), c0); it != cols.end() && *it < c1; ++it) {
-      const double* col = J.data() + size_t(*it) * n_ext_ + r0;
-      for (int r = 0; r < rows; ++r)
-        if (col[r] != 0.0) schur_t_.emplace_back(r, *it - c0, col[r]);
+    for (auto it = std::lower_bound(cols.begin(), cols.end(), n_); it != cols.end(); ++it) {
+      double* col = base + size_t(*it) * n_ext_ + row;
+      for (int r = 0; r < len; ++r)
+        if (col[r] != 0.0) schur_t_.emplace_back(pos + r, *it - n_, col[r]), col[r] = 0.0;
     }
-    S.resize(rows, c1 - c0);
-    S.setFromTriplets(schur_t_.begin(), schur_t_.end());
-  };
-  for (int u : explicit_order_)
-    gather(units[u].offset, static_cast<int>(units[u].spec.states().size()), u, 0, n_, schur_zs_[u]);
+    pos += len;
+  }
+  // The explicit units' rows from the entries they wrote (listed by their sinks: a screen or a mixer reads its feed
+  // class by class, and scanning their blocks cost as much as clearing them): each unit's J_SR rows and the J_SS block
+  // of each read between explicit units. Every entry read is cleared, which leaves jac_ext_ all zeros for the next
+  // evaluation.
+  for (int u : explicit_order_) zs_triplets_[u].clear();
+  for (auto& b : read_blocks_) b.clear();
+  for (const auto& [row, col] : ext_touched_) {
+    double& e = base[size_t(col) * n_ext_ + row];
+    const double v = e;
+    if (v == 0.0) continue;  // a structural zero, or an entry listed twice and already taken
+    e = 0.0;
+    const int u = fs_.state_unit(row), r = row - units[u].offset;
+    if (col < n_) {
+      zs_triplets_[u].emplace_back(r, col, v);
+    } else {
+      const int w = fs_.state_unit(col);  // u's own block is the identity of x - f
+      const int k = w == u ? -1 : read_index_[size_t(u) * nu_all + w];
+      if (k >= 0) read_blocks_[k].emplace_back(r, col - units[w].offset, v);
+    }
+  }
+  ext_clean_ = true;
+  for (int u : explicit_order_) {
+    schur_zs_[u].resize(static_cast<int>(units[u].spec.states().size()), n_);
+    schur_zs_[u].setFromTriplets(zs_triplets_[u].begin(), zs_triplets_[u].end());
+  }
   Eigen::MatrixXd& zu = schur_u_;
   zu.setZero(m, n_terms);
   for (int k = 0; k < n_terms; ++k) {
@@ -473,34 +512,20 @@ void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj,
     zu.col(k).segment(units[term.unit].offset - n_, static_cast<Eigen::Index>(term.u.size())) =
         Eigen::Map<const Eigen::VectorXd>(term.u.data(), static_cast<Eigen::Index>(term.u.size()));
   }
-  for (const auto& [u, v] : explicit_reads_) {
+  for (size_t k = 0; k < explicit_reads_.size(); ++k) {
+    const auto [u, v] = explicit_reads_[k];
     const int ou = units[u].offset - n_, nu = static_cast<int>(units[u].spec.states().size());
     const int ov = units[v].offset - n_, nv = static_cast<int>(units[v].spec.states().size());
-    gather(n_ + ou, nu, u, n_ + ov, n_ + ov + nv, schur_s_);
+    schur_s_.resize(nu, nv);
+    schur_s_.setFromTriplets(read_blocks_[k].begin(), read_blocks_[k].end());
     schur_ps_ = schur_s_ * schur_zs_[v];
     schur_zs_[u] -= schur_ps_;
     if (n_terms > 0) zu.middleRows(ou, nu).noalias() -= schur_s_ * zu.middleRows(ov, nv);
   }
   // Only rows of units that read explicit states and columns that explicit units read can change:
   // dF_R/dy_R = J_RR - J_RS Z - (J_RS U) W^T, J_RS gathered from the columns those units read.
-  out = J.topLeftCorner(n_, n_);
   const int nr = static_cast<int>(schur_rows_.size()), nc = static_cast<int>(schur_cols_.size());
   if (nr == 0 || nc == 0) return;
-  schur_t_.clear();
-  schur_row_of_.resize(nr);
-  for (const auto& [pos, row, len] : schur_row_runs_)
-    for (int k = 0; k < len; ++k) schur_row_of_[pos + k] = row + k;
-  // schur_rows_ holds whole units (every row of an integrated unit that reads an explicit state), in order
-  for (int pos = 0; pos < nr;) {
-    const int row = schur_row_of_[pos], u = fs_.state_unit(row), len = static_cast<int>(units[u].spec.states().size());
-    const auto& cols = local_cols_[u];
-    for (auto it = std::lower_bound(cols.begin(), cols.end(), n_); it != cols.end(); ++it) {
-      const double* col = J.data() + size_t(*it) * n_ext_ + row;
-      for (int r = 0; r < len; ++r)
-        if (col[r] != 0.0) schur_t_.emplace_back(pos + r, *it - n_, col[r]);
-    }
-    pos += len;
-  }
   schur_a_.resize(nr, m);
   schur_a_.setFromTriplets(schur_t_.begin(), schur_t_.end());
   for (int u : explicit_order_) {
@@ -532,16 +557,14 @@ void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj,
 void DaeSystem::assemble(double t, const double* y, const double* yp, double cj, int dim, double* dense, double* sparse,
                          bool factor_outer) {
   const auto& units = fs_.units();
-  if (dense && factor_outer && ext_clean_) {
-    // The inlined path's matrix over every state is mostly structural zeros: clear only the blocks the units write
-    // (each unit's rows in the columns it reads), which are all the entries any evaluation can have made nonzero.
-    for (size_t u = 0; u < units.size(); ++u) {
-      const int off = units[u].offset, ns = static_cast<int>(units[u].spec.states().size());
-      for (int c : local_cols_[u]) std::fill_n(dense + size_t(c) * dim + off, ns, 0.0);
-    }
+  if (dense && factor_outer) {
+    // The inlined path's matrix over every state: mostly structural zeros, cleared entry by entry by the Schur pass
+    // that reads it (jacobian()); cleared whole only when an evaluation did not get that far.
+    if (!ext_clean_) std::fill(dense, dense + size_t(dim) * dim, 0.0);
+    ext_clean_ = false;
+    ext_touched_.clear();
   } else if (dense) {
     std::fill(dense, dense + size_t(dim) * dim, 0.0);
-    ext_clean_ = factor_outer;
   }
   if (sparse) {
     pattern();  // built on first use
@@ -562,6 +585,7 @@ void DaeSystem::assemble(double t, const double* y, const double* yp, double cj,
     };
     if (dense && factor_outer && units[u].spec.is_explicit()) {
       FactoringSink sink(*this, static_cast<int>(u), dense, dim, units[u].offset);
+      sink.list_writes(&ext_touched_, units[u].offset, 0);
       run(sink);
     } else if (dense) {
       DenseSink sink(dense, dim, units[u].offset);

@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
+#include <iterator>
 #include <regex>
 
 #include "granuflow/properties.hpp"
@@ -273,34 +275,51 @@ TEST(Gf25Scene, JacobianIsExactAtAStateInsideTheRun) {
   }
 }
 
+// The inlined Jacobian keeps explicit units' outer products factored and multiplies only the nonzeros it finds
+// among the entries the units wrote: it must equal J_RR - J_RS J_SS^-1 J_SR of the Jacobian over all states, formed
+// densely here. It is evaluated at the run's start first, so the second evaluation also shows that the first left
+// nothing behind in the matrix over every state (each evaluation clears only the entries it wrote).
+void expect_inlined_jacobian_is_schur_complement(Scene& s, double t) {
+  SimOptions o = s.options;
+  o.t_out = {0, t};
+  const SimResult r = simulate(*s.flowsheet, o);
+  DaeSystem sys(*s.flowsheet), full(*s.flowsheet, false);
+  const int n = sys.size(), nf = full.size();
+  ASSERT_GT(nf, n);
+  std::vector<double> y(r.y.begin() + nf, r.y.begin() + nf + n), yp(r.yp.begin() + nf, r.yp.begin() + nf + n);
+  std::vector<double> yf(nf), ypf(nf), jac(size_t(n) * n), jf(size_t(nf) * nf);
+  const double cj = 0.37;
+  sys.jacobian(0.0, r.y.data(), r.yp.data(), 2.0 * cj, jac.data(), nullptr);
+  sys.extend(t, y.data(), yp.data(), yf.data(), ypf.data());
+  sys.jacobian(t, y.data(), yp.data(), cj, jac.data(), nullptr);
+  full.jacobian(t, yf.data(), ypf.data(), cj, jf.data(), nullptr);
+  const Eigen::Map<const Eigen::MatrixXd> J(jf.data(), nf, nf), inl(jac.data(), n, n);
+  const int m = nf - n;
+  const Eigen::MatrixXd schur =
+      J.topLeftCorner(n, n) - J.topRightCorner(n, m) * J.bottomRightCorner(m, m).lu().solve(J.bottomLeftCorner(m, n));
+  const double scale = schur.cwiseAbs().maxCoeff();
+  EXPECT_LT((inl - schur).cwiseAbs().maxCoeff(), 1e-12 * scale);
+  // the correction is not trivially zero: explicit states change the integrated rows
+  EXPECT_GT((schur - J.topLeftCorner(n, n)).cwiseAbs().maxCoeff(), 1e-6 * scale);
+}
+
 TEST(Gf25Scene, InlinedJacobianIsTheSchurComplementOfTheFullOne) {
-  // The inlined Jacobian keeps the spray zone's weight-sum outer product factored and multiplies only the
-  // nonzeros: it must equal J_RR - J_RS J_SS^-1 J_SR of the Jacobian over all states, formed densely here.
   for (int classes : {10, 20}) {
     SCOPED_TRACE(classes);
     Scene s = headline(classes);
-    SimOptions o = s.options;
-    o.t_out = {0, 900};
-    const SimResult r = simulate(*s.flowsheet, o);
-    DaeSystem sys(*s.flowsheet), full(*s.flowsheet, false);
-    const int n = sys.size(), nf = full.size();
-    ASSERT_GT(nf, n);
-    std::vector<double> y(r.y.begin() + nf, r.y.begin() + nf + n), yp(r.yp.begin() + nf, r.yp.begin() + nf + n);
-    std::vector<double> yf(nf), ypf(nf), jac(size_t(n) * n), jf(size_t(nf) * nf);
-    sys.extend(900.0, y.data(), yp.data(), yf.data(), ypf.data());
-    const double cj = 0.37;
-    sys.jacobian(900.0, y.data(), yp.data(), cj, jac.data(), nullptr);
-    full.jacobian(900.0, yf.data(), ypf.data(), cj, jf.data(), nullptr);
-    const Eigen::Map<const Eigen::MatrixXd> J(jf.data(), nf, nf), inl(jac.data(), n, n);
-    const int m = nf - n;
-    const Eigen::MatrixXd schur =
-        J.topLeftCorner(n, n) - J.topRightCorner(n, m) * J.bottomRightCorner(m, m).lu().solve(J.bottomLeftCorner(m, n));
-    const double scale = schur.cwiseAbs().maxCoeff();
-    EXPECT_LT((inl - schur).cwiseAbs().maxCoeff(), 1e-12 * scale);
-    // the correction is not trivially zero: explicit states change the integrated rows
-    EXPECT_GT((schur - J.topLeftCorner(n, n)).cwiseAbs().maxCoeff(), 1e-6 * scale);
+    expect_inlined_jacobian_is_schur_complement(s, 900.0);
   }
 }
+
+TEST(SieveMillLoop, InlinedJacobianIsTheSchurComplementOfTheFullOne) {
+  // explicit units reading explicit units: the sieve feeds the mill, both feed the recycle mixer
+  std::ifstream in(testing::repo_path("flowsheets/continuous_layering_sieve_mill.yaml"));
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_NE(text.find("classes: 100"), std::string::npos);
+  Scene s = scene_from_text(std::regex_replace(text, std::regex("classes: 100"), "classes: 30"));
+  expect_inlined_jacobian_is_schur_complement(s, 5.0 * 3600.0);
+}
+
 TEST(Gf25Scene, SensitivitiesEqualFiniteDifferences) {
   // the bed's parameter tables (particle mass, breakage matrix) and its initial PSD carry parameter derivatives too
   const std::vector<std::string> params{"bed.ln_beta0",    "bed.k_break",     "wall.k_wall", "bed.X_cr",

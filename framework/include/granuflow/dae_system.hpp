@@ -136,15 +136,19 @@ class DaeSystem {
   std::vector<OuterTerm> outer_;  // storage reused between Jacobians; the first n_outer_ are current
   size_t n_outer_ = 0;
   Eigen::MatrixXd schur_u_, schur_au_, schur_p_;
-  Eigen::SparseMatrix<double> schur_s_, schur_a_, schur_ps_;  // a block of J_SS, J_RS, a product of sparse blocks
-  std::vector<Eigen::SparseMatrix<double>> schur_zs_;         // per explicit unit: its rows of Z = J_SS^-1 J_SR
-  std::vector<Eigen::Triplet<double>> schur_t_;
-  std::vector<int> schur_row_of_;                          // position in schur_rows_ -> global row
-  std::vector<int> schur_rows_, schur_cols_;               // where the Schur correction can be nonzero
-  std::vector<int> schur_col_pos_;                         // integrated column -> position in schur_cols_, or -1
-  std::vector<std::tuple<int, int, int>> schur_row_runs_;  // (position in schur_rows_, first row, length)
+  Eigen::SparseMatrix<double> schur_s_, schur_a_, schur_ps_;      // a block of J_SS, J_RS, a product of sparse blocks
+  std::vector<Eigen::SparseMatrix<double>> schur_zs_;             // per explicit unit: its rows of Z = J_SS^-1 J_SR
+  std::vector<Eigen::Triplet<double>> schur_t_;                   // J_RS
+  std::vector<std::vector<Eigen::Triplet<double>>> zs_triplets_;  // per unit: an explicit unit's J_SR rows
+  std::vector<std::vector<Eigen::Triplet<double>>> read_blocks_;  // per explicit read (u, v): J_SS block
+  std::vector<int> read_index_;                                   // u * units + v -> index in explicit_reads_, or -1
+  std::vector<std::pair<int, int>> ext_touched_;                  // (row, column) of jac_ext_ the units wrote
+  std::vector<int> schur_row_of_;                                 // position in schur_rows_ -> global row
+  std::vector<int> schur_rows_, schur_cols_;                      // where the Schur correction can be nonzero
+  std::vector<int> schur_col_pos_;                                // integrated column -> position in schur_cols_, or -1
+  std::vector<std::tuple<int, int, int>> schur_row_runs_;         // (position in schur_rows_, first row, length)
   std::vector<double> y_ext_, yp_ext_, jac_ext_, scratch_;
-  bool ext_clean_ = false;  // jac_ext_ is zero outside the units' blocks (assemble then clears only those)
+  bool ext_clean_ = false;  // jac_ext_ is all zeros (the Schur pass of the last evaluation cleared what it read)
   double segment_start_ = 0.0;
   std::vector<std::vector<double>> pvals_;      // per unit, at the last fill time
   std::vector<std::vector<double>> pconst_;     // per unit, the run's values at t = 0 (links applied)
