@@ -428,6 +428,44 @@ class DaeSystem::FactoringSink : public JacobianSink {
   int unit_;
 };
 
+void DaeSystem::SparseRows::assign(int n_rows, const std::vector<Eigen::Triplet<double>>& entries) {
+  start.assign(size_t(n_rows) + 1, 0);
+  for (const auto& e : entries) ++start[e.row() + 1];
+  for (int r = 0; r < n_rows; ++r) start[r + 1] += start[r];
+  col.resize(entries.size());
+  val.resize(entries.size());
+  next.assign(start.begin(), start.end() - 1);
+  for (const auto& e : entries) {
+    const int k = next[e.row()]++;
+    col[k] = e.col(), val[k] = e.value();
+  }
+}
+
+// z <- z - s zv row by row (Gustavson): a dense accumulator over the integrated columns, marked per row, so a
+// product costs its multiplications and the rows it touches, whatever the blocks' area.
+void DaeSystem::subtract_product(SparseRows& z, const SparseRows& s, const SparseRows& zv) {
+  SparseRows& out = product_rows_;
+  out.start.assign(1, 0);
+  out.col.clear();
+  out.val.clear();
+  for (int r = 0; r < z.rows(); ++r) {
+    const int stamp = ++schur_stamp_;
+    const size_t first = out.col.size();
+    auto touch = [&](int c) {
+      if (schur_mark_[c] != stamp) schur_mark_[c] = stamp, schur_acc_[c] = 0.0, out.col.push_back(c);
+    };
+    for (int k = z.start[r]; k < z.start[r + 1]; ++k) touch(z.col[k]), schur_acc_[z.col[k]] += z.val[k];
+    for (int k = s.start[r]; k < s.start[r + 1]; ++k) {
+      const int j = s.col[k];
+      const double a = s.val[k];
+      for (int q = zv.start[j]; q < zv.start[j + 1]; ++q) touch(zv.col[q]), schur_acc_[zv.col[q]] -= a * zv.val[q];
+    }
+    for (size_t k = first; k < out.col.size(); ++k) out.val.push_back(schur_acc_[out.col[k]]);
+    out.start.push_back(static_cast<int>(out.col.size()));
+  }
+  std::swap(z, out);
+}
+
 void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj, double* dense, double* sparse) {
   ++n_jac_;
   fill_params(t);
@@ -451,7 +489,7 @@ void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj,
   // the blocks and Z are sparse (a screen reads its feed class by class, a mill couples every class with the coarser
   // ones), so the products cost their nonzeros, not the blocks' area; explicit_reads_ lists every read of a unit
   // after all reads of the units it reads, so Z_v is final when Z_u uses it.
-  schur_zs_.resize(units.size());
+  z_rows_.resize(units.size());
   zs_triplets_.resize(units.size());
   read_blocks_.resize(explicit_reads_.size());
   const int nu_all = static_cast<int>(units.size());
@@ -501,10 +539,7 @@ void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj,
     }
   }
   ext_clean_ = true;
-  for (int u : explicit_order_) {
-    schur_zs_[u].resize(static_cast<int>(units[u].spec.states().size()), n_);
-    schur_zs_[u].setFromTriplets(zs_triplets_[u].begin(), zs_triplets_[u].end());
-  }
+  for (int u : explicit_order_) z_rows_[u].assign(static_cast<int>(units[u].spec.states().size()), zs_triplets_[u]);
   Eigen::MatrixXd& zu = schur_u_;
   zu.setZero(m, n_terms);
   for (int k = 0; k < n_terms; ++k) {
@@ -512,32 +547,32 @@ void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj,
     zu.col(k).segment(units[term.unit].offset - n_, static_cast<Eigen::Index>(term.u.size())) =
         Eigen::Map<const Eigen::VectorXd>(term.u.data(), static_cast<Eigen::Index>(term.u.size()));
   }
+  schur_acc_.resize(n_);
+  schur_mark_.resize(n_, 0);
   for (size_t k = 0; k < explicit_reads_.size(); ++k) {
     const auto [u, v] = explicit_reads_[k];
     const int ou = units[u].offset - n_, nu = static_cast<int>(units[u].spec.states().size());
-    const int ov = units[v].offset - n_, nv = static_cast<int>(units[v].spec.states().size());
-    schur_s_.resize(nu, nv);
-    schur_s_.setFromTriplets(read_blocks_[k].begin(), read_blocks_[k].end());
-    schur_ps_ = schur_s_ * schur_zs_[v];
-    schur_zs_[u] -= schur_ps_;
-    if (n_terms > 0) zu.middleRows(ou, nu).noalias() -= schur_s_ * zu.middleRows(ov, nv);
+    const int ov = units[v].offset - n_;
+    s_rows_.assign(nu, read_blocks_[k]);
+    subtract_product(z_rows_[u], s_rows_, z_rows_[v]);  // Z_u -= S_uv Z_v
+    if (n_terms > 0)
+      for (const auto& e : read_blocks_[k]) zu.row(ou + e.row()) -= e.value() * zu.row(ov + e.col());
   }
   // Only rows of units that read explicit states and columns that explicit units read can change:
-  // dF_R/dy_R = J_RR - J_RS Z - (J_RS U) W^T, J_RS gathered from the columns those units read.
+  // dF_R/dy_R = J_RR - J_RS Z - (J_RS U) W^T, each entry of J_RS times its row of Z added into the result.
   const int nr = static_cast<int>(schur_rows_.size()), nc = static_cast<int>(schur_cols_.size());
   if (nr == 0 || nc == 0) return;
-  schur_a_.resize(nr, m);
-  schur_a_.setFromTriplets(schur_t_.begin(), schur_t_.end());
-  for (int u : explicit_order_) {
-    const int ou = units[u].offset - n_, nu = static_cast<int>(units[u].spec.states().size());
-    schur_ps_ = schur_a_.middleCols(ou, nu) * schur_zs_[u];
-    for (int k = 0; k < schur_ps_.outerSize(); ++k)
-      for (Eigen::SparseMatrix<double>::InnerIterator it(schur_ps_, k); it; ++it)
-        out(schur_row_of_[it.row()], it.col()) -= it.value();
+  for (const auto& e : schur_t_) {
+    const int s = n_ + e.col(), u = fs_.state_unit(s), r = s - units[u].offset;
+    const SparseRows& z = z_rows_[u];
+    double* row = dense + schur_row_of_[e.row()];
+    const double a = e.value();
+    for (int q = z.start[r]; q < z.start[r + 1]; ++q) row[size_t(z.col[q]) * n_] -= a * z.val[q];
   }
   if (n_terms > 0) {
     schur_p_.setZero(nr, nc);
-    schur_au_.noalias() = schur_a_ * zu;
+    schur_au_.setZero(nr, n_terms);
+    for (const auto& e : schur_t_) schur_au_.row(e.row()) += e.value() * zu.row(e.col());
     for (int k = 0; k < n_terms; ++k) {
       const OuterTerm& term = outer_[k];
       for (size_t c = 0; c < term.cols.size(); ++c) {

@@ -136,8 +136,18 @@ class DaeSystem {
   std::vector<OuterTerm> outer_;  // storage reused between Jacobians; the first n_outer_ are current
   size_t n_outer_ = 0;
   Eigen::MatrixXd schur_u_, schur_au_, schur_p_;
-  Eigen::SparseMatrix<double> schur_s_, schur_a_, schur_ps_;      // a block of J_SS, J_RS, a product of sparse blocks
-  std::vector<Eigen::SparseMatrix<double>> schur_zs_;             // per explicit unit: its rows of Z = J_SS^-1 J_SR
+  struct SparseRows {  // compressed sparse rows
+    std::vector<int> start{0}, col, next;
+    std::vector<double> val;
+    int rows() const { return static_cast<int>(start.size()) - 1; }
+    void assign(int n_rows, const std::vector<Eigen::Triplet<double>>& entries);  // entries in any order, no repeats
+  };
+  void subtract_product(SparseRows& z, const SparseRows& s, const SparseRows& zv);
+  std::vector<SparseRows> z_rows_;  // per explicit unit: its rows of Z = J_SS^-1 J_SR
+  SparseRows s_rows_, product_rows_;
+  std::vector<double> schur_acc_;
+  std::vector<int> schur_mark_;
+  int schur_stamp_ = 0;
   std::vector<Eigen::Triplet<double>> schur_t_;                   // J_RS
   std::vector<std::vector<Eigen::Triplet<double>>> zs_triplets_;  // per unit: an explicit unit's J_SR rows
   std::vector<std::vector<Eigen::Triplet<double>>> read_blocks_;  // per explicit read (u, v): J_SS block
