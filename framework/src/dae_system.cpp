@@ -406,12 +406,12 @@ class SparseSink : public JacobianSink {
 };
 }  // namespace
 
-// Dense, but keeps an inlined unit's outer products on integrated columns apart: the Schur complement then
-// applies them as rank-one updates instead of through a dense product.
+// An inlined (explicit) unit's entries as a list, repeats summed later (its block over every state is mostly
+// structural zeros: a sieve's 600 x 201 block holds 1200 nonzeros), and its outer products on integrated columns kept
+// apart: the Schur complement applies them as rank-one updates instead of through a dense product.
 class DaeSystem::FactoringSink : public JacobianSink {
  public:
-  FactoringSink(DaeSystem& sys, int unit, double* a, int n, int offset)
-      : JacobianSink(a + offset, size_t(n)), sys_(sys), unit_(unit) {}
+  FactoringSink(DaeSystem& sys, int unit, int row0) : sys_(sys), unit_(unit), row0_(row0) {}
   void add_outer(int n_rows, const double* u, int n_cols, const int* cols, const double* w) override {
     for (int k = 0; k < n_cols; ++k)
       if (cols[k] >= sys_.n_) return JacobianSink::add_outer(n_rows, u, n_cols, cols, w);
@@ -423,9 +423,42 @@ class DaeSystem::FactoringSink : public JacobianSink {
     t.w.assign(w, w + n_cols);
   }
 
+ protected:
+  void add_entry(int local_row, int global_col, double value) override {
+    if (value != 0.0) sys_.ext_entries_.emplace_back(row0_ + local_row, global_col, value);
+  }
+
+ private:
+  DaeSystem& sys_;
+  int unit_, row0_;
+};
+
+// An integrated unit's rows in the inlined path: dense, but the part of an outer product on explicit columns is kept
+// apart (rs_outer_), its part on integrated columns expanded as usual.
+class DaeSystem::IntegratedSink : public JacobianSink {
+ public:
+  IntegratedSink(DaeSystem& sys, int unit, double* a, int ld, int offset)
+      : JacobianSink(a + offset, size_t(ld)), sys_(sys), unit_(unit) {}
+  void add_outer(int n_rows, const double* u, int n_cols, const int* cols, const double* w) override {
+    cols_.clear(), w_.clear();
+    for (int k = 0; k < n_cols; ++k)
+      if (cols[k] < sys_.n_) cols_.push_back(cols[k]), w_.push_back(w[k]);
+    if (static_cast<int>(cols_.size()) == n_cols) return JacobianSink::add_outer(n_rows, u, n_cols, cols, w);
+    if (!cols_.empty()) JacobianSink::add_outer(n_rows, u, static_cast<int>(cols_.size()), cols_.data(), w_.data());
+    if (sys_.n_rs_outer_ == sys_.rs_outer_.size()) sys_.rs_outer_.emplace_back();
+    OuterTerm& t = sys_.rs_outer_[sys_.n_rs_outer_++];
+    t.unit = unit_;
+    t.u.assign(u, u + n_rows);
+    t.cols.clear(), t.w.clear();
+    for (int k = 0; k < n_cols; ++k)
+      if (cols[k] >= sys_.n_) t.cols.push_back(cols[k]), t.w.push_back(w[k]);
+  }
+
  private:
   DaeSystem& sys_;
   int unit_;
+  std::vector<int> cols_;
+  std::vector<double> w_;
 };
 
 void DaeSystem::SparseRows::assign(int n_rows, const std::vector<Eigen::Triplet<double>>& entries) {
@@ -474,13 +507,12 @@ void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj,
   std::copy(y, y + n_, y_ext_.begin());
   std::copy(yp, yp + n_, yp_ext_.begin());
   evaluate_explicit(t, y_ext_.data(), yp_ext_.data(), pvals_, scratch_);
-  jac_ext_.resize(size_t(n_ext_) * n_ext_);
-  n_outer_ = 0;
+  jac_ext_.resize(size_t(n_) * n_ext_);  // the integrated units' rows over every column
+  n_outer_ = n_rs_outer_ = 0;
   assemble(t, y_ext_.data(), yp_ext_.data(), cj, n_ext_, jac_ext_.data(), nullptr, true);
   // Chain rule through the explicit states: dF_R/dy_R = J_RR - J_RS J_SS^-1 J_SR, with J_SR = D + sum u_k w_k^T
   // (D sparse in practice: each explicit state reads few integrated ones, apart from the outer products).
   const int m = n_ext_ - n_;
-  Eigen::Map<const Eigen::MatrixXd> J(jac_ext_.data(), n_ext_, n_ext_);
   Eigen::Map<Eigen::MatrixXd> out(dense, n_, n_);
   const auto& units = fs_.units();
   const int n_terms = static_cast<int>(n_outer_);
@@ -498,12 +530,13 @@ void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj,
     for (size_t k = 0; k < explicit_reads_.size(); ++k)
       read_index_[size_t(explicit_reads_[k].first) * nu_all + explicit_reads_[k].second] = static_cast<int>(k);
     schur_row_of_.resize(schur_rows_.size());
+    schur_pos_of_row_.assign(n_, -1);
     for (const auto& [pos, row, len] : schur_row_runs_)
-      for (int k = 0; k < len; ++k) schur_row_of_[pos + k] = row + k;
+      for (int k = 0; k < len; ++k) schur_row_of_[pos + k] = row + k, schur_pos_of_row_[row + k] = pos + k;
   }
-  out = J.topLeftCorner(n_, n_);
   double* const base = jac_ext_.data();
-  for (int c = 0; c < n_; ++c) std::fill_n(base + size_t(c) * n_ext_, n_, 0.0);
+  std::copy(base, base + size_t(n_) * n_, dense);  // J_RR
+  std::fill(base, base + size_t(n_) * n_, 0.0);
   // J_RS on the rows that read explicit states (whole units, in order), scanned over the columns they read: these
   // blocks are dense in practice (a bed's aggregation reads every class's wetted fraction), so a scan costs no more
   // than listing their entries would. Each entry is cleared once read.
@@ -512,30 +545,25 @@ void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj,
     const int row = schur_row_of_[pos], u = fs_.state_unit(row), len = static_cast<int>(units[u].spec.states().size());
     const auto& cols = local_cols_[u];
     for (auto it = std::lower_bound(cols.begin(), cols.end(), n_); it != cols.end(); ++it) {
-      double* col = base + size_t(*it) * n_ext_ + row;
+      double* col = base + size_t(*it) * n_ + row;
       for (int r = 0; r < len; ++r)
         if (col[r] != 0.0) schur_t_.emplace_back(pos + r, *it - n_, col[r]), col[r] = 0.0;
     }
     pos += len;
   }
-  // The explicit units' rows from the entries they wrote (listed by their sinks: a screen or a mixer reads its feed
-  // class by class, and scanning their blocks cost as much as clearing them): each unit's J_SR rows and the J_SS block
-  // of each read between explicit units. Every entry read is cleared, which leaves jac_ext_ all zeros for the next
-  // evaluation.
+  // The explicit units' rows from the entries they wrote: each unit's J_SR rows and the J_SS block of each read
+  // between explicit units (an entry listed twice is summed by the products below, which are linear in each entry).
   for (int u : explicit_order_) zs_triplets_[u].clear();
   for (auto& b : read_blocks_) b.clear();
-  for (const auto& [row, col] : ext_touched_) {
-    double& e = base[size_t(col) * n_ext_ + row];
-    const double v = e;
-    if (v == 0.0) continue;  // a structural zero, or an entry listed twice and already taken
-    e = 0.0;
+  for (const auto& e : ext_entries_) {
+    const int row = e.row(), col = e.col();
     const int u = fs_.state_unit(row), r = row - units[u].offset;
     if (col < n_) {
-      zs_triplets_[u].emplace_back(r, col, v);
+      zs_triplets_[u].emplace_back(r, col, e.value());
     } else {
       const int w = fs_.state_unit(col);  // u's own block is the identity of x - f
       const int k = w == u ? -1 : read_index_[size_t(u) * nu_all + w];
-      if (k >= 0) read_blocks_[k].emplace_back(r, col - units[w].offset, v);
+      if (k >= 0) read_blocks_[k].emplace_back(r, col - units[w].offset, e.value());
     }
   }
   ext_clean_ = true;
@@ -562,17 +590,47 @@ void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj,
   // dF_R/dy_R = J_RR - J_RS Z - (J_RS U) W^T, each entry of J_RS times its row of Z added into the result.
   const int nr = static_cast<int>(schur_rows_.size()), nc = static_cast<int>(schur_cols_.size());
   if (nr == 0 || nc == 0) return;
+  // Row-major, so that the rows of Z added in land on contiguous memory; one pass then subtracts it from the
+  // column-major result, each entry once (adding straight into the result's rows strode through it, ~14 % of the
+  // sieve-mill loop's run).
+  schur_c_.setZero(nr, n_);
   for (const auto& e : schur_t_) {
     const int s = n_ + e.col(), u = fs_.state_unit(s), r = s - units[u].offset;
     const SparseRows& z = z_rows_[u];
-    double* row = dense + schur_row_of_[e.row()];
+    double* row = schur_c_.data() + size_t(e.row()) * n_;
     const double a = e.value();
-    for (int q = z.start[r]; q < z.start[r + 1]; ++q) row[size_t(z.col[q]) * n_] -= a * z.val[q];
+    for (int q = z.start[r]; q < z.start[r + 1]; ++q) row[z.col[q]] += a * z.val[q];
+  }
+  for (const auto& [pos, row, len] : schur_row_runs_) out.middleRows(row, len) -= schur_c_.middleRows(pos, len);
+  // The factored outer products u w^T of J_RS: u (w^T Z), w^T Z accumulated over the rows of Z it weights.
+  for (size_t k = 0; k < n_rs_outer_; ++k) {
+    const OuterTerm& term = rs_outer_[k];
+    const int stamp = ++schur_stamp_;
+    schur_cols_touched_.clear();
+    for (size_t c = 0; c < term.cols.size(); ++c) {
+      const int s = term.cols[c], u = fs_.state_unit(s), r = s - units[u].offset;
+      const SparseRows& z = z_rows_[u];
+      for (int q = z.start[r]; q < z.start[r + 1]; ++q) {
+        const int j = z.col[q];
+        if (schur_mark_[j] != stamp) schur_mark_[j] = stamp, schur_acc_[j] = 0.0, schur_cols_touched_.push_back(j);
+        schur_acc_[j] += term.w[c] * z.val[q];
+      }
+    }
+    const Eigen::Map<const Eigen::VectorXd> uv(term.u.data(), static_cast<Eigen::Index>(term.u.size()));
+    const int row0 = units[term.unit].offset;
+    for (int j : schur_cols_touched_) out.col(j).segment(row0, uv.size()).noalias() -= schur_acc_[j] * uv;
   }
   if (n_terms > 0) {
     schur_p_.setZero(nr, nc);
     schur_au_.setZero(nr, n_terms);
     for (const auto& e : schur_t_) schur_au_.row(e.row()) += e.value() * zu.row(e.col());
+    for (size_t k = 0; k < n_rs_outer_; ++k) {
+      const OuterTerm& term = rs_outer_[k];
+      Eigen::RowVectorXd g = Eigen::RowVectorXd::Zero(n_terms);
+      for (size_t c = 0; c < term.cols.size(); ++c) g += term.w[c] * zu.row(term.cols[c] - n_);
+      const int pos0 = schur_pos_of_row_[units[term.unit].offset];
+      for (size_t i = 0; i < term.u.size(); ++i) schur_au_.row(pos0 + static_cast<int>(i)) += term.u[i] * g;
+    }
     for (int k = 0; k < n_terms; ++k) {
       const OuterTerm& term = outer_[k];
       for (size_t c = 0; c < term.cols.size(); ++c) {
@@ -592,12 +650,14 @@ void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj,
 void DaeSystem::assemble(double t, const double* y, const double* yp, double cj, int dim, double* dense, double* sparse,
                          bool factor_outer) {
   const auto& units = fs_.units();
+  // The inlined path (factor_outer): `dense` holds the integrated units' rows over every column (leading dimension
+  // n_), cleared by the Schur pass that reads it (jacobian()), or whole when an evaluation did not get that far;
+  // explicit units list their entries in ext_entries_.
+  const int ld = factor_outer ? n_ : dim;
   if (dense && factor_outer) {
-    // The inlined path's matrix over every state: mostly structural zeros, cleared entry by entry by the Schur pass
-    // that reads it (jacobian()); cleared whole only when an evaluation did not get that far.
-    if (!ext_clean_) std::fill(dense, dense + size_t(dim) * dim, 0.0);
+    if (!ext_clean_) std::fill(dense, dense + size_t(n_) * dim, 0.0);
     ext_clean_ = false;
-    ext_touched_.clear();
+    ext_entries_.clear();
   } else if (dense) {
     std::fill(dense, dense + size_t(dim) * dim, 0.0);
   }
@@ -619,11 +679,13 @@ void DaeSystem::assemble(double t, const double* y, const double* yp, double cj,
       if (!units[u].spec.analytic_complete()) ad_unit(static_cast<int>(u), t, y, yp, cj, sink);
     };
     if (dense && factor_outer && units[u].spec.is_explicit()) {
-      FactoringSink sink(*this, static_cast<int>(u), dense, dim, units[u].offset);
-      sink.list_writes(&ext_touched_, units[u].offset, 0);
+      FactoringSink sink(*this, static_cast<int>(u), units[u].offset);
+      run(sink);
+    } else if (dense && factor_outer) {
+      IntegratedSink sink(*this, static_cast<int>(u), dense, ld, units[u].offset);
       run(sink);
     } else if (dense) {
-      DenseSink sink(dense, dim, units[u].offset);
+      DenseSink sink(dense, ld, units[u].offset);
       run(sink);
     } else {
       SparseSink sink(sparse, block_pos_[u], col_map_[u], static_cast<int>(local_cols_[u].size()), units[u].name);

@@ -135,8 +135,14 @@ class DaeSystem {
   };
   std::vector<OuterTerm> outer_;  // storage reused between Jacobians; the first n_outer_ are current
   size_t n_outer_ = 0;
+  // u w^T on the rows of an integrated unit, columns explicit states (a sum over an inlined stream's classes, such as
+  // a bed's total feed): kept factored, it enters the Schur complement as u (w^T Z), not as rows times Z.
+  std::vector<OuterTerm> rs_outer_;
+  size_t n_rs_outer_ = 0;
+  class IntegratedSink;
   Eigen::MatrixXd schur_u_, schur_au_, schur_p_;
-  struct SparseRows {  // compressed sparse rows
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> schur_c_;  // J_RS Z on the rows reading S
+  struct SparseRows {                                                               // compressed sparse rows
     std::vector<int> start{0}, col, next;
     std::vector<double> val;
     int rows() const { return static_cast<int>(start.size()) - 1; }
@@ -146,13 +152,14 @@ class DaeSystem {
   std::vector<SparseRows> z_rows_;  // per explicit unit: its rows of Z = J_SS^-1 J_SR
   SparseRows s_rows_, product_rows_;
   std::vector<double> schur_acc_;
-  std::vector<int> schur_mark_;
+  std::vector<int> schur_mark_, schur_cols_touched_;
+  std::vector<int> schur_pos_of_row_;  // integrated row -> position in schur_rows_, or -1
   int schur_stamp_ = 0;
   std::vector<Eigen::Triplet<double>> schur_t_;                   // J_RS
   std::vector<std::vector<Eigen::Triplet<double>>> zs_triplets_;  // per unit: an explicit unit's J_SR rows
   std::vector<std::vector<Eigen::Triplet<double>>> read_blocks_;  // per explicit read (u, v): J_SS block
   std::vector<int> read_index_;                                   // u * units + v -> index in explicit_reads_, or -1
-  std::vector<std::pair<int, int>> ext_touched_;                  // (row, column) of jac_ext_ the units wrote
+  std::vector<Eigen::Triplet<double>> ext_entries_;               // what the explicit units wrote (global row, column)
   std::vector<int> schur_row_of_;                                 // position in schur_rows_ -> global row
   std::vector<int> schur_rows_, schur_cols_;                      // where the Schur correction can be nonzero
   std::vector<int> schur_col_pos_;                                // integrated column -> position in schur_cols_, or -1

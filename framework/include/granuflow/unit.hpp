@@ -309,12 +309,10 @@ class JacobianSink {
  public:
   virtual ~JacobianSink() = default;
   void add(int local_row, int global_col, double value) {
-    if (dense_) {
+    if (dense_)
       dense_[size_t(global_col) * ld_ + size_t(local_row)] += value;
-      if (touched_ && global_col >= listed_from_) touched_->push_back({row0_ + local_row, global_col});
-    } else {
+    else
       add_entry(local_row, global_col, value);
-    }
   }
   // The outer product u w^T on local rows 0..n_rows-1 and the global columns `cols`: how rows that all depend on
   // one shared intermediate (a sum over classes) enter. A sink that can keep the product factored does (the
@@ -324,12 +322,6 @@ class JacobianSink {
       if (u[r] != 0.0)
         for (int k = 0; k < n_cols; ++k)
           if (w[k] != 0.0) add(r, cols[k], u[r] * w[k]);
-  }
-  // Dense storage that is mostly structural zeros (the framework's matrix over every state, explicit units included):
-  // every entry written in a column from `from_col` on is listed as (global row, global column), the unit's rows
-  // starting at `row0`, so the reader finds the nonzeros and clears them without scanning the blocks.
-  void list_writes(std::vector<std::pair<int, int>>* touched, int row0, int from_col) {
-    touched_ = touched, row0_ = row0, listed_from_ = from_col;
   }
 
  protected:
@@ -341,8 +333,6 @@ class JacobianSink {
  private:
   double* dense_ = nullptr;
   size_t ld_ = 0;
-  std::vector<std::pair<int, int>>* touched_ = nullptr;
-  int row0_ = 0, listed_from_ = 0;
 };
 
 class Unit {
