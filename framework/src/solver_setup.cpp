@@ -68,7 +68,7 @@ int ida_jac(realtype t, realtype cj, N_Vector y, N_Vector yp, N_Vector, SUNMatri
           fails += sens_fails;
       }
       if (u->mem && !u->fresh_only && k.valid && k.reusable == 1 && fails == k.conv_fails &&
-          step - k.step < JacobianCache::kMaxAge) {
+          step - k.step < k.max_age) {
         std::copy(k.jac.begin(), k.jac.end(), a);
         for (int i : k.differential) a[size_t(i) * n + i] += cj - k.cj;
         return 0;
@@ -160,6 +160,7 @@ Ida::Ida(SUNContext ctx, IdaUser& user, double t0, const NVec& y, const NVec& yp
   }
   make_linear_solver(user.dense, sys, y.v, ctx, A, LS);
   eigen_dense = user.dense;
+  this->user = &user;
   check(IDASetLinearSolver(mem, LS.s, A.m), "IDASetLinearSolver");
   check(IDASetJacFn(mem, ida_jac), "IDASetJacFn");
 }
@@ -172,11 +173,19 @@ Ida::Ida(SUNContext ctx, IdaUser& user, double t0, const NVec& y, const NVec& yp
 // (102, 202, 402 unknowns) 47.5 -> 45.0, 200 -> 166, 1127 -> 868; two-zone layering (a block of 400) 225 -> 161;
 // free hold-up loop 82.7 -> 75.3. Smaller blocks keep the default: the headline scene at 40 classes (89 unknowns)
 // was 4 % slower at 50 %, the tanks-in-series scene (blocks of at most 22 states) 38 % slower.
-constexpr int kLargeBlock = 100;
-void Ida::tune_refactoring() const {
+//
+// A cached Jacobian is re-evaluated after 20 steps, or after 51 (CVODE's default) once the block reaches 64 states:
+// there a Jacobian costs tens of residuals (the headline scene at 40 classes: 0.3 ms against 9 us), and a fresher
+// one saves fewer Newton iterations than it costs. Measured the same way (wall ms, age 20 -> 51): headline scene at
+// 40 classes 10.6 -> 9.7, 40 classes without breakage 11.1 -> 10.4, 100 classes 46.8 -> 42.9; sieve-mill loop
+// 102 -> 98; free hold-up loop 58.5 -> 57.5; two-zone 85.6 -> 84.7. Below that size the headline scene at 10 and
+// 20 classes (29 and 49 unknowns) was 1-6 % slower at 51, tanks in series 13 % slower: they keep 20.
+constexpr int kLargeBlock = 100, kCostlyJacobian = 64;
+void Ida::tune_refactoring() {
   if (!eigen_dense) return;
-  const double change = eigen_dense_largest_block(LS.s) >= kLargeBlock ? 0.5 : 0.25;
-  check(IDASetDeltaCjLSetup(mem, change), "IDASetDeltaCjLSetup");
+  const int block = eigen_dense_largest_block(LS.s);
+  check(IDASetDeltaCjLSetup(mem, block >= kLargeBlock ? 0.5 : 0.25), "IDASetDeltaCjLSetup");
+  user->cache.max_age = block >= kCostlyJacobian ? 51 : 20;
 }
 
 // Dense Jacobians (explicit units inlined) up to `dense_limit` unknowns, and beyond that while the Jacobian is

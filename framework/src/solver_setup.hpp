@@ -66,10 +66,10 @@ void set_sparse_pattern(const SparsityPattern& pat, SUNMatrix J);
 // A dense Jacobian kept for reuse, the way CVODE keeps df/dy: IDA sets its Newton matrix up again whenever
 // cj = alpha / h moves by 25 %, and with every differential state's residual of the form y'_k - f(y) (all
 // units' contract, checked on the first evaluation of a run) only the diagonal of the differential states
-// depends on cj. An evaluation at most kMaxAge steps old is reused with cj updated, unless Newton (of the states
+// depends on cj. An evaluation at most max_age steps old is reused with cj updated, unless Newton (of the states
 // or of their sensitivities) has failed to converge since; IDACalcIC and each segment start from a fresh one.
 struct JacobianCache {
-  static constexpr long kMaxAge = 20;
+  long max_age = 20;              // Ida::tune_refactoring() raises it for large blocks
   std::vector<double> jac;        // column-major n x n, evaluated at cj
   std::vector<int> differential;  // indices of the differential states
   double cj = 0.0;
@@ -107,11 +107,12 @@ struct Ida {
   Mat A;
   LinSol LS;
   bool eigen_dense = false;  // LS is make_eigen_dense_solver's
+  IdaUser* user = nullptr;
   Ida(SUNContext ctx, IdaUser& user, double t0, const NVec& y, const NVec& yp, double rtol, const NVec& atol);
   ~Ida() { IDAFree(&mem); }
   // Sets how far cj may move before IDA refactors the Newton matrix, from the size of the largest block the dense
   // solver factored (call after a setup, e.g. after consistent initialization); see solver_setup.cpp.
-  void tune_refactoring() const;
+  void tune_refactoring();
   Ida(const Ida&) = delete;
   Ida& operator=(const Ida&) = delete;
 };

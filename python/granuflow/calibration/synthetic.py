@@ -1,7 +1,7 @@
 """Synthetic experiments and the paper-001 stages (Table 1 points, Fig. 10)."""
 from __future__ import annotations
 
-from typing import Mapping, Sequence
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
@@ -39,10 +39,12 @@ def table1_points() -> list[dict]:
 def synthetic_experiments(flowsheet: Flowsheet, points: Sequence[Mapping], params: Mapping[str, float] | None = None,
                           *, times: Sequence[float] | None = None, observables: Sequence[str] | None = None,
                           sigma: Mapping[str, Mapping[str, float]] | None = None, seed: int | None = 0,
-                          noise: bool = True, name: str = "synthetic", workers: int = 2) -> ExperimentSet:
+                          noise: bool = True, name: str = "synthetic", workers: int = 2,
+                          options: Mapping[str, Any] | None = None) -> ExperimentSet:
     """Experiments simulated with the flowsheet at `points` (see :func:`table1_points`) and parameters `params`
     (SI), sampled at `times` (s; default every 5 min to 60 min), with Gaussian noise at `sigma` (default
-    :data:`TABLE5_SIGMA`): data = model + sigma_abs * N(0,1), or model * (1 + sigma_rel * N(0,1))."""
+    :data:`TABLE5_SIGMA`): data = model + sigma_abs * N(0,1), or model * (1 + sigma_rel * N(0,1)). `options`: the
+    calibration options the simulations run with (for example a tighter ``rtol`` for noise-free checks)."""
     sigma = dict(sigma or TABLE5_SIGMA)
     observables = list(observables or (["gas.T", "bed.moisture"] + list(D_VALUES)))
     times = np.asarray(times if times is not None else np.arange(5, 61, 5) * 60.0, dtype=float)
@@ -59,7 +61,8 @@ def synthetic_experiments(flowsheet: Flowsheet, points: Sequence[Mapping], param
             obs.append(Observation(o, times.copy(), np.zeros(len(times)), sa, sr))
         exps.append(Experiment(str(p.get("name")), settings, obs, float(times[-1]), str(p.get("kind", "")),
                                str(p.get("use", "calibration"))))
-    pred = flowsheet.predict_raw([e.to_core() for e in exps], dict(params or {}), {"num_threads": workers})
+    pred = flowsheet.predict_raw([e.to_core() for e in exps], dict(params or {}),
+                                 {"num_threads": workers, **dict(options or {})})
     by = {(q["experiment"], q["observable"]): np.asarray(q["model"]) for q in pred}
     for e in exps:  # noise drawn in a fixed order: experiment, observable, time
         for o in e.observations:
