@@ -415,10 +415,7 @@ class DaeSystem::FactoringSink : public JacobianSink {
   void add_outer(int n_rows, const double* u, int n_cols, const int* cols, const double* w) override {
     for (int k = 0; k < n_cols; ++k)
       if (cols[k] >= sys_.n_) return JacobianSink::add_outer(n_rows, u, n_cols, cols, w);
-    if (sys_.n_outer_ == sys_.outer_.size()) sys_.outer_.emplace_back();
-    OuterTerm& t = sys_.outer_[sys_.n_outer_++];
-    t.unit = unit_;
-    t.u.assign(u, u + n_rows);
+    OuterTerm& t = next_term(sys_.outer_, sys_.n_outer_, unit_, n_rows, u);
     t.cols.assign(cols, cols + n_cols);
     t.w.assign(w, w + n_cols);
   }
@@ -445,10 +442,7 @@ class DaeSystem::IntegratedSink : public JacobianSink {
       if (cols[k] < sys_.n_) cols_.push_back(cols[k]), w_.push_back(w[k]);
     if (static_cast<int>(cols_.size()) == n_cols) return JacobianSink::add_outer(n_rows, u, n_cols, cols, w);
     if (!cols_.empty()) JacobianSink::add_outer(n_rows, u, static_cast<int>(cols_.size()), cols_.data(), w_.data());
-    if (sys_.n_rs_outer_ == sys_.rs_outer_.size()) sys_.rs_outer_.emplace_back();
-    OuterTerm& t = sys_.rs_outer_[sys_.n_rs_outer_++];
-    t.unit = unit_;
-    t.u.assign(u, u + n_rows);
+    OuterTerm& t = next_term(sys_.rs_outer_, sys_.n_rs_outer_, unit_, n_rows, u);
     t.cols.clear(), t.w.clear();
     for (int k = 0; k < n_cols; ++k)
       if (cols[k] >= sys_.n_) t.cols.push_back(cols[k]), t.w.push_back(w[k]);
@@ -460,6 +454,16 @@ class DaeSystem::IntegratedSink : public JacobianSink {
   std::vector<int> cols_;
   std::vector<double> w_;
 };
+
+// The next term of `terms` (storage reused between Jacobians; the first `used` are current), for `unit` with u.
+DaeSystem::OuterTerm& DaeSystem::next_term(std::vector<OuterTerm>& terms, size_t& used, int unit, int n_rows,
+                                           const double* u) {
+  if (used == terms.size()) terms.emplace_back();
+  OuterTerm& t = terms[used++];
+  t.unit = unit;
+  t.u.assign(u, u + n_rows);
+  return t;
+}
 
 void DaeSystem::SparseRows::assign(int n_rows, const std::vector<Eigen::Triplet<double>>& entries) {
   start.assign(size_t(n_rows) + 1, 0);
@@ -484,19 +488,20 @@ void DaeSystem::subtract_product(SparseRows& z, const SparseRows& s, const Spars
   for (int r = 0; r < z.rows(); ++r) {
     const int stamp = ++schur_stamp_;
     const size_t first = out.col.size();
-    auto touch = [&](int c) {
-      if (schur_mark_[c] != stamp) schur_mark_[c] = stamp, schur_acc_[c] = 0.0, out.col.push_back(c);
-    };
-    for (int k = z.start[r]; k < z.start[r + 1]; ++k) touch(z.col[k]), schur_acc_[z.col[k]] += z.val[k];
-    for (int k = s.start[r]; k < s.start[r + 1]; ++k) {
-      const int j = s.col[k];
-      const double a = s.val[k];
-      for (int q = zv.start[j]; q < zv.start[j + 1]; ++q) touch(zv.col[q]), schur_acc_[zv.col[q]] -= a * zv.val[q];
-    }
+    accumulate_row(z, r, 1.0, stamp, out.col);
+    for (int k = s.start[r]; k < s.start[r + 1]; ++k) accumulate_row(zv, s.col[k], -s.val[k], stamp, out.col);
     for (size_t k = first; k < out.col.size(); ++k) out.val.push_back(schur_acc_[out.col[k]]);
     out.start.push_back(static_cast<int>(out.col.size()));
   }
   std::swap(z, out);
+}
+
+void DaeSystem::accumulate_row(const SparseRows& z, int r, double a, int stamp, std::vector<int>& touched) {
+  for (int q = z.start[r]; q < z.start[r + 1]; ++q) {
+    const int c = z.col[q];
+    if (schur_mark_[c] != stamp) schur_mark_[c] = stamp, schur_acc_[c] = 0.0, touched.push_back(c);
+    schur_acc_[c] += a * z.val[q];
+  }
 }
 
 void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj, double* dense, double* sparse) {
@@ -608,13 +613,8 @@ void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj,
     const int stamp = ++schur_stamp_;
     schur_cols_touched_.clear();
     for (size_t c = 0; c < term.cols.size(); ++c) {
-      const int s = term.cols[c], u = fs_.state_unit(s), r = s - units[u].offset;
-      const SparseRows& z = z_rows_[u];
-      for (int q = z.start[r]; q < z.start[r + 1]; ++q) {
-        const int j = z.col[q];
-        if (schur_mark_[j] != stamp) schur_mark_[j] = stamp, schur_acc_[j] = 0.0, schur_cols_touched_.push_back(j);
-        schur_acc_[j] += term.w[c] * z.val[q];
-      }
+      const int s = term.cols[c], u = fs_.state_unit(s);
+      accumulate_row(z_rows_[u], s - units[u].offset, term.w[c], stamp, schur_cols_touched_);
     }
     const Eigen::Map<const Eigen::VectorXd> uv(term.u.data(), static_cast<Eigen::Index>(term.u.size()));
     const int row0 = units[term.unit].offset;

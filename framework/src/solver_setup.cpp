@@ -159,7 +159,6 @@ Ida::Ida(SUNContext ctx, IdaUser& user, double t0, const NVec& y, const NVec& yp
     return;
   }
   make_linear_solver(user.dense, sys, y.v, ctx, A, LS);
-  eigen_dense = user.dense;
   this->user = &user;
   check(IDASetLinearSolver(mem, LS.s, A.m), "IDASetLinearSolver");
   check(IDASetJacFn(mem, ida_jac), "IDASetJacFn");
@@ -182,7 +181,7 @@ Ida::Ida(SUNContext ctx, IdaUser& user, double t0, const NVec& y, const NVec& yp
 // 20 classes (29 and 49 unknowns) was 1-6 % slower at 51, tanks in series 13 % slower: they keep 20.
 constexpr int kLargeBlock = 100, kCostlyJacobian = 64;
 void Ida::tune_refactoring() {
-  if (!eigen_dense) return;
+  if (!user || !user->dense) return;
   const int block = eigen_dense_largest_block(LS.s);
   check(IDASetDeltaCjLSetup(mem, block >= kLargeBlock ? 0.5 : 0.25), "IDASetDeltaCjLSetup");
   user->cache.max_age = block >= kCostlyJacobian ? 51 : 20;

@@ -106,8 +106,7 @@ struct Ida {
   void* mem = nullptr;
   Mat A;
   LinSol LS;
-  bool eigen_dense = false;  // LS is make_eigen_dense_solver's
-  IdaUser* user = nullptr;
+  IdaUser* user = nullptr;  // set with a matrix-based solver (dense: make_eigen_dense_solver's)
   Ida(SUNContext ctx, IdaUser& user, double t0, const NVec& y, const NVec& yp, double rtol, const NVec& atol);
   ~Ida() { IDAFree(&mem); }
   // Sets how far cj may move before IDA refactors the Newton matrix, from the size of the largest block the dense

@@ -3,8 +3,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <fstream>
-#include <iterator>
 #include <regex>
 
 #include "granuflow/properties.hpp"
@@ -313,8 +311,7 @@ TEST(Gf25Scene, InlinedJacobianIsTheSchurComplementOfTheFullOne) {
 
 TEST(SieveMillLoop, InlinedJacobianIsTheSchurComplementOfTheFullOne) {
   // explicit units reading explicit units: the sieve feeds the mill, both feed the recycle mixer
-  std::ifstream in(testing::repo_path("flowsheets/continuous_layering_sieve_mill.yaml"));
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string text = scene_from_file("flowsheets/continuous_layering_sieve_mill.yaml").text;
   ASSERT_NE(text.find("classes: 100"), std::string::npos);
   Scene s = scene_from_text(std::regex_replace(text, std::regex("classes: 100"), "classes: 30"));
   expect_inlined_jacobian_is_schur_complement(s, 5.0 * 3600.0);

@@ -128,7 +128,8 @@ class DaeSystem {
   std::vector<std::unique_ptr<Workspace>> ws_;       // per unit, this run's
   std::vector<int> explicit_order_;                  // explicit units, each after the explicit units it reads
   std::vector<std::pair<int, int>> explicit_reads_;  // (u, v): explicit unit u reads explicit unit v, in order
-  struct OuterTerm {                                 // u w^T on the rows of an explicit unit, columns integrated states
+  // u w^T on the rows of `unit` and the columns `cols`: outer_ for explicit units, rs_outer_ for integrated ones
+  struct OuterTerm {
     int unit = -1;
     std::vector<double> u, w;
     std::vector<int> cols;
@@ -146,9 +147,13 @@ class DaeSystem {
     std::vector<int> start{0}, col, next;
     std::vector<double> val;
     int rows() const { return static_cast<int>(start.size()) - 1; }
-    void assign(int n_rows, const std::vector<Eigen::Triplet<double>>& entries);  // entries in any order, no repeats
+    // entries in any order; a repeated entry stays a second term of its row, which every use sums
+    void assign(int n_rows, const std::vector<Eigen::Triplet<double>>& entries);
   };
   void subtract_product(SparseRows& z, const SparseRows& s, const SparseRows& zv);
+  // schur_acc_ += a * row r of z over the columns that row holds, each column listed once per stamp in `touched`
+  void accumulate_row(const SparseRows& z, int r, double a, int stamp, std::vector<int>& touched);
+  static OuterTerm& next_term(std::vector<OuterTerm>& terms, size_t& used, int unit, int n_rows, const double* u);
   std::vector<SparseRows> z_rows_;  // per explicit unit: its rows of Z = J_SS^-1 J_SR
   SparseRows s_rows_, product_rows_;
   std::vector<double> schur_acc_;
