@@ -109,8 +109,9 @@ struct Ida {
   IdaUser* user = nullptr;  // set with a matrix-based solver (dense: make_eigen_dense_solver's)
   Ida(SUNContext ctx, IdaUser& user, double t0, const NVec& y, const NVec& yp, double rtol, const NVec& atol);
   ~Ida() { IDAFree(&mem); }
-  // Sets how far cj may move before IDA refactors the Newton matrix, from the size of the largest block the dense
-  // solver factored (call after a setup, e.g. after consistent initialization); see solver_setup.cpp.
+  // From the size of the largest block the dense solver factored (call after a setup, e.g. after consistent
+  // initialization): how far cj may move before IDA refactors the Newton matrix, and how many steps a cached
+  // Jacobian is kept; see solver_setup.cpp.
   void tune_refactoring();
   Ida(const Ida&) = delete;
   Ida& operator=(const Ida&) = delete;

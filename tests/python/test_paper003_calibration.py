@@ -132,3 +132,16 @@ def test_standard_errors_are_the_linearized_ones_and_spray_tau_is_not_identifiab
     rel3 = fisher_rel_se(fs, exps.calibration, {**at, "spray.tau": 4.0})
     assert rel3["spray.tau"] > 10.0
     assert rel3["drying.tau"] < 0.1 * rel3["spray.tau"]
+
+
+def test_synthetic_options_are_checked_by_name(setup):
+    """Options for the synthetic runs go through the calibration's checks; a thread count there would silently
+    override `workers`, so it is refused."""
+    _, fs, _ = setup
+    g = generator()
+    pts = [p for p in g.points() if p["name"] == "S75"]
+    kw = dict(times=np.array([600.0]), observables=list(g.SIGMA), sigma=g.SIGMA, noise=False)
+    with pytest.raises(ValueError, match="rtoll"):
+        cal.synthetic_experiments(fs, pts, options={"rtoll": 1e-8}, **kw)
+    with pytest.raises(ValueError, match="workers"):
+        cal.synthetic_experiments(fs, pts, options={"num_threads": 1}, **kw)

@@ -45,6 +45,9 @@ def synthetic_experiments(flowsheet: Flowsheet, points: Sequence[Mapping], param
     (SI), sampled at `times` (s; default every 5 min to 60 min), with Gaussian noise at `sigma` (default
     :data:`TABLE5_SIGMA`): data = model + sigma_abs * N(0,1), or model * (1 + sigma_rel * N(0,1)). `options`: the
     calibration options the simulations run with (for example a tighter ``rtol`` for noise-free checks)."""
+    if options and "num_threads" in options:
+        raise ConfigError(f"synthetic_experiments: options num_threads = {options['num_threads']!r} would override "
+                          f"workers = {workers}; give the thread count as workers only")
     sigma = dict(sigma or TABLE5_SIGMA)
     observables = list(observables or (["gas.T", "bed.moisture"] + list(D_VALUES)))
     times = np.asarray(times if times is not None else np.arange(5, 61, 5) * 60.0, dtype=float)
