@@ -174,6 +174,12 @@ DaeSystem::DaeSystem(const Flowsheet& fs, bool inline_explicit) : fs_(fs) {
         schur_row_runs_.push_back({i, schur_rows_[i], 1});
     schur_col_pos_.assign(n_, -1);
     for (size_t j = 0; j < schur_cols_.size(); ++j) schur_col_pos_[schur_cols_[j]] = static_cast<int>(j);
+    schur_pos_of_row_.assign(n_, -1);
+    for (size_t pos = 0; pos < schur_rows_.size(); ++pos) schur_pos_of_row_[schur_rows_[pos]] = static_cast<int>(pos);
+    const size_t nu = units.size();
+    read_index_.assign(nu * nu, -1);
+    for (size_t k = 0; k < explicit_reads_.size(); ++k)
+      read_index_[size_t(explicit_reads_[k].first) * nu + explicit_reads_[k].second] = static_cast<int>(k);
   }
   plans_.resize(units.size());
   for (size_t u = 0; u < units.size(); ++u) build_ad_plan(static_cast<int>(u));
@@ -530,15 +536,6 @@ void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj,
   zs_triplets_.resize(units.size());
   read_blocks_.resize(explicit_reads_.size());
   const int nu_all = static_cast<int>(units.size());
-  if (read_index_.empty()) {
-    read_index_.assign(size_t(nu_all) * nu_all, -1);
-    for (size_t k = 0; k < explicit_reads_.size(); ++k)
-      read_index_[size_t(explicit_reads_[k].first) * nu_all + explicit_reads_[k].second] = static_cast<int>(k);
-    schur_row_of_.resize(schur_rows_.size());
-    schur_pos_of_row_.assign(n_, -1);
-    for (const auto& [pos, row, len] : schur_row_runs_)
-      for (int k = 0; k < len; ++k) schur_row_of_[pos + k] = row + k, schur_pos_of_row_[row + k] = pos + k;
-  }
   double* const base = jac_ext_.data();
   std::copy(base, base + size_t(n_) * n_, dense);  // J_RR
   std::fill(base, base + size_t(n_) * n_, 0.0);
@@ -547,7 +544,7 @@ void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj,
   // than listing their entries would. Each entry is cleared once read.
   schur_t_.clear();
   for (int pos = 0, nr = static_cast<int>(schur_rows_.size()); pos < nr;) {
-    const int row = schur_row_of_[pos], u = fs_.state_unit(row), len = static_cast<int>(units[u].spec.states().size());
+    const int row = schur_rows_[pos], u = fs_.state_unit(row), len = static_cast<int>(units[u].spec.states().size());
     const auto& cols = local_cols_[u];
     for (auto it = std::lower_bound(cols.begin(), cols.end(), n_); it != cols.end(); ++it) {
       double* col = base + size_t(*it) * n_ + row;

@@ -165,7 +165,6 @@ class DaeSystem {
   std::vector<std::vector<Eigen::Triplet<double>>> read_blocks_;  // per explicit read (u, v): J_SS block
   std::vector<int> read_index_;                                   // u * units + v -> index in explicit_reads_, or -1
   std::vector<Eigen::Triplet<double>> ext_entries_;               // what the explicit units wrote (global row, column)
-  std::vector<int> schur_row_of_;                                 // position in schur_rows_ -> global row
   std::vector<int> schur_rows_, schur_cols_;                      // where the Schur correction can be nonzero
   std::vector<int> schur_col_pos_;                                // integrated column -> position in schur_cols_, or -1
   std::vector<std::tuple<int, int, int>> schur_row_runs_;         // (position in schur_rows_, first row, length)
