@@ -6,6 +6,9 @@
 // unit supplies its whole Jacobian (the identity on its own states, -P on the inlet), which is the matrix itself.
 #include "mill.hpp"
 
+#include <Eigen/Dense>
+#include <algorithm>
+
 #include "granuflow/flowsheet.hpp"
 #include "kernels/discretization/psd.hpp"
 #include "kernels/registry.hpp"
@@ -66,10 +69,21 @@ class Mill : public UnitBase<Mill> {
     f.m.assign(n_, T(0.0)), f.w.assign(n_, T(0.0));
     for (int k = 0; k < n_; ++k)
       f.in_m[k] = c.port(in_, solids::mdot(k)), f.in_w[k] = c.port(in_, solids::water(n_, k));
-    // column by column (P is column-major): parent class k feeds classes i <= k; each sum still runs over k upwards
-    for (int k = 0; k < n_; ++k) {
-      const T* col = P + size_t(k) * n_;
-      for (int i = 0; i <= k; ++i) f.m[i] += col[i] * f.in_m[k], f.w[i] += col[i] * f.in_w[k];
+    if constexpr (std::is_same_v<T, double>) {
+      // Eigen's blocked triangular product (P is upper triangular: parent class k feeds classes i <= k); a dry
+      // feed skips the water column, which would be a second product of zeros
+      const Eigen::Map<const Eigen::MatrixXd> Pm(P, n_, n_);
+      const bool wet = std::any_of(f.in_w.begin(), f.in_w.end(), [](double v) { return v != 0.0; });
+      Eigen::Map<Eigen::VectorXd>(f.m.data(), n_).noalias() =
+          Pm.triangularView<Eigen::Upper>() * Eigen::Map<const Eigen::VectorXd>(f.in_m.data(), n_);
+      if (wet)
+        Eigen::Map<Eigen::VectorXd>(f.w.data(), n_).noalias() =
+            Pm.triangularView<Eigen::Upper>() * Eigen::Map<const Eigen::VectorXd>(f.in_w.data(), n_);
+    } else {
+      for (int k = 0; k < n_; ++k) {  // column by column (P is column-major)
+        const T* col = P + size_t(k) * n_;
+        for (int i = 0; i <= k; ++i) f.m[i] += col[i] * f.in_m[k], f.w[i] += col[i] * f.in_w[k];
+      }
     }
     for (int i = 0; i < n_; ++i) {
       c.res(sM_ + i) = c.x(sM_ + i) - f.m[i];

@@ -16,6 +16,15 @@ namespace {
 
 constexpr double kCapacityFloor = 1e-12;  // W/K
 
+struct Work : Workspace {
+  template <class T>
+  struct Flows {
+    std::vector<T> cap, h;  // per class: capacity and enthalpy flows summed over the inlets
+  };
+  Flows<double> fd;
+  Flows<Jet> fj;
+};
+
 class SolidsMixer : public UnitBase<SolidsMixer> {
  public:
   std::string type() const override { return "solids_mixer"; }
@@ -49,31 +58,30 @@ class SolidsMixer : public UnitBase<SolidsMixer> {
   }
   template <class T>
   Status eval(const Ctx<T>& c) const {
-    for (int i = 0; i < n_; ++i) {
-      T m(0.0), w(0.0);
-      for (PortId p : in_) m += c.port(p, solids::mdot(i)), w += c.port(p, solids::water(n_, i));
-      c.res(sM_ + i) = c.x(sM_ + i) - m;
-      c.res(sW_ + i) = c.x(sW_ + i) - w;
-    }
+    auto& f = per_scalar<T>(c.template ws<Work>().fd, c.template ws<Work>().fj);
+    f.cap.resize(n_), f.h.resize(n_);
     const T cp_s = c.sh(pp_.cp_s);
     const T& cp_l = c.par(p_cpl_);
-    auto capacity = [&](PortId p, int i) {
-      return c.port(p, solids::mdot(i)) * cp_s + c.port(p, solids::water(n_, i)) * cp_l;
-    };
-    const T cap = c.reduce(r_capacity_, n_, [&](int i) {
-      T v(0.0);
-      for (PortId p : in_) v += capacity(p, i);
-      return v;
-    });
-    const T h = c.reduce(r_enthalpy_, n_, [&](int i) {
-      T v(0.0);
-      for (PortId p : in_) v += capacity(p, i) * (c.port(p, solids::T(n_)) - props::kT0);
-      return v;
-    });
+    // one pass over the inlets' classes: flows, capacity flows C_ji and enthalpy flows C_ji (T_j - T0)
+    for (int i = 0; i < n_; ++i) {
+      T m(0.0), w(0.0), cap(0.0), h(0.0);
+      for (PortId p : in_) {
+        const T& mp = c.port(p, solids::mdot(i));
+        const T& wp = c.port(p, solids::water(n_, i));
+        const T cp = mp * cp_s + wp * cp_l;
+        m += mp, w += wp, cap += cp, h += cp * (c.port(p, solids::T(n_)) - props::kT0);
+      }
+      c.res(sM_ + i) = c.x(sM_ + i) - m;
+      c.res(sW_ + i) = c.x(sW_ + i) - w;
+      f.cap[i] = cap, f.h[i] = h;
+    }
+    const T cap = c.reduce(r_capacity_, n_, [&](int i) { return f.cap[i]; });
+    const T h = c.reduce(r_enthalpy_, n_, [&](int i) { return f.h[i]; });
     const T t_first = c.port(in_[0], solids::T(n_)) - props::kT0;
     c.res(sT_) = c.x(sT_) - (props::kT0 + (h + kCapacityFloor * t_first) / (cap + kCapacityFloor));
     return Status::kOk;
   }
+  std::unique_ptr<Workspace> workspace() const override { return std::make_unique<Work>(); }
   template <class T>
   void init(InitCtx<T>& c) const {
     for (int i = 0; i < n_; ++i) c.x(sM_ + i) = c.x(sW_ + i) = T(0.0);

@@ -8,7 +8,7 @@ namespace {
 // Koren's limited slope (Koren 1993) from the downwind jump a and the upwind jump b (both scaled to the cell width):
 // the kappa = 1/3 reconstruction (2a + b)/3, third-order upwind-biased where the solution is smooth, limited to
 // min(2|a|, 2|b|) with the common sign and 0 at extrema; da, db its derivatives.
-template <class T>
+template <class T, bool kDerivatives = true>
 T koren(const T& a, const T& b, double& da, double& db) {
   da = db = 0.0;
   if (!(a * b > 0.0)) return T(0.0);
@@ -28,11 +28,12 @@ T koren(const T& a, const T& b, double& da, double& db) {
 }
 
 // van Albada's slope ab (a + b) / (a^2 + b^2) from the same jumps, and its derivatives.
-template <class T>
+template <class T, bool kDerivatives = true>
 T van_albada(const T& a, const T& b, double& da, double& db) {
   const double av = value_of(a), bv = value_of(b), q = av * av + bv * bv;
   da = db = 0.0;
   if (!(q > 0.0)) return T(0.0);
+  if constexpr (!kDerivatives) return a * b * (a + b) / (a * a + b * b);
   const double num = av * bv * (av + bv);
   da = (bv * (2.0 * av + bv) * q - 2.0 * av * num) / (q * q);
   db = (av * (av + 2.0 * bv) * q - 2.0 * bv * num) / (q * q);
@@ -57,7 +58,7 @@ void FvGrowth::setup(const Grid& g) {
   for (int f = 0; f <= n_; ++f) dx_face_[f] = g.pivot_ext(f) - g.pivot_ext(f - 1);
 }
 
-template <class T>
+template <class T, bool kDerivatives>
 FvGrowth::Face<T> FvGrowth::face(const T* N, int f, bool upward) const {
   Face<T> r{T(0.0), {-1, -1, -1}, {0, 0, 0}};
   // Donor cell and the neighbours downwind (towards the face) and upwind; mirrored for downward growth.
@@ -72,7 +73,9 @@ FvGrowth::Face<T> FvGrowth::face(const T* N, int f, bool upward) const {
   const double cd = upward ? cplus_[donor] : cminus_[donor], cu = upward ? cminus_[donor] : cplus_[donor];
   const T a = (N[down] / width_[down] - nd) * cd, b = (nd - N[up] / width_[up]) * cu;
   double da, db;
-  r.phi += 0.5 * (limiter_ == Limiter::kKoren ? koren(a, b, da, db) : van_albada(a, b, da, db));
+  r.phi += 0.5 * (limiter_ == Limiter::kKoren ? koren<T, kDerivatives>(a, b, da, db)
+                                              : van_albada<T, kDerivatives>(a, b, da, db));
+  if constexpr (!kDerivatives) return r;
   // phi = nd + sigma(a, b)/2, a = (n_down - nd) cd, b = (nd - n_up) cu
   r.cols[1] = down, r.cols[2] = up;
   r.d[0] += 0.5 * (-da * cd + db * cu) / width_[donor];
@@ -108,26 +111,63 @@ void FvGrowth::faces_and_growth(const T* N, const GrowthTerms<T>& g, std::vector
   fc.resize(nf);
   if (g.normalized) {
     // Volume-normalized laws grow (a_k >= 0, s_k >= 0): upwind from below.
-    for (int f = 0; f < nf; ++f) fc[f] = face(N, f, true);
+    for (int f = 0; f < nf; ++f) fc[f] = face<T, true>(N, f, true);
     growth_at_faces(fc, g, G, inv_integral);
   } else {
     growth_at_faces(fc, g, G, inv_integral);  // phi is not needed for absolute laws
-    for (int f = 0; f < nf; ++f) fc[f] = face(N, f, !(G[f] < 0.0));
+    for (int f = 0; f < nf; ++f) fc[f] = face<T, true>(N, f, !(G[f] < 0.0));
   }
 }
 
+// The residual's path: face values only (the derivatives d[] serve flux_jacobian alone) and no work arrays, F
+// holding the face densities until the growth rates are known; the same operations in the same order as
+// faces_and_growth, so both paths agree to the bit.
 template <class T>
 T FvGrowth::flux_values(const T* N, const GrowthTerms<T>& g, T* F, int* donor) const {
   const int nf = n_ + 1;
-  std::vector<Face<T>> fc;
-  std::vector<T> G, inv;
-  faces_and_growth(N, g, fc, G, inv);
-  T W(0.0);
-  for (int f = 0; f < nf; ++f) {
-    F[f] = G[f] * fc[f].phi;
-    donor[f] = fc[f].cols[0];
-    W += F[f] * dx_face_[f];
+  constexpr int kTerms = 4;  // scales of up to this many terms on the stack
+  T stack[kTerms];
+  bool stack_on[kTerms];
+  std::vector<T> heap(g.terms > kTerms ? g.terms : 0);
+  std::vector<char> heap_on(heap.size());
+  T* scale = g.terms > kTerms ? heap.data() : stack;
+  auto on = [&](int k) -> bool { return g.terms > kTerms ? heap_on[k] : stack_on[k]; };
+  auto rate_at = [&](int f) {  // sum_k scale_k s_k(d_f) over the terms that grow, in the order growth_at_faces adds
+    T G(0.0);
+    for (int k = 0; k < g.terms; ++k)
+      if (on(k)) G += scale[k] * g.shape[size_t(k) * nf + f];
+    return G;
+  };
+  auto set = [&](int k, const T& v, bool active) {
+    scale[k] = v;
+    if (g.terms > kTerms)
+      heap_on[k] = active;
+    else
+      stack_on[k] = active;
+  };
+  if (g.normalized) {
+    for (int f = 0; f < nf; ++f) {
+      const Face<T> fc = face<T, false>(N, f, true);
+      F[f] = fc.phi, donor[f] = fc.cols[0];
+    }
+    for (int k = 0; k < g.terms; ++k) {
+      const T* s = g.shape + size_t(k) * nf;
+      T integral(0.0);
+      for (int f = 0; f < nf; ++f) integral += s[f] * F[f] * dx_face_[f];
+      const bool grows = integral > 0.0;  // else no particles to grow on
+      set(k, grows ? T(g.amount[k] * (1.0 / integral)) : T(0.0), grows);
+    }
+    for (int f = 0; f < nf; ++f) F[f] = rate_at(f) * F[f];
+  } else {
+    for (int k = 0; k < g.terms; ++k) set(k, g.amount[k], true);
+    for (int f = 0; f < nf; ++f) {
+      const T G = rate_at(f);
+      const Face<T> fc = face<T, false>(N, f, !(G < 0.0));
+      F[f] = G * fc.phi, donor[f] = fc.cols[0];
+    }
   }
+  T W(0.0);
+  for (int f = 0; f < nf; ++f) W += F[f] * dx_face_[f];
   return W;
 }
 

@@ -60,7 +60,7 @@ class FvGrowth {
     int cols[3];
     double d[3];  // d phi / d N_col (double path only)
   };
-  template <class T>
+  template <class T, bool kDerivatives>
   Face<T> face(const T* N, int f, bool upward) const;
   // Face densities (upwind by the sign of G) and the growth rates at the faces, shared by rates and Jacobian.
   template <class T>
