@@ -164,6 +164,14 @@ int eigen_dense_largest_block(SUNLinearSolver s) {
   return static_cast<int>(largest);
 }
 
+int eigen_dense_block_for(const double* a, int n) {
+  Content c;
+  find_groups(Eigen::Map<const Eigen::MatrixXd>(a, n, n), c);
+  size_t largest = 0;
+  for (const auto& g : c.groups) largest = std::max(largest, g.size());
+  return c.groups.size() > 1 && double(largest) <= 0.9 * double(n) ? static_cast<int>(largest) : n;
+}
+
 SUNLinearSolver make_eigen_dense_solver(SUNContext ctx) {
   SUNLinearSolver s = SUNLinSolNewEmpty(ctx);
   if (!s) return nullptr;

@@ -15,5 +15,7 @@ SUNLinearSolver make_eigen_dense_solver(SUNContext ctx);
 int eigen_dense_groups(SUNLinearSolver s);
 // The size of the largest matrix the last setup factored: the whole matrix, or its largest group (0 before any setup).
 int eigen_dense_largest_block(SUNLinearSolver s);
+// The size of the largest matrix a setup of the column-major n x n matrix `a` would factor, without factoring it.
+int eigen_dense_block_for(const double* a, int n);
 
 }  // namespace granuflow::detail

@@ -51,6 +51,35 @@ int ida_res(realtype t, N_Vector y, N_Vector yp, N_Vector r, void* ud) {
   }
 }
 
+void check_contract(DaeSystem& sys, double t, const double* y, const double* yp, double cj, const double* a,
+                    JacobianCache& k) {
+  const int n = sys.size();
+  std::vector<double> shifted(size_t(n) * n);
+  sys.jacobian(t, y, yp, cj + 1.0, shifted.data(), nullptr);
+  const auto id = sys.differential_id();
+  k.reusable = 1;
+  for (int c = 0; c < n && k.reusable; ++c)
+    for (int r = 0; r < n; ++r) {
+      const double d = shifted[size_t(c) * n + r] - a[size_t(c) * n + r];
+      const double expect = (r == c && id[r] == 1.0) ? 1.0 : 0.0;
+      if (std::abs(d - expect) > 1e-9 * (1.0 + std::abs(a[size_t(c) * n + r]))) {
+        k.reusable = 0;
+        break;
+      }
+    }
+  k.differential.clear();
+  for (int i = 0; i < n; ++i)
+    if (id[i] == 1.0) k.differential.push_back(i);
+}
+
+void JacobianCache::keep(const double* a, int n, double cj_at, long step_at, long fails_at) {
+  jac.assign(a, a + size_t(n) * n);
+  cj = cj_at;
+  step = step_at;
+  conv_fails = fails_at;
+  valid = true;
+}
+
 int ida_jac(realtype t, realtype cj, N_Vector y, N_Vector yp, N_Vector, SUNMatrix J, void* ud, N_Vector, N_Vector,
             N_Vector) {
   auto* u = static_cast<IdaUser*>(ud);
@@ -75,30 +104,8 @@ int ida_jac(realtype t, realtype cj, N_Vector y, N_Vector yp, N_Vector, SUNMatri
       }
       u->sys->jacobian(t, N_VGetArrayPointer(y), N_VGetArrayPointer(yp), cj, a, nullptr);
       if (!u->mem) return 0;
-      if (k.reusable < 0) {  // dF/dy' must be the identity on the differential states, zero elsewhere
-        std::vector<double> shifted(size_t(n) * n);
-        u->sys->jacobian(t, N_VGetArrayPointer(y), N_VGetArrayPointer(yp), cj + 1.0, shifted.data(), nullptr);
-        const auto id = u->sys->differential_id();
-        k.reusable = 1;
-        for (int c = 0; c < n && k.reusable; ++c)
-          for (int r = 0; r < n; ++r) {
-            const double d = shifted[size_t(c) * n + r] - a[size_t(c) * n + r];
-            const double expect = (r == c && id[r] == 1.0) ? 1.0 : 0.0;
-            if (std::abs(d - expect) > 1e-9 * (1.0 + std::abs(a[size_t(c) * n + r]))) {
-              k.reusable = 0;
-              break;
-            }
-          }
-        for (int i = 0; i < n; ++i)
-          if (id[i] == 1.0) k.differential.push_back(i);
-      }
-      if (k.reusable == 1) {
-        k.jac.assign(a, a + size_t(n) * n);
-        k.cj = cj;
-        k.step = step;
-        k.conv_fails = fails;
-        k.valid = true;
-      }
+      if (k.reusable < 0) check_contract(*u->sys, t, N_VGetArrayPointer(y), N_VGetArrayPointer(yp), cj, a, k);
+      if (k.reusable == 1) k.keep(a, n, cj, step, fails);
     } else {
       set_sparse_pattern(u->sys->pattern(), J);
       u->sys->jacobian(t, N_VGetArrayPointer(y), N_VGetArrayPointer(yp), cj, nullptr, SUNSparseMatrix_Data(J));
@@ -181,8 +188,11 @@ Ida::Ida(SUNContext ctx, IdaUser& user, double t0, const NVec& y, const NVec& yp
 // 20 classes (29 and 49 unknowns) was 1-6 % slower at 51, tanks in series 13 % slower: they keep 20.
 constexpr int kLargeBlock = 100, kCostlyJacobian = 64;
 void Ida::tune_refactoring() {
+  if (user && user->dense) tune_refactoring(eigen_dense_largest_block(LS.s));
+}
+
+void Ida::tune_refactoring(int block) {
   if (!user || !user->dense) return;
-  const int block = eigen_dense_largest_block(LS.s);
   check(IDASetDeltaCjLSetup(mem, block >= kLargeBlock ? 0.5 : 0.25), "IDASetDeltaCjLSetup");
   user->cache.max_age = block >= kCostlyJacobian ? 51 : 20;
 }

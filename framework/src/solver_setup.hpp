@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "granuflow/dae_system.hpp"
+#include "jacobian_cache.hpp"
 #include "serial_vector_ops.hpp"
 
 namespace granuflow::detail {
@@ -63,21 +64,6 @@ void check(int flag, const char* call);  // throws on a negative SUNDIALS flag
 // lets a Jacobian callback rewrite them, and KLU reads them at every factorization).
 void set_sparse_pattern(const SparsityPattern& pat, SUNMatrix J);
 
-// A dense Jacobian kept for reuse, the way CVODE keeps df/dy: IDA sets its Newton matrix up again whenever
-// cj = alpha / h moves by 25 %, and with every differential state's residual of the form y'_k - f(y) (all
-// units' contract, checked on the first evaluation of a run) only the diagonal of the differential states
-// depends on cj. An evaluation at most max_age steps old is reused with cj updated, unless Newton (of the states
-// or of their sensitivities) has failed to converge since; IDACalcIC and each segment start from a fresh one.
-struct JacobianCache {
-  long max_age = 20;              // Ida::tune_refactoring() raises it for large blocks
-  std::vector<double> jac;        // column-major n x n, evaluated at cj
-  std::vector<int> differential;  // indices of the differential states
-  double cj = 0.0;
-  long step = 0, conv_fails = 0;
-  bool valid = false;
-  int reusable = -1;  // -1 unknown (checked on the first evaluation), 0 no, 1 yes
-};
-
 // State shared by the IDAS callbacks.
 struct IdaUser {
   IdaUser(DaeSystem* s, bool d, std::vector<int> params = {}) : sys(s), dense(d), sens_params(std::move(params)) {}
@@ -113,6 +99,7 @@ struct Ida {
   // initialization): how far cj may move before IDA refactors the Newton matrix, and how many steps a cached
   // Jacobian is kept; see solver_setup.cpp.
   void tune_refactoring();
+  void tune_refactoring(int block);  // for a largest factored block of `block` states
   Ida(const Ida&) = delete;
   Ida& operator=(const Ida&) = delete;
 };

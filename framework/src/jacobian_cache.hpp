@@ -1,0 +1,30 @@
+// The dense Jacobian a run keeps between integrator steps, and the residual contract that makes keeping it valid.
+#pragma once
+#include <vector>
+
+#include "granuflow/dae_system.hpp"
+
+namespace granuflow::detail {
+
+// A dense Jacobian kept for reuse, the way CVODE keeps df/dy: IDA sets its Newton matrix up again whenever
+// cj = alpha / h moves by 25 %, and with every differential state's residual of the form y'_k - f(y) (all
+// units' contract, checked on the first evaluation of a run) only the diagonal of the differential states
+// depends on cj. An evaluation at most max_age steps old is reused with cj updated, unless Newton (of the states
+// or of their sensitivities) has failed to converge since; IDACalcIC and each segment start from a fresh one.
+struct JacobianCache {
+  long max_age = 20;              // Ida::tune_refactoring() raises it for large blocks
+  std::vector<double> jac;        // column-major n x n, evaluated at cj
+  std::vector<int> differential;  // indices of the differential states
+  double cj = 0.0;
+  long step = 0, conv_fails = 0;
+  bool valid = false;
+  int reusable = -1;  // -1 unknown (checked on the first evaluation), 0 no, 1 yes
+  // Keeps `a` (column-major n x n, evaluated at cj_at) for reuse from integrator step step_at on.
+  void keep(const double* a, int n, double cj_at, long step_at, long fails_at);
+};
+// Sets k.reusable (and k.differential) from a second Jacobian at cj + 1: dF/dy' must be the identity on the
+// differential states and zero elsewhere; `a` is the Jacobian at (t, y, y', cj).
+void check_contract(DaeSystem& sys, double t, const double* y, const double* yp, double cj, const double* a,
+                    JacobianCache& k);
+
+}  // namespace granuflow::detail
