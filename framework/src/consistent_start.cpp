@@ -10,7 +10,7 @@ namespace granuflow::detail {
 namespace {
 
 constexpr int kMaxIterations = 20;  // IDACalcIC takes over beyond
-constexpr int kMaxHalvings = 5;  // of a correction whose residual the units refuse (a step out of their domain)
+constexpr int kMaxHalvings = 5;     // of a correction whose residual the units refuse (a step out of their domain)
 // Converged when the last correction's weighted RMS norm is below this: with Newton's quadratic rate the error left
 // is of its square, far below IDACalcIC's own test (0.0033 in the same norm).
 constexpr double kTolerance = 1e-4;
@@ -18,11 +18,15 @@ constexpr double kSlowRate = 0.25;  // a correction shrinking less than this ask
 
 }  // namespace
 
-int consistent_start(DaeSystem& sys, JacobianCache& cache, double t, const double* ewt, double* y, double* yp) {
+int consistent_start(DaeSystem& sys, JacobianCache& cache, double t, const double* ewt, double* y, double* yp,
+                     const double* j0) {
   const int n = sys.size();
   std::vector<double> jac(size_t(n) * n), r(n);
-  sys.jacobian(t, y, yp, 0.0, jac.data(), nullptr);
-  if (cache.reusable < 0) check_contract(sys, t, y, yp, 0.0, jac.data(), cache);
+  if (j0)
+    std::copy(j0, j0 + size_t(n) * n, jac.begin());
+  else
+    sys.jacobian(t, y, yp, 0.0, jac.data(), nullptr);
+  if (cache.reusable < 0) check_contract(sys, t, y, yp, cache);
   if (cache.reusable != 1) return 0;
   const std::vector<double> id = sys.differential_id();
   std::vector<int> alg;

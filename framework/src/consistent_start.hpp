@@ -16,6 +16,8 @@ namespace granuflow::detail {
 // and the cache knows whether the contract holds (its Jacobian is left invalid); returns the size of the largest
 // block the dense solver will factor (for Ida::tune_refactoring). Returns 0, y and yp untouched, when the contract does
 // not hold, the algebraic block is singular or Newton does not converge: the caller falls back to IDACalcIC.
-int consistent_start(DaeSystem& sys, JacobianCache& cache, double t, const double* ewt, double* y, double* yp);
+// `j0`, if given: the Jacobian dF/dy (cj = 0) at the given (t, y, y'), column-major n x n.
+int consistent_start(DaeSystem& sys, JacobianCache& cache, double t, const double* ewt, double* y, double* yp,
+                     const double* j0 = nullptr);
 
 }  // namespace granuflow::detail

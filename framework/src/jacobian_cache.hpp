@@ -22,9 +22,10 @@ struct JacobianCache {
   // Keeps `a` (column-major n x n, evaluated at cj_at) for reuse from integrator step step_at on.
   void keep(const double* a, int n, double cj_at, long step_at, long fails_at);
 };
-// Sets k.reusable (and k.differential) from a second Jacobian at cj + 1: dF/dy' must be the identity on the
-// differential states and zero elsewhere; `a` is the Jacobian at (t, y, y', cj).
-void check_contract(DaeSystem& sys, double t, const double* y, const double* yp, double cj, const double* a,
-                    JacobianCache& k);
+// Sets k.reusable (and k.differential): dF/dy' must be the identity on the differential states and zero elsewhere.
+// Checked along one direction v of y' (every component nonzero, pseudo-random): F(y, y' + v) - F(y, y') must be v on
+// the differential rows and 0 on the algebraic ones. A residual that reads y' other than as the contract allows moves
+// along almost every direction; the check costs one residual, where comparing two Jacobians cost one Jacobian.
+void check_contract(DaeSystem& sys, double t, const double* y, const double* yp, JacobianCache& k);
 
 }  // namespace granuflow::detail

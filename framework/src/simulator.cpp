@@ -146,7 +146,15 @@ SimResult simulate_ida(Flowsheet& fs, const SimOptions& opt, const std::string& 
   DaeSystem sys(fs, dense);
   const int n = sys.size(), n_full = sys.full_size(), nq = sys.n_quadratures();
   if (n == 0) throw ConfigError("flowsheet '" + fs.name() + "' has no states to integrate");
-  check_algebraic_structure(sys);  // names an unsolvable algebraic part before IDACalcIC fails on it
+  // The inlined system's Jacobian at the initial values serves the structural check and the consistent start.
+  std::vector<double> j0;
+  if (sys.inlined()) {
+    std::vector<double> y_init, yp_init(n, 0.0);
+    sys.initial_values(y_init);
+    j0.resize(size_t(n) * n);
+    sys.jacobian(0.0, y_init.data(), yp_init.data(), 0.0, j0.data(), nullptr);
+  }
+  check_algebraic_structure(sys, j0.empty() ? nullptr : j0.data());  // names an unsolvable algebraic part
 
   const std::vector<int> sens_ids = sensitivity_ids(fs, opt);
   const std::vector<double> t_out = output_times(opt);
@@ -327,7 +335,8 @@ SimResult simulate_ida(Flowsheet& fs, const SimOptions& opt, const std::string& 
     int block = 0;
     if (dense && !user.iterative) {
       for (int i = 0; i < n; ++i) ewt[i] = 1.0 / (opt.rtol * std::abs(y.data()[i]) + atol.data()[i]);
-      block = detail::consistent_start(sys, user.cache, t0, ewt.data(), y.data(), yp.data());
+      block = detail::consistent_start(sys, user.cache, t0, ewt.data(), y.data(), yp.data(),
+                                       seg == 0 && !j0.empty() ? j0.data() : nullptr);
       if (block > 0) {
         check(IDAReInit(mem, t0, y.v, yp.v), "IDAReInit");
         if (nq > 0) check(IDAQuadReInit(mem, q.v), "IDAQuadReInit");

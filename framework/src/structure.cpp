@@ -144,7 +144,7 @@ std::pair<std::string, std::string> names(const Flowsheet& fs, const std::vector
 namespace {
 
 // The message for `sys`, or nothing if its algebraic equations can be solved at the initial state.
-std::optional<std::string> diagnose(DaeSystem& sys) {
+std::optional<std::string> diagnose(DaeSystem& sys, const double* j0) {
   const Flowsheet& fs = sys.flowsheet();
   const int n = sys.size();
   const auto id = sys.differential_id();
@@ -162,8 +162,11 @@ std::optional<std::string> diagnose(DaeSystem& sys) {
   std::vector<std::vector<int>> adj(na);
   Eigen::MatrixXd a = Eigen::MatrixXd::Zero(na, na);
   if (sys.inlined()) {
-    std::vector<double> j(size_t(n) * n);
-    sys.jacobian(0.0, y.data(), yp.data(), 0.0, j.data(), nullptr);
+    std::vector<double> j;
+    if (j0)
+      j.assign(j0, j0 + size_t(n) * n);
+    else
+      j.resize(size_t(n) * n), sys.jacobian(0.0, y.data(), yp.data(), 0.0, j.data(), nullptr);
     for (int c = 0; c < n; ++c) {
       if (local[c] < 0) continue;
       for (int r = 0; r < n; ++r)
@@ -234,13 +237,13 @@ std::optional<std::string> diagnose(DaeSystem& sys) {
 
 }  // namespace
 
-void check_algebraic_structure(DaeSystem& sys) {
-  auto message = diagnose(sys);
+void check_algebraic_structure(DaeSystem& sys, const double* j0) {
+  auto message = diagnose(sys, j0);
   if (!message) return;
   // Explicit units are eliminated from an inlined system; the full one names their states too.
   if (sys.inlined()) {
     DaeSystem full(sys.flowsheet(), false);
-    if (auto named = diagnose(full)) message = named;
+    if (auto named = diagnose(full, nullptr)) message = named;
   }
   throw ConfigError(*message);
 }

@@ -38,6 +38,8 @@ Deficiency structural_deficiency(int n_cols, const std::vector<std::vector<int>>
 // Both checks on the system a run is about to integrate (its units configured with the run's parameters);
 // throws ConfigError naming the flowsheet, the units and the states (at most 12) otherwise. Systems with more
 // than 3000 algebraic states skip the numerical check (its dense factorization would cost more than it saves).
-void check_algebraic_structure(DaeSystem& sys);
+// `j0`: for an inlined system, its dense Jacobian dF/dy (cj = 0) at the initial values with y' = 0, when the caller
+// has it (the run's consistent start needs the same matrix).
+void check_algebraic_structure(DaeSystem& sys, const double* j0 = nullptr);
 
 }  // namespace granuflow
