@@ -5,8 +5,8 @@
 //
 // IDACalcIC's Newton matrix dF/dy + dF/dy' / h_ic is the exact one for neither of its unknown sets (it carries
 // dF/dy of the differential columns), so its Newton converges linearly and asks for fresh Jacobians: 3 Jacobians and
-// 16 residuals at the headline scene's start, 13 % of its run at 40 classes. Here the Newton is exact: the same
-// start costs 2 Jacobians (one of them the contract check the integrator needs anyway) and 4 residuals.
+// 16 residuals at the headline scene's start, 13 % of its run at 40 classes. Here the Newton is exact: that start
+// now costs the one Jacobian the structural check evaluates anyway and 6 residuals.
 #pragma once
 #include "jacobian_cache.hpp"
 
