@@ -59,6 +59,13 @@ class Decay : public UnitBase<Decay> {
   OutputId o_a_;
 };
 
+std::unique_ptr<Flowsheet> decay(Tie tie) {
+  auto fs = std::make_unique<Flowsheet>("decay");
+  fs->add_unit("u", std::make_unique<Decay>(tie), Settings("u", {}));
+  fs->finalize();
+  return fs;
+}
+
 struct Start {
   std::vector<double> y0, y, yp, ewt;
   int block = 0;
@@ -77,10 +84,8 @@ Start start(DaeSystem& sys, detail::JacobianCache& cache) {
 
 TEST(ConsistentStart, SolvesANonlinearAlgebraicStateAndTheRatesExactly) {
   for (Tie tie : {Tie::kCubic, Tie::kLog}) {
-    Flowsheet fs("decay");
-    fs.add_unit("u", std::make_unique<Decay>(tie), Settings("u", {}));
-    fs.finalize();
-    DaeSystem sys(fs);
+    const auto fs = decay(tie);
+    DaeSystem sys(*fs);
     detail::JacobianCache cache;
     const Start s = start(sys, cache);
     ASSERT_EQ(s.block, 2);
@@ -96,10 +101,8 @@ TEST(ConsistentStart, SolvesANonlinearAlgebraicStateAndTheRatesExactly) {
 }
 
 TEST(ConsistentStart, GivesWayToIdaCalcIcWhenAnAlgebraicResidualReadsARate) {
-  Flowsheet fs("decay");
-  fs.add_unit("u", std::make_unique<Decay>(Tie::kReadsRate), Settings("u", {}));
-  fs.finalize();
-  DaeSystem sys(fs);
+  const auto fs = decay(Tie::kReadsRate);
+  DaeSystem sys(*fs);
   detail::JacobianCache cache;
   const Start s = start(sys, cache);
   EXPECT_EQ(s.block, 0);
@@ -108,7 +111,7 @@ TEST(ConsistentStart, GivesWayToIdaCalcIcWhenAnAlgebraicResidualReadsARate) {
   // the run itself starts through IDACalcIC and keeps a = 2 dm/dt = -k m exactly along the way
   SimOptions o;
   o.t_end = 2.0, o.t_out = {0.0, 1.0, 2.0};
-  const SimResult r = simulate(fs, o);
+  const SimResult r = simulate(*fs, o);
   for (size_t k = 0; k < r.t.size(); ++k) {
     EXPECT_NEAR(r.state(k, 0), std::exp(-0.5 * r.t[k]), 1e-5) << r.t[k];
     EXPECT_NEAR(r.state(k, 1), -std::exp(-0.5 * r.t[k]), 1e-5) << r.t[k];
@@ -117,12 +120,10 @@ TEST(ConsistentStart, GivesWayToIdaCalcIcWhenAnAlgebraicResidualReadsARate) {
 
 TEST(ConsistentStart, RunsFromItFollowTheRootAlongTheDecay) {
   for (Tie tie : {Tie::kCubic, Tie::kLog}) {
-    Flowsheet fs("decay");
-    fs.add_unit("u", std::make_unique<Decay>(tie), Settings("u", {}));
-    fs.finalize();
+    const auto fs = decay(tie);
     SimOptions o;
     o.t_end = 4.0, o.t_out = {0.0, 2.0, 4.0};
-    const SimResult r = simulate(fs, o);
+    const SimResult r = simulate(*fs, o);
     for (size_t k = 0; k < r.t.size(); ++k) {
       const double m = std::exp(-0.5 * r.t[k]);
       const double a = r.state(k, 1);
