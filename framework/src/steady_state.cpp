@@ -24,6 +24,7 @@
 #include <memory>
 #include <sstream>
 
+#include "consistent_start.hpp"
 #include "granuflow/errors.hpp"
 #include "granuflow/simulator.hpp"
 #include "solver_setup.hpp"
@@ -123,10 +124,20 @@ void kin_err(int code, const char* module, const char* function, char* msg, void
   static_cast<KinUser*>(ud)->s->last_error = std::string(module) + "." + function + ": " + msg;
 }
 
-// Algebraic states solved for the given differential states (IDACalcIC), used to start Newton from a point
-// where recycle flows are consistent rather than from structurally singular guesses.
+// Algebraic states solved for the given differential states, used to start Newton from a point where recycle flows
+// are consistent rather than from structurally singular guesses: by the exact Newton of a run's consistent start
+// (dense systems), else or where that gives up by IDACalcIC.
 void consistent_initial_values(DaeSystem& sys, bool dense, double t, std::vector<double>& y0) {
   const int n = sys.size();
+  if (dense) {
+    std::vector<double> y = y0, yp(n, 0.0), ewt(n);
+    for (int i = 0; i < n; ++i) ewt[i] = 1.0 / (1e-8 * std::abs(y[i]) + 1e-10);  // IDACalcIC's tolerances below
+    JacobianCache cache;
+    if (consistent_start(sys, cache, t, ewt.data(), y.data(), yp.data()) > 0) {
+      y0 = y;
+      return;
+    }
+  }
   Context C;
   NVec y(n, C.ctx), yp(n, C.ctx), atol(n, C.ctx);
   std::copy(y0.begin(), y0.end(), y.data());
