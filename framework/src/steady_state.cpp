@@ -53,6 +53,7 @@ struct SteadySystem {
   std::vector<int> held;                                  // rows replaced by y_r - y0_r
   std::vector<std::pair<int, std::vector<double>>> kept;  // rows replaced by b^T (y - y0) (b dense over states)
   std::string last_error;
+  std::vector<double> jac_y0;  // dF/dy at y0 (dense, before the replaced rows), from analyse_structure
 
   Status residual(const double* y, const double* yp, double* f) {
     const Status s = sys->residual(t, y, yp, f);
@@ -66,7 +67,11 @@ struct SteadySystem {
   }
   // Dense column-major n x n.
   void jacobian_dense(const double* y, const double* yp, double cj, double* J) {
-    sys->jacobian(t, y, yp, cj, J, nullptr);
+    // Newton's first Jacobian is the one the structure analysis evaluated at the same point
+    if (!jac_y0.empty() && cj == 0.0 && std::equal(y0.begin(), y0.end(), y))
+      std::copy(jac_y0.begin(), jac_y0.end(), J);
+    else
+      sys->jacobian(t, y, yp, cj, J, nullptr);
     for (int r : held) {
       for (int c = 0; c < n; ++c) J[size_t(c) * n + r] = 0.0;
       J[size_t(r) * n + r] = 1.0;
@@ -176,7 +181,9 @@ std::string describe_states(const Flowsheet& fs, const std::vector<int>& states)
 // SolverError when a combination drifts at a constant rate (no steady state).
 void analyse_structure(SteadySystem& s, const Flowsheet& fs, std::vector<std::string>& conserved) {
   const int n = s.n;
-  std::vector<double> jac(size_t(n) * n), f0(n);
+  std::vector<double>& jac = s.jac_y0;
+  std::vector<double> f0(n);
+  jac.resize(size_t(n) * n);
   s.sys->jacobian(s.t, s.y0.data(), s.zeros.data(), 0.0, jac.data(), nullptr);
   s.sys->residual(s.t, s.y0.data(), s.zeros.data(), f0.data());
   const auto id = s.sys->differential_id();
