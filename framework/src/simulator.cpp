@@ -325,11 +325,6 @@ SimResult simulate_ida(Flowsheet& fs, const SimOptions& opt, const std::string& 
     }
     if (ns > 0) check(IDASensToggleOff(mem), "IDASensToggleOff");
     user.cache.valid = false;  // a segment starts from a fresh Jacobian
-    // IDACalcIC's Newton matrix is dF/dy + dF/dy' / h_ic with h_ic = 1e-3 (tout1 - t0); the exact one for its
-    // unknowns (y' differential, y algebraic) lacks dF/dy of the differential states, so a long h_ic slows
-    // Newton (headline scene, tout1 at the segment end: 55 residuals), while a very short one loosens the test
-    // on y', whose correction is measured times h_ic. 1 % of the segment (15 residuals there); not the first
-    // output time, so that results do not depend on which output times are asked for.
     // A dense run whose units keep the residual contract starts with an exact Newton on its algebraic states
     // (consistent_start.hpp), IDACalcIC otherwise or when that Newton gives up.
     int block = 0;
@@ -344,6 +339,11 @@ SimResult simulate_ida(Flowsheet& fs, const SimOptions& opt, const std::string& 
       }
     }
     if (block == 0) {
+      // IDACalcIC's Newton matrix is dF/dy + dF/dy' / h_ic with h_ic = 1e-3 (tout1 - t0); the exact one for its
+      // unknowns (y' differential, y algebraic) lacks dF/dy of the differential states, so a long h_ic slows
+      // Newton (headline scene, tout1 at the segment end: 55 residuals), while a very short one loosens the test
+      // on y', whose correction is measured times h_ic. 1 % of the segment (15 residuals there); not the first
+      // output time, so that results do not depend on which output times are asked for.
       const double tout1 = t0 + 0.01 * (t1 - t0);
       user.fresh_only = true;
       int flag = IDACalcIC(mem, IDA_YA_YDP_INIT, tout1);
