@@ -55,6 +55,16 @@ void find_groups(const Eigen::Map<const Eigen::MatrixXd>& m, Content& c) {
   }
 }
 
+size_t largest_group(const Content& c) {
+  size_t largest = 0;
+  for (const auto& g : c.groups) largest = std::max(largest, g.size());
+  return largest;
+}
+
+// Splitting pays when no group holds nearly every state (a group of 90 % still costs 73 % of the whole LU; the whole
+// matrix keeps the factorization, and so the results, of a coupled flowsheet with a few loose states).
+bool split_pays(const Content& c, long n) { return c.groups.size() > 1 && double(largest_group(c)) <= 0.9 * double(n); }
+
 // Whether the groups of the last setup still separate m (no nonzero joins two of them): a scan without the
 // union-find, and the structure rarely changes between setups.
 bool groups_hold(const Eigen::Map<const Eigen::MatrixXd>& m, const Content& c) {
@@ -90,11 +100,7 @@ int setup(SUNLinearSolver s, SUNMatrix a) {
   const bool look = c.split ? !groups_hold(m, c) : c.unsplit_setups++ % 16 == 0;
   if (look) {
     find_groups(m, c);
-    // Splitting pays when no group holds nearly every state (a group of 90 % still costs 73 % of the whole LU;
-    // the whole matrix keeps the factorization, and so the results, of a coupled flowsheet with a few loose states).
-    size_t largest = 0;
-    for (const auto& g : c.groups) largest = std::max(largest, g.size());
-    c.split = c.groups.size() > 1 && double(largest) <= 0.9 * double(n);
+    c.split = split_pays(c, n);
     c.unsplit_setups = c.split ? 0 : 1;
   }
   // A zero or non-finite pivot makes the step fail recoverably: the integrator retries with a smaller step.
@@ -158,18 +164,13 @@ int eigen_dense_groups(SUNLinearSolver s) {
 
 int eigen_dense_largest_block(SUNLinearSolver s) {
   const Content& c = *content(s);
-  if (!c.split) return static_cast<int>(c.lu.rows());
-  size_t largest = 0;
-  for (const auto& g : c.groups) largest = std::max(largest, g.size());
-  return static_cast<int>(largest);
+  return static_cast<int>(c.split ? largest_group(c) : c.lu.rows());
 }
 
 int eigen_dense_block_for(const double* a, int n) {
   Content c;
   find_groups(Eigen::Map<const Eigen::MatrixXd>(a, n, n), c);
-  size_t largest = 0;
-  for (const auto& g : c.groups) largest = std::max(largest, g.size());
-  return c.groups.size() > 1 && double(largest) <= 0.9 * double(n) ? static_cast<int>(largest) : n;
+  return split_pays(c, n) ? static_cast<int>(largest_group(c)) : n;
 }
 
 SUNLinearSolver make_eigen_dense_solver(SUNContext ctx) {

@@ -84,24 +84,44 @@ FvGrowth::Face<T> FvGrowth::face(const T* N, int f, bool upward) const {
   return r;
 }
 
+template <class T, class Phi>
+void FvGrowth::term_scales(const GrowthTerms<T>& g, Phi phi, TermScale<T>* ts) const {
+  const int nf = n_ + 1;
+  for (int k = 0; k < g.terms; ++k) {
+    ts[k] = {T(g.amount[k]), T(0.0), true};
+    if (!g.normalized) continue;
+    const T* s = g.shape + size_t(k) * nf;
+    T integral(0.0);
+    for (int f = 0; f < nf; ++f) integral += s[f] * phi(f) * dx_face_[f];
+    if (!(integral > 0.0)) {  // no particles to grow on
+      ts[k] = {T(0.0), T(0.0), false};
+      continue;
+    }
+    ts[k].inv = 1.0 / integral;
+    ts[k].value = g.amount[k] * ts[k].inv;
+  }
+}
+
+template <class T>
+T FvGrowth::rate_at(const GrowthTerms<T>& g, const TermScale<T>* ts, int f) const {
+  const int nf = n_ + 1;
+  T G(0.0);
+  for (int k = 0; k < g.terms; ++k)
+    if (ts[k].grows) G += ts[k].value * g.shape[size_t(k) * nf + f];
+  return G;
+}
+
 template <class T>
 void FvGrowth::growth_at_faces(const std::vector<Face<T>>& fc, const GrowthTerms<T>& g, std::vector<T>& G,
                                std::vector<T>& inv_integral) const {
   const int nf = n_ + 1;
-  G.assign(nf, T(0.0));
-  inv_integral.assign(g.terms, T(0.0));
-  for (int k = 0; k < g.terms; ++k) {
-    const T* s = g.shape + size_t(k) * nf;
-    T scale = g.amount[k];
-    if (g.normalized) {
-      T integral(0.0);
-      for (int f = 0; f < nf; ++f) integral += s[f] * fc[f].phi * dx_face_[f];
-      if (!(integral > 0.0)) continue;  // no particles to grow on
-      inv_integral[k] = 1.0 / integral;
-      scale = g.amount[k] * inv_integral[k];
-    }
-    for (int f = 0; f < nf; ++f) G[f] += scale * s[f];
-  }
+  std::vector<TermScale<T>> ts(g.terms);
+  term_scales(
+      g, [&](int f) { return fc[f].phi; }, ts.data());
+  G.resize(nf);
+  for (int f = 0; f < nf; ++f) G[f] = rate_at(g, ts.data(), f);
+  inv_integral.resize(g.terms);
+  for (int k = 0; k < g.terms; ++k) inv_integral[k] = ts[k].inv;
 }
 
 template <class T>
@@ -125,43 +145,23 @@ void FvGrowth::faces_and_growth(const T* N, const GrowthTerms<T>& g, std::vector
 template <class T>
 T FvGrowth::flux_values(const T* N, const GrowthTerms<T>& g, T* F, int* donor) const {
   const int nf = n_ + 1;
-  constexpr int kTerms = 4;  // scales of up to this many terms on the stack
-  T stack[kTerms];
-  bool stack_on[kTerms];
-  std::vector<T> heap(g.terms > kTerms ? g.terms : 0);
-  std::vector<char> heap_on(heap.size());
-  T* scale = g.terms > kTerms ? heap.data() : stack;
-  auto on = [&](int k) -> bool { return g.terms > kTerms ? heap_on[k] : stack_on[k]; };
-  auto rate_at = [&](int f) {  // sum_k scale_k s_k(d_f) over the terms that grow, in the order growth_at_faces adds
-    T G(0.0);
-    for (int k = 0; k < g.terms; ++k)
-      if (on(k)) G += scale[k] * g.shape[size_t(k) * nf + f];
-    return G;
-  };
-  auto set = [&](int k, const T& v, bool active) {
-    scale[k] = v;
-    if (g.terms > kTerms)
-      heap_on[k] = active;
-    else
-      stack_on[k] = active;
-  };
+  constexpr int kTerms = 4;  // the terms' scales of up to this many on the stack
+  TermScale<T> stack[kTerms];
+  std::vector<TermScale<T>> heap(g.terms > kTerms ? g.terms : 0);
+  TermScale<T>* ts = g.terms > kTerms ? heap.data() : stack;
   if (g.normalized) {
     for (int f = 0; f < nf; ++f) {
       const Face<T> fc = face<T, false>(N, f, true);
       F[f] = fc.phi, donor[f] = fc.cols[0];
     }
-    for (int k = 0; k < g.terms; ++k) {
-      const T* s = g.shape + size_t(k) * nf;
-      T integral(0.0);
-      for (int f = 0; f < nf; ++f) integral += s[f] * F[f] * dx_face_[f];
-      const bool grows = integral > 0.0;  // else no particles to grow on
-      set(k, grows ? T(g.amount[k] * (1.0 / integral)) : T(0.0), grows);
-    }
-    for (int f = 0; f < nf; ++f) F[f] = rate_at(f) * F[f];
+    term_scales(
+        g, [&](int f) { return F[f]; }, ts);
+    for (int f = 0; f < nf; ++f) F[f] = rate_at(g, ts, f) * F[f];
   } else {
-    for (int k = 0; k < g.terms; ++k) set(k, g.amount[k], true);
+    term_scales(
+        g, [](int) { return T(0.0); }, ts);  // absolute laws read no face density
     for (int f = 0; f < nf; ++f) {
-      const T G = rate_at(f);
+      const T G = rate_at(g, ts, f);
       const Face<T> fc = face<T, false>(N, f, !(G < 0.0));
       F[f] = G * fc.phi, donor[f] = fc.cols[0];
     }

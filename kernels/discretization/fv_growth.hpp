@@ -71,6 +71,18 @@ class FvGrowth {
   template <class T>
   void growth_at_faces(const std::vector<Face<T>>& fc, const GrowthTerms<T>& g, std::vector<T>& G,
                        std::vector<T>& inv_integral) const;
+  // Per term k of a growth law: its scale a_k / I_k (normalized laws, I_k = sum_f s_k(d_f) phi_f dx_f from the face
+  // densities phi(f), 1 / I_k kept for the Jacobian) or a_k; a normalized term with I_k <= 0 has nothing to grow on.
+  template <class T>
+  struct TermScale {
+    T value, inv;
+    bool grows;
+  };
+  template <class T, class Phi>
+  void term_scales(const GrowthTerms<T>& g, Phi phi, TermScale<T>* ts) const;
+  // G(d_f) = sum over the growing terms of scale_k s_k(d_f), added in the terms' order.
+  template <class T>
+  T rate_at(const GrowthTerms<T>& g, const TermScale<T>* ts, int f) const;
 
   Limiter limiter_;
   const Grid* grid_ = nullptr;
