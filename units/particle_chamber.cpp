@@ -4,6 +4,7 @@
 #include <tuple>
 #include <type_traits>
 
+#include "chamber_outlet.hpp"
 #include "granuflow/errors.hpp"
 #include "granuflow/flowsheet.hpp"
 #include "granuflow/properties.hpp"
@@ -23,10 +24,10 @@ struct ParticleChamber::Work : Workspace {
   std::vector<Jet> cls_scratch;
   template <class T>
   struct Scratch {
-    std::vector<T> pm, spm, N, floor, dM, dW, dN, F, ones, temp, rate;
+    std::vector<T> pm, spm, N, floor, dM, dW, dN, F, ones, temp;
     std::vector<int> donor;
     void resize(int n) {
-      for (auto* v : {&pm, &spm, &N, &floor, &dM, &dW, &dN, &temp, &rate}) v->assign(n, T(0.0));
+      for (auto* v : {&pm, &spm, &N, &floor, &dM, &dW, &dN, &temp}) v->assign(n, T(0.0));
       F.assign(n + 1, T(0.0)), ones.assign(n + 1, T(1.0)), donor.assign(n + 1, -1);
     }
   };
@@ -167,15 +168,19 @@ void ParticleChamber::declare(UnitSpec& s, Settings& st) {
     inlets_.push_back(p);
   };
   auto outlet = [&](const std::string& name, Outlet& o) {
-    o.m = s.add_states(name + "_mdot", n_, StateKind::Algebraic, "kg/s", 1e-2);
-    if (wet_) o.w = s.add_states(name + "_water", n_, StateKind::Algebraic, "kg/s", 1e-3);
-    o.port = s.add_port(name, streams::solids(), PortDir::Out, n_);
-    s.set_port_grid(o.port, d);
+    o.rate = s.add_state(name + "_rate", StateKind::Algebraic, "1/s", 1e-3);
+    o.holdup = s.add_port(name + "_holdup", chamber_holdup(), PortDir::Out, n_);
+    s.set_port_grid(o.holdup, d);
     for (int i = 0; i < n_; ++i) {
-      s.provide(o.port, solids::mdot(i), o.m + i);
-      s.provide(o.port, solids::water(n_, i), wet_ ? o.w + i : sZero_);
+      s.provide(o.holdup, holdup_fields::mass(i), sM_ + i);
+      s.provide(o.holdup, holdup_fields::water(n_, i), wet_ ? sW_ + i : sZero_);
     }
-    s.provide(o.port, solids::T(n_), sT_);
+    s.provide(o.holdup, holdup_fields::T(n_), sT_);
+    s.provide(o.holdup, holdup_fields::rate(n_), o.rate);
+    ChamberOutletSpec spec{n_, wet_,
+                           &o == &discharge_out_ && discharge_ == Discharge::kClassified ? &classifier_ : nullptr, d};
+    s.add_companion(
+        {name, [spec](const std::string& owner) { return make_chamber_outlet(owner, spec); }, o.holdup, name});
   };
   if (role_ != ChamberRole::kGranulator) {
     inlet("in", false);
@@ -186,11 +191,6 @@ void ParticleChamber::declare(UnitSpec& s, Settings& st) {
 
   ClassLayout layout{n_, {sM_}, {}};
   if (wet_) layout.state_blocks.push_back(sW_);
-  for (const Outlet* o : {&exchange_, &discharge_out_}) {
-    if (!o->m) continue;
-    layout.state_blocks.push_back(o->m);
-    if (wet_) layout.state_blocks.push_back(o->w);
-  }
   for (PortId p : inlets_) {
     layout.field_blocks.push_back({p, solids::mdot(0)});
     if (wet_) layout.field_blocks.push_back({p, solids::water(n_, 0)});
@@ -222,7 +222,7 @@ void ParticleChamber::declare(UnitSpec& s, Settings& st) {
   if (spray_) o_g_ = s.add_output("G", "m/s");
   o_particles_ = s.add_output("particles", "-");
   if (discharge_ != Discharge::kNone) o_dis_ = s.add_output("discharge_mdot", "kg/s");
-  if (exchange_.m) o_exch_ = s.add_output("exchange_mdot", "kg/s");
+  if (exchange_.rate) o_exch_ = s.add_output("exchange_mdot", "kg/s");
   o_top_ = s.add_output("top_class_fraction", "-", OutputRole::kGridEnd);
   o_heat_ = s.add_output("heat_duty", "W");
   o_vapour_ = s.add_output("vapour_mdot", "kg/s");
@@ -320,6 +320,23 @@ kernels::Population::State<T> ParticleChamber::population_state(const Ctx<T>& c,
 }
 
 template <class T>
+const T* ParticleChamber::discharge_fractions(const Ctx<T>& c) const {
+  if (discharge_ != Discharge::kClassified) return nullptr;
+  Work& w = c.template ws<Work>();
+  if constexpr (std::is_same_v<T, double>)
+    return classifier_.fractions(c.p, w.cls);
+  else
+    return classifier_.fractions(c.p, w.cls, w.cls_scratch);
+}
+
+// What class i carries out through outlet `o`: the flows the outlet's companion computes (chamber_outlet.cpp).
+template <class T>
+std::pair<T, T> ParticleChamber::outlet_flow(const Ctx<T>& c, const Outlet& o, const T* frac, int i) const {
+  const T r = frac ? T(c.x(o.rate) * frac[i]) : c.x(o.rate);
+  return {r * c.x(sM_ + i), wet_ ? T(r * c.x(sW_ + i)) : T(0.0)};
+}
+
+template <class T>
 Status ParticleChamber::eval(const Ctx<T>& c) const {
   Work& w = c.template ws<Work>();
   auto& sc = w.template scratch<T>();
@@ -349,16 +366,13 @@ Status ParticleChamber::eval(const Ctx<T>& c) const {
       for (int i = 0; i < n_; ++i) sc.dM[i] += pm[i] * sc.dN[i];
     }
   }
-  // Outlet rates per class (fraction of the class leaving per second).
+  // Outlet rates (fraction of a class leaving per second, times the classifier's fraction f_i).
   T exch_rate(0.0);
-  if (exchange_.m) exch_rate = 1.0 / c.par(p_tau_);
-  const T* frac = nullptr;
-  if (discharge_ == Discharge::kClassified) {
-    if constexpr (std::is_same_v<T, double>)
-      frac = classifier_.fractions(c.p, w.cls);
-    else
-      frac = classifier_.fractions(c.p, w.cls, w.cls_scratch);
+  if (exchange_.rate) {
+    exch_rate = 1.0 / c.par(p_tau_);
+    c.res(exchange_.rate) = c.x(exchange_.rate) - exch_rate;
   }
+  const T* frac = discharge_fractions(c);
   if (discharge_ != Discharge::kNone) {
     if (controlled_) {
       const T mass = c.reduce(r_mass_, n_, [&](int i) { return M[i]; });
@@ -373,10 +387,10 @@ Status ParticleChamber::eval(const Ctx<T>& c) const {
       const T u = fed + m_sus - exch_rate * mass + (mass - m_set) / tau_c;
       const T eps = kValveSmoothing * m_set / tau_c;
       const T open = softplus(u, eps);
-      const T rate = (open - softplus(T(open - c.par(p_rmax_)), eps)) / (weighted + kMassFloor);
-      for (int i = 0; i < n_; ++i) sc.rate[i] = frac ? T(rate * frac[i]) : rate;
+      c.res(discharge_out_.rate) =
+          c.x(discharge_out_.rate) - (open - softplus(T(open - c.par(p_rmax_)), eps)) / (weighted + kMassFloor);
     } else {
-      for (int i = 0; i < n_; ++i) sc.rate[i] = frac ? T(c.par(p_k_) * frac[i]) : T(c.par(p_k_));
+      c.res(discharge_out_.rate) = c.x(discharge_out_.rate) - c.par(p_k_);
     }
   }
   T surface(0.0), m_water(0.0);
@@ -391,14 +405,9 @@ Status ParticleChamber::eval(const Ctx<T>& c) const {
       if (wet_) in_w += c.port(p, solids::water(n_, i));
     }
     for (const Outlet* o : {&exchange_, &discharge_out_}) {
-      if (!o->m) continue;
-      const T& r = o == &exchange_ ? exch_rate : sc.rate[i];
-      c.res(o->m + i) = c.x(o->m + i) - r * M[i];
-      out_m += c.x(o->m + i);
-      if (wet_) {
-        c.res(o->w + i) = c.x(o->w + i) - r * W[i];
-        out_w += c.x(o->w + i);
-      }
+      if (!o->rate) continue;
+      const auto [m, wo] = outlet_flow(c, *o, o == &discharge_out_ ? frac : nullptr, i);
+      out_m += m, out_w += wo;
     }
     c.res(sM_ + i) = c.xd(sM_ + i) - (sc.dM[i] + in_m - out_m);
     if (wet_) {
@@ -493,14 +502,8 @@ void ParticleChamber::init(InitCtx<T>& c) const {
   }
   c.x(sT_) = c.par(p_t_);
   if (sZero_) c.x(sZero_) = T(0.0);
-  for (const Outlet* o : {&exchange_, &discharge_out_}) {
-    if (!o->m) continue;
-    const T r = o == &exchange_ ? T(1.0 / c.par(p_tau_)) : (controlled_ ? T(0.0) : T(c.par(p_k_)));
-    for (int i = 0; i < n_; ++i) {
-      c.x(o->m + i) = r * c.x(sM_ + i);
-      if (wet_) c.x(o->w + i) = r * c.x(sW_ + i);
-    }
-  }
+  if (exchange_.rate) c.x(exchange_.rate) = 1.0 / c.par(p_tau_);
+  if (discharge_out_.rate) c.x(discharge_out_.rate) = controlled_ ? T(0.0) : T(c.par(p_k_));
 }
 
 template <class T>
@@ -533,13 +536,13 @@ void ParticleChamber::outputs(const Ctx<T>& c) const {
   if (spray_)  // Eq. (7.33), paper 003, with mu_2 of the class pivots
     c.out(o_g_) = any ? T(2.0 * spray_solids(c) / (pp_.envelope_density(c.shared) * kernels::kPi * mu[2])) : T(0.0);
   c.out(o_particles_) = mu[0];
-  auto outflow = [&](const Outlet& o) {
+  auto outflow = [&](const Outlet& o, const T* frac) {
     T m(0.0);
-    for (int i = 0; i < n_; ++i) m += c.x(o.m + i);
+    for (int i = 0; i < n_; ++i) m += outlet_flow(c, o, frac, i).first;
     return m;
   };
-  if (discharge_out_.m) c.out(o_dis_) = outflow(discharge_out_);
-  if (exchange_.m) c.out(o_exch_) = outflow(exchange_);
+  if (discharge_out_.rate) c.out(o_dis_) = outflow(discharge_out_, discharge_fractions(c));
+  if (exchange_.rate) c.out(o_exch_) = outflow(exchange_, static_cast<const T*>(nullptr));
   c.out(o_top_) = mass > 0.0 ? T(M[n_ - 1] / mass) : T(0.0);
   c.out(o_hold_solids_) = mass;
   c.out(o_hold_water_) = water;
@@ -561,6 +564,7 @@ ParticleChamber::Boundary<T> ParticleChamber::boundary(const Ctx<T>& c) const {
   const T cp_s = c.sh(pp_.cp_s), cp_l = c.par(p_cpl_);
   const T& t = c.x(sT_);
   T vapour(0.0), h_in(0.0), h_out(0.0), dh(0.0), capacity(0.0);
+  const T* frac = discharge_fractions(c);
   for (int i = 0; i < n_; ++i) {
     const T wi = wet_ ? c.x(sW_ + i) : T(0.0);
     capacity += c.x(sM_ + i) * cp_s + wi * cp_l;
@@ -571,8 +575,11 @@ ParticleChamber::Boundary<T> ParticleChamber::boundary(const Ctx<T>& c) const {
       h_in += (c.port(p, solids::mdot(i)) * cp_s + wf * cp_l) * (c.port(p, solids::T(n_)) - props::kT0);
       if (!wet_) vapour += wf;  // fed water evaporates at once
     }
-    for (const Outlet* o : {&exchange_, &discharge_out_})
-      if (o->m) h_out += (c.x(o->m + i) * cp_s + (wet_ ? c.x(o->w + i) : T(0.0)) * cp_l) * (t - props::kT0);
+    for (const Outlet* o : {&exchange_, &discharge_out_}) {
+      if (!o->rate) continue;
+      const auto [m, wo] = outlet_flow(c, *o, o == &discharge_out_ ? frac : nullptr, i);
+      h_out += (m * cp_s + wo * cp_l) * (t - props::kT0);
+    }
   }
   dh += capacity * c.xd(sT_);
   Boundary<T> b;

@@ -2,8 +2,9 @@
 // shared implementation of the paper-003 units granulator (a whole continuous chamber), spray_compartment and
 // drying_compartment (the two zones of Eqs. (7.37)-(7.39)). Not registered itself; each unit file chooses a Role.
 //
-// States per class i: dry solids M_i (kg), optionally water W_i (kg, setting drying: first_order), and the flows of
-// every outlet (algebraic, kg/s). Mechanisms:
+// States per class i: dry solids M_i (kg), optionally water W_i (kg, setting drying: first_order); per outlet one
+// rate r (algebraic, 1/s). An outlet's flows r_i M_i and r_i W_i are computed by the outlet's companion unit
+// (chamber_outlet.hpp, "<chamber>:<outlet>"), inline, so they are no unknowns of the Newton system. Mechanisms:
 //  * layering growth from a spray (granulator, spray compartment): the sprayed solids M_sus = m_spray w_spray spread
 //    over the particle surface, G = 2 M_sus / (rho pi mu_2) the same for every particle (paper 003, Eqs.
 //    (7.32)-(7.34)), on the finite-volume scheme of the population engine (kernels/discretization/fv_growth.hpp)
@@ -30,6 +31,7 @@
 #pragma once
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "classifier.hpp"
@@ -66,9 +68,13 @@ class ParticleChamber : public UnitBase<ParticleChamber> {
 
  private:
   struct Outlet {
-    PortId port;
-    StateId m, w;  // per-class flows of solids and water (w: -1 when dry)
+    PortId holdup;  // what the outlet's companion reads: the hold-up and the rate
+    StateId rate;   // 1/s: class i leaves at rate * f_i (f_i: the classifier's fractions, or 1)
   };
+  template <class T>
+  const T* discharge_fractions(const Ctx<T>& c) const;  // nullptr unless the discharge classifies
+  template <class T>
+  std::pair<T, T> outlet_flow(const Ctx<T>& c, const Outlet& o, const T* frac, int i) const;  // solids, water
   // What crosses the flowsheet's boundary in this unit per second (quad(), outputs()).
   template <class T>
   struct Boundary {

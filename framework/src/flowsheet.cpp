@@ -93,12 +93,29 @@ void Settings::check_all_used() const {
 // ---------------------------------------------------------------- Flowsheet
 void Flowsheet::add_unit(const std::string& name, std::unique_ptr<Unit> unit, Settings settings) {
   if (finalized_) throw std::logic_error("add_unit after finalize");
-  if (name.empty() || name.find('.') != std::string::npos)
-    throw ConfigError("unit name '" + name + "': must be non-empty and contain no '.'");
+  if (name.empty() || name.find_first_of(".:") != std::string::npos)
+    throw ConfigError("unit name '" + name + "': must be non-empty and contain no '.' or ':'");
+  const std::string where = settings.where();
+  add_instance(name, std::move(unit), std::move(settings));
+  const int owner = static_cast<int>(units_.size()) - 1;
+  const auto companions = units_[owner].spec.companions();  // a copy: units_ grows below
+  for (const auto& c : companions) {
+    const std::string cname = name + ":" + c.name;
+    add_instance(cname, c.make(name), Settings(where + " (" + c.name + ")", {}));
+    const int k = static_cast<int>(units_.size()) - 1;
+    units_[k].owner = owner;
+    units_[k].state_prefix = name + "." + c.name + "_";
+    connect(name + "." + units_[owner].spec.ports()[c.from.i].name, cname + ".in");
+    aliases_[{owner, c.as}] = split_port(cname + ".out");
+  }
+}
+
+void Flowsheet::add_instance(const std::string& name, std::unique_ptr<Unit> unit, Settings settings) {
   for (const auto& u : units_)
     if (u.name == name) throw ConfigError("unit '" + name + "' is defined twice");
   UnitInstance inst;
   inst.name = name;
+  inst.state_prefix = name + ".";
   inst.unit = std::move(unit);
   settings.attach(this);
   inst.unit->declare(inst.spec, settings);
@@ -116,11 +133,18 @@ void Flowsheet::add_unit(const std::string& name, std::unique_ptr<Unit> unit, Se
   units_.push_back(std::move(inst));
 }
 
+std::string Flowsheet::port_label(int u, int p) const {
+  for (const auto& [key, target] : aliases_)
+    if (target == std::make_pair(u, p)) return units_[key.first].name + "." + key.second;
+  return units_[u].name + "." + units_[u].spec.ports()[p].name;
+}
+
 int Flowsheet::unit_index(const std::string& name) const {
   for (size_t i = 0; i < units_.size(); ++i)
     if (units_[i].name == name) return static_cast<int>(i);
   std::string allowed;
-  for (const auto& u : units_) allowed += (allowed.empty() ? "" : ", ") + u.name;
+  for (const auto& u : units_)
+    if (u.owner < 0) allowed += (allowed.empty() ? "" : ", ") + u.name;
   throw ConfigError("unknown unit '" + name + "' (units: " + allowed + ")");
 }
 
@@ -132,8 +156,11 @@ std::pair<int, int> Flowsheet::split_port(const std::string& qualified) const {
   const auto& ports = units_[u].spec.ports();
   for (size_t p = 0; p < ports.size(); ++p)
     if (ports[p].name == port) return {u, static_cast<int>(p)};
+  if (auto a = aliases_.find({u, port}); a != aliases_.end()) return a->second;
   std::string allowed;
   for (const auto& p : ports) allowed += (allowed.empty() ? "" : ", ") + p.name;
+  for (const auto& [key, target] : aliases_)
+    if (key.first == u) allowed += (allowed.empty() ? "" : ", ") + key.second;
   throw ConfigError("unit '" + units_[u].name + "' has no port '" + port +
                     "' (ports: " + (allowed.empty() ? "none" : allowed) + ")");
 }
@@ -203,7 +230,7 @@ void Flowsheet::finalize() {
     const auto& ports = inst.spec.ports();
     inst.port_index.assign(ports.size(), {});
     for (size_t p = 0; p < ports.size(); ++p) {
-      const std::string where = "port " + inst.name + "." + ports[p].name;
+      const std::string where = "port " + port_label(static_cast<int>(u), static_cast<int>(p));
       const bool open = inst.peers[p].first < 0;
       if (open && ports[p].dir != PortDir::Probe && !ports[p].optional)
         throw ConfigError(where + " (" + to_string(ports[p].kind) + ", " + to_string(ports[p].dir) +
@@ -536,7 +563,7 @@ std::vector<double> Flowsheet::breakpoints(double t_end) const {
 std::vector<std::string> Flowsheet::state_names() const {
   std::vector<std::string> v(n_states_);
   for (const auto& u : units_)
-    for (size_t k = 0; k < u.spec.states().size(); ++k) v[u.offset + k] = u.name + "." + u.spec.states()[k].name;
+    for (size_t k = 0; k < u.spec.states().size(); ++k) v[u.offset + k] = u.state_prefix + u.spec.states()[k].name;
   return v;
 }
 

@@ -229,6 +229,7 @@ void register_flowsheet(py::module_& m) {
            [](const Scene& s) {
              py::dict d;
              for (const auto& u : s.flowsheet->units()) {
+               if (u.owner >= 0) continue;  // a companion: part of its owner
                py::dict st;
                for (const auto& x : u.settings) st[py::str(x.name)] = setting_to_string(x.value);
                d[py::str(u.name)] = py::make_tuple(u.unit->type(), st);

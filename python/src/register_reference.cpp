@@ -4,6 +4,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <map>
 #include <string>
 
@@ -62,17 +63,34 @@ py::dict unit_reference(const std::string& type, const std::map<std::string, std
   Flowsheet fs("unit_reference");
   if (type != "particles") fs.add_unit("particles", reg.create("particles"), Settings("particles", {}));
   fs.add_unit(type, reg.create(type, "unit_reference"), Settings("unit_reference(" + type + ").settings", given));
-  const UnitInstance& inst = fs.units().back();
+  const UnitInstance& inst = fs.units()[fs.unit_index(type)];
   const UnitSpec& spec = inst.spec;
   py::list ports, params, states, outputs;
-  for (const auto& p : spec.ports())
-    ports.append(py::dict("name"_a = p.name, "kind"_a = to_string(p.kind), "direction"_a = to_string(p.dir),
+  auto port_dict = [&](const std::string& name, const PortSpec& p) {
+    ports.append(py::dict("name"_a = name, "kind"_a = to_string(p.kind), "direction"_a = to_string(p.dir),
                           "classes"_a = p.classes, "optional"_a = p.optional));
+  };
+  // A companion's outlet is the unit's port to a user (the hold-up port that feeds the companion is internal).
+  const auto& comps = spec.companions();
+  for (size_t k = 0; k < spec.ports().size(); ++k) {
+    const auto c = std::find_if(comps.begin(), comps.end(), [&](const auto& x) { return x.from.i == int(k); });
+    if (c == comps.end()) {
+      port_dict(spec.ports()[k].name, spec.ports()[k]);
+      continue;
+    }
+    const UnitSpec& cs = fs.units()[fs.unit_index(type) + 1 + (c - comps.begin())].spec;
+    for (const auto& p : cs.ports())
+      if (p.name == "out") port_dict(c->as, p);
+  }
   for (const auto& p : spec.params()) params.append(param_dict(p));
   for (const auto& s : spec.states())
     states.append(py::dict("name"_a = s.name,
                            "kind"_a = s.kind == StateKind::Differential ? "differential" : "algebraic",
                            "unit"_a = s.unit, "scale"_a = s.scale));
+  for (size_t k = 0; k < comps.size(); ++k)  // a companion's states carry the unit's name, computed inline
+    for (const auto& s : fs.units()[fs.unit_index(type) + 1 + k].spec.states())
+      states.append(py::dict("name"_a = comps[k].name + "_" + s.name, "kind"_a = "algebraic, inline", "unit"_a = s.unit,
+                             "scale"_a = s.scale));
   for (const auto& o : spec.outputs()) {
     bool quad = false;
     for (const auto& q : spec.quadratures()) quad = quad || q.output.i == &o - spec.outputs().data();
@@ -153,7 +171,7 @@ void register_reference(py::module_& m) {
       [](const Scene& s) {
         py::dict d;
         for (const auto& u : s.flowsheet->units()) {
-          for (const auto& x : u.spec.states()) d[py::str(u.name + "." + x.name)] = x.unit;
+          for (const auto& x : u.spec.states()) d[py::str(u.state_prefix + x.name)] = x.unit;
           for (const auto& x : u.spec.outputs()) d[py::str(u.name + "." + x.name)] = x.unit;
         }
         return d;

@@ -199,6 +199,65 @@ def test_an_ideal_sieve_splits_at_its_cut_sizes():
     assert r["sieve.product_mdot_16"][-1] == pytest.approx(0.5 * r["split.out1_mdot_16"][-1], rel=1e-12)
 
 
+# -- a chamber's outlets: computed inline by companion units ---------------------------------------------------------
+CLASSIFIED = """
+scene: classified
+t_end: 2 h
+output: {n: 5}
+particles:
+  settings: {classes: 20, d_min: 1.0e-4, d_max: 4.0e-3}
+  params: {rho_s: 1500 kg/m3}
+units:
+  gran:
+    type: granulator
+    settings: {discharge: classified, bed_mass: controlled, drying: first_order}
+    params: {bed_mass: 50 kg, M_set: 50 kg, d50_0: 800 um, sigma_0: 1.5, class_d_cut: 1.0 mm, X0: 0.05}
+  product: {type: solids_product}
+connections: [gran.discharge -> product.in]
+"""
+
+
+def test_outlet_flows_are_computed_inline_from_the_hold_up_and_one_rate():
+    """The discharge's per-class flows are no unknowns of the Newton system: the companion unit gran:discharge
+    computes r f_i M_i and r f_i W_i from the granulator's hold-up and its one rate state, and they keep the names
+    gran.discharge_mdot_i, gran.discharge_water_i."""
+    fs = loop(20)
+    r = fs.simulate(t_end=3 * 3600.0, n_out=4)
+    names = fs.state_names
+    assert {f"gran.discharge_mdot_{i}" for i in range(20)} <= set(names) and "gran.discharge_rate" in names
+    assert not any(":" in k for k in names)
+    # the Newton system: 20 class masses, T, the dry chamber's zero water, the rate and the product's states;
+    # the 20 flows are among the inlined states, with the sieve's, the mill's and the mixer's
+    assert r.stats["states"] < 30 and r.stats["states"] + r.stats["explicit_states"] == len(names)
+    for k in range(1, 4):
+        for i in range(20):
+            want = r["gran.discharge_rate"][k] * r[f"gran.M_{i}"][k]
+            assert r[f"gran.discharge_mdot_{i}"][k] == pytest.approx(want, rel=1e-13, abs=1e-300)
+        total = sum(r[f"gran.discharge_mdot_{i}"][k] for i in range(20))
+        assert r["gran.discharge_mdot"][k] == pytest.approx(total, rel=1e-13)
+    # a classified discharge of a wet bed: class i leaves at r f_i, water with its solids, fine classes stay
+    fs = gf.load_text(CLASSIFIED, "classified")
+    r = fs.simulate()
+    frac = []
+    for i in range(20):
+        m, w = r[f"gran.discharge_mdot_{i}"][-1], r[f"gran.discharge_water_{i}"][-1]
+        assert w / m == pytest.approx(r[f"gran.W_{i}"][-1] / r[f"gran.M_{i}"][-1], rel=1e-12)
+        frac.append(m / (r["gran.discharge_rate"][-1] * r[f"gran.M_{i}"][-1]))
+    assert frac[0] < 1e-3 and frac[-1] > 0.999 and np.all(np.diff(frac) > -1e-15)  # a separation curve
+    assert r["gran.discharge_mdot"][-1] == pytest.approx(r["product.mdot"][-1], rel=1e-13)
+    assert r["gran.mass"][-1] == pytest.approx(50.0, rel=1e-3)  # the controller holds the bed
+
+
+def test_a_chamber_outlet_is_named_by_its_owner_in_errors():
+    text = CLASSIFIED.replace("connections: [gran.discharge -> product.in]", "connections: []")
+    with pytest.raises(gf.ConfigError, match=r"port gran\.discharge \(solids, out\) is not connected"):
+        gf.load_text(text, "open")
+    with pytest.raises(gf.ConfigError, match=r"has no port 'dis' \(ports: .*discharge"):
+        gf.load_text(CLASSIFIED.replace("gran.discharge ->", "gran.dis ->"), "typo")
+    with pytest.raises(gf.ConfigError, match=r"unit name 'gran:x'.*no '\.' or ':'"):
+        gf.load_text(CLASSIFIED.replace("  gran:\n", "  gran:x:\n"), "colon")
+
+
 # -- layering without recycle: analytic surface-proportional growth --------------------------------------------------
 def test_batch_layering_follows_the_analytic_surface_proportional_growth():
     """Paper 003, Eqs. (7.33)-(7.34): every particle grows at G = 2 M_sus / (rho pi mu_2), so the number distribution

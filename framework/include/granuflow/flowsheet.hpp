@@ -59,6 +59,10 @@ struct UnitInstance {
   std::vector<std::pair<int, int>> peers;              // per port: (unit index, port index) of the connected port
   int quad_offset = 0;                                 // global index of own quadrature 0
   int shared = -1;  // unit index of the particle system whose parameters it reads (UnitSpec::use_shared_params)
+  int owner = -1;   // a companion (UnitSpec::add_companion): the unit that brought it
+  // Qualifies the unit's state names: "name.", or for a companion "owner.<companion>_" (a granulator's discharge
+  // flows are "gran.discharge_mdot_i" whichever unit computes them).
+  std::string state_prefix;
 };
 
 class Flowsheet {
@@ -69,7 +73,8 @@ class Flowsheet {
 
   const std::string& name() const { return name_; }
 
-  // Building. add_unit calls unit->declare(); connect takes "unit.port" on both sides, out -> in.
+  // Building. add_unit calls unit->declare() and adds the unit's companions after it; connect takes "unit.port" on
+  // both sides, out -> in (a companion's outlet under its owner's name for it).
   void add_unit(const std::string& name, std::unique_ptr<Unit> unit, Settings settings);
   void connect(const std::string& from, const std::string& to);
   // Resolves ports (every port connected once, matching kinds and class counts, every field provided by
@@ -114,6 +119,8 @@ class Flowsheet {
   void check_units() const;
   // "unit NAME (TYPE): message" for a ConfigError a unit threw relative to itself.
   std::string qualify_unit_message(int u, const std::string& message) const;
+  // "unit.port" as a scene names it: a companion's outlet by its owner's name for it.
+  std::string port_label(int u, int p) const;
   std::vector<int> linked_targets(int source) const;
   // Breakpoints of all inputs inside (0, t_end).
   std::vector<double> breakpoints(double t_end) const;
@@ -135,13 +142,15 @@ class Flowsheet {
 
  private:
   std::pair<int, int> split_port(const std::string& qualified) const;
+  void add_instance(const std::string& name, std::unique_ptr<Unit> unit, Settings settings);
   double linked_value(int source) const;
   int resolve_field(int u, int p, int f, int depth) const;
   void store_param(int id, double value_si);  // bounds-checked, ignores links
   std::string name_;
   std::vector<UnitInstance> units_;
   std::vector<std::pair<std::pair<int, int>, std::pair<int, int>>> connections_;
-  std::vector<std::pair<int, int>> param_table_;  // global param id -> (unit, local)
+  std::map<std::pair<int, std::string>, std::pair<int, int>> aliases_;  // (owner, port name) -> companion's outlet
+  std::vector<std::pair<int, int>> param_table_;                        // global param id -> (unit, local)
   std::vector<int> state_owner_;
   std::vector<std::pair<int, int>> links_;  // (target, source) parameter ids
   int n_states_ = 0;

@@ -17,6 +17,7 @@
 // declared: everything a run computes or caches lives in the unit's Workspace, one per run, so one flowsheet
 // can be simulated from several threads at once.
 #pragma once
+#include <functional>
 #include <memory>
 #include <string>
 #include <type_traits>
@@ -123,6 +124,7 @@ struct ClassLayout {
 };
 
 class Settings;  // scene settings of one unit (flowsheet.hpp)
+class Unit;
 
 // What a unit declares.
 class UnitSpec {
@@ -183,6 +185,19 @@ class UnitSpec {
   // `solver.linear_solver: auto` picks that solver for a system past dense_limit that holds such a unit.
   void set_preconditioner() { preconditioner_ = true; }
   bool has_preconditioner() const { return preconditioner_; }
+  // A zero-hold-up unit that comes with this one: the valve of an outlet whose flows are explicit in the unit's
+  // hold-up (r M_i). Declared explicit, it is evaluated inline, so those flows are no unknowns of the Newton system;
+  // as states of the unit itself they would double a particle unit's share of it. The flowsheet adds it right after
+  // its owner as "<owner>:<name>", connects the owner's port `from` to its port "in", and takes the owner's port
+  // name `as` in connections for its port "out". `make` receives the owner's instance name.
+  struct Companion {
+    std::string name;
+    std::function<std::unique_ptr<Unit>(const std::string& owner)> make;
+    PortId from;
+    std::string as;
+  };
+  void add_companion(Companion c) { companions_.push_back(std::move(c)); }
+  const std::vector<Companion>& companions() const { return companions_; }
 
   const std::vector<StateSpec>& states() const { return states_; }
   const std::vector<ParamSpec>& params() const { return params_; }
@@ -202,6 +217,7 @@ class UnitSpec {
   std::vector<QuadSpec> quads_;
   std::vector<std::string> reductions_;
   ClassLayout classes_;
+  std::vector<Companion> companions_;
   std::string shared_;
   bool explicit_ = false;
   bool preconditioner_ = false;

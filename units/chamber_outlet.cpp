@@ -1,0 +1,100 @@
+#include "chamber_outlet.hpp"
+
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+#include "classifier.hpp"
+#include "granuflow/flowsheet.hpp"
+
+namespace granuflow::units {
+
+StreamKind chamber_holdup() {
+  static const StreamType t{"chamber hold-up",
+                            "a chamber's state for its outlet: per class dry solids and water, T, rate", [](int n) {
+                              std::vector<FieldSpec> f;
+                              append_class_fields(f, "mass", n, "kg");
+                              append_class_fields(f, "water", n, "kg");
+                              f.push_back({"T", "K"});
+                              f.push_back({"rate", "1/s"});
+                              return f;
+                            }};
+  return &t;
+}
+
+namespace {
+
+struct Work : Workspace {
+  Classifier::Cache cls;
+  std::vector<Jet> cls_scratch;
+};
+
+class ChamberOutlet : public UnitBase<ChamberOutlet> {
+ public:
+  ChamberOutlet(std::string owner, ChamberOutletSpec spec) : owner_(std::move(owner)), spec_(std::move(spec)) {}
+  std::string type() const override { return "chamber_outlet"; }
+  void declare(UnitSpec& s, Settings&) override {
+    const int n = spec_.classes;
+    if (spec_.classifier) s.use_shared_params(owner_);  // the separation curve's parameters are the owner's
+    sM_ = s.add_states("mdot", n, StateKind::Algebraic, "kg/s", 1e-2);
+    if (spec_.wet) sW_ = s.add_states("water", n, StateKind::Algebraic, "kg/s", 1e-3);
+    in_ = s.add_port("in", chamber_holdup(), PortDir::In, n);
+    s.set_port_grid(in_, spec_.diameters);
+    const PortId out = s.add_port("out", streams::solids(), PortDir::Out, n);
+    s.set_port_grid(out, spec_.diameters);
+    for (int i = 0; i < n; ++i) {
+      s.provide(out, solids::mdot(i), sM_ + i);
+      if (spec_.wet)
+        s.provide(out, solids::water(n, i), sW_ + i);
+      else
+        s.forward(out, solids::water(n, i), in_, holdup_fields::water(n, i));  // the dry chamber's zero
+    }
+    s.forward(out, solids::T(n), in_, holdup_fields::T(n));
+    s.set_explicit();
+    ClassLayout layout{n, {sM_}, {{in_, holdup_fields::mass(0)}}};
+    if (spec_.wet) layout.state_blocks.push_back(sW_), layout.field_blocks.push_back({in_, holdup_fields::water(n, 0)});
+    s.set_classes(layout);
+  }
+  std::unique_ptr<Workspace> workspace() const override { return std::make_unique<Work>(); }
+
+  template <class T>
+  Status eval(const Ctx<T>& c) const {
+    const int n = spec_.classes;
+    const T* frac = nullptr;
+    if (spec_.classifier) {
+      Work& w = c.template ws<Work>();
+      if constexpr (std::is_same_v<T, double>)
+        frac = spec_.classifier->fractions(c.shared, w.cls);
+      else
+        frac = spec_.classifier->fractions(c.shared, w.cls, w.cls_scratch);
+    }
+    const T& r = c.port(in_, holdup_fields::rate(n));
+    for (int i = 0; i < n; ++i) {
+      const T ri = frac ? T(r * frac[i]) : r;
+      c.res(sM_ + i) = c.x(sM_ + i) - ri * c.port(in_, holdup_fields::mass(i));
+      if (spec_.wet) c.res(sW_ + i) = c.x(sW_ + i) - ri * c.port(in_, holdup_fields::water(n, i));
+    }
+    return Status::kOk;
+  }
+  template <class T>
+  void init(InitCtx<T>& c) const {  // evaluated inline; these only fill a run without inlining's first guess
+    for (int i = 0; i < spec_.classes; ++i) {
+      c.x(sM_ + i) = T(0.0);
+      if (spec_.wet) c.x(sW_ + i) = T(0.0);
+    }
+  }
+
+ private:
+  std::string owner_;
+  ChamberOutletSpec spec_;
+  StateId sM_, sW_;
+  PortId in_;
+};
+
+}  // namespace
+
+std::unique_ptr<Unit> make_chamber_outlet(const std::string& owner, ChamberOutletSpec spec) {
+  return std::make_unique<ChamberOutlet>(owner, std::move(spec));
+}
+
+}  // namespace granuflow::units

@@ -1,0 +1,37 @@
+// The outlet of a particle chamber (particle_chamber.hpp) as its zero-hold-up companion unit (UnitSpec::add_companion):
+// from the chamber's hold-up M_i, W_i and its outlet rate r (per second), the flows
+//     mdot_i = r f_i M_i,   water_i = r f_i W_i,
+// f_i the cell fractions of the chamber's classifying discharge (1 for a well-mixed outlet). These flows are explicit
+// in the chamber's states, so as an explicit unit they are evaluated inline and never enter the Newton system: the
+// chamber's own unknowns are its hold-up and one rate per outlet, not its hold-up and every outlet flow.
+#pragma once
+#include <memory>
+#include <string>
+
+#include "granuflow/stream.hpp"
+#include "granuflow/unit.hpp"
+
+namespace granuflow::units {
+
+class Classifier;
+
+// A chamber's state as its outlets read it: per class dry-solid and water mass (kg), temperature (K) and the rate
+// of one outlet (1/s).
+StreamKind chamber_holdup();
+namespace holdup_fields {
+inline int mass(int i) { return i; }
+inline int water(int classes, int i) { return classes + i; }
+inline int T(int classes) { return 2 * classes; }
+inline int rate(int classes) { return 2 * classes + 1; }
+}  // namespace holdup_fields
+
+struct ChamberOutletSpec {
+  int classes = 0;
+  bool wet = false;                        // per-class water flows (else the chamber's zero water passes through)
+  const Classifier* classifier = nullptr;  // the owner's separation curve, read with the owner's parameters
+  std::vector<double> diameters;           // pivot diameters of the size grid (m)
+};
+
+std::unique_ptr<Unit> make_chamber_outlet(const std::string& owner, ChamberOutletSpec spec);
+
+}  // namespace granuflow::units
