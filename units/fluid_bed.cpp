@@ -5,6 +5,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "chamber_outlet.hpp"
 #include "granuflow/errors.hpp"
 #include "granuflow/flowsheet.hpp"
 #include "granuflow/properties.hpp"
@@ -113,8 +114,7 @@ class FluidBed : public UnitBase<FluidBed> {
     if (discharge) {
       p_kdis_ = s.add_param({"k_discharge", "1/s", 1e-3, 0.0, 10.0,
                              "discharge rate: fraction of the hold-up leaving per second", "operating input"});
-      sDM_ = s.add_states("discharge_mdot", n_, StateKind::Algebraic, "kg/s", 1e-2);
-      sDW_ = s.add_states("discharge_water", n_, StateKind::Algebraic, "kg/s", 1e-3);
+      sRate_ = s.add_state("discharge_rate", StateKind::Algebraic, "1/s", 1e-3);
     }
 
     const std::vector<double>& d = grid_->diameter_pivots();
@@ -128,14 +128,18 @@ class FluidBed : public UnitBase<FluidBed> {
     s.provide(s.add_port("heat", streams::heat(), PortDir::In, 0, true), heat::kQ, sQ_);
     feed_ = s.add_port("feed", streams::solids(), PortDir::In, n_, true);
     s.set_port_grid(feed_, d);
-    if (discharge) {
-      const PortId out = s.add_port("discharge", streams::solids(), PortDir::Out, n_);
-      s.set_port_grid(out, d);
+    if (discharge) {  // the flows k M_i, k W_i: computed inline by the companion "<bed>:discharge"
+      const PortId hold = s.add_port("discharge_holdup", chamber_holdup(), PortDir::Out, n_);
+      s.set_port_grid(hold, d);
       for (int i = 0; i < n_; ++i) {
-        s.provide(out, solids::mdot(i), sDM_ + i);
-        s.provide(out, solids::water(n_, i), sDW_ + i);
+        s.provide(hold, holdup_fields::mass(i), sM_ + i);
+        s.provide(hold, holdup_fields::water(n_, i), sW_ + i);
       }
-      s.provide(out, solids::T(n_), sT_);
+      s.provide(hold, holdup_fields::T(n_), sT_);
+      s.provide(hold, holdup_fields::rate(n_), sRate_);
+      const ChamberOutletSpec spec{n_, true, nullptr, d};
+      s.add_companion({"discharge", [spec](const std::string& owner) { return make_chamber_outlet(owner, spec); }, hold,
+                       "discharge"});
     }
     const PortId probe = s.add_port("state", paper001::holdup_stream(), PortDir::Probe, n_);
     s.set_port_grid(probe, d);
@@ -155,7 +159,6 @@ class FluidBed : public UnitBase<FluidBed> {
                         {wet_, wetting::Xwet(n_, 0)},
                         {feed_, solids::mdot(0)},
                         {feed_, solids::water(n_, 0)}}};
-    if (discharge) layout.state_blocks.push_back(sDM_), layout.state_blocks.push_back(sDW_);
     s.set_classes(layout);
     r_surface_ = s.add_reduction("particle surface");
     r_drying_ = s.add_reduction("drying");
@@ -229,15 +232,12 @@ class FluidBed : public UnitBase<FluidBed> {
     const T m_fed = c.reduce(r_feed_, n_, [&](int i) { return fed ? c.port(feed_, solids::mdot(i)) : T(0.0); });
     const T w_fed =
         c.reduce(r_feed_water_, n_, [&](int i) { return fed ? c.port(feed_, solids::water(n_, i)) : T(0.0); });
-    const T k_out = sDM_ ? c.par(p_kdis_) : T(0.0);
+    const T k_out = sRate_ ? c.x(sRate_) : T(0.0);
+    if (sRate_) c.res(sRate_) = c.x(sRate_) - c.par(p_kdis_);
     for (int i = 0; i < n_; ++i) {
       T in_m(0.0), in_w(0.0), out_m(0.0), out_w(0.0);
       if (fed) in_m = c.port(feed_, solids::mdot(i)), in_w = c.port(feed_, solids::water(n_, i));
-      if (sDM_) {
-        out_m = c.x(sDM_ + i), out_w = c.x(sDW_ + i);
-        c.res(sDM_ + i) = c.x(sDM_ + i) - k_out * M[i];  // a well-mixed outlet: every class alike
-        c.res(sDW_ + i) = c.x(sDW_ + i) - k_out * W[i];
-      }
+      if (sRate_) out_m = k_out * M[i], out_w = k_out * W[i];              // a well-mixed outlet: every class alike
       c.res(sM_ + i) = c.xd(sM_ + i) - (pm[i] * sc.dN[i] + in_m - out_m);  // Eq. (20), paper 001, in mass
       c.res(sW_ + i) = c.xd(sW_ + i) - (deposit(c, i, wet) - sc.dry[i] + sc.dW[i] + in_w - out_w);  // Eq. (58)
     }
@@ -247,7 +247,7 @@ class FluidBed : public UnitBase<FluidBed> {
     // discharge takes its share of the bed's.
     T h_flow(0.0);
     if (fed) h_flow += (m_fed * cp_s + w_fed * c.par(p_cpl_)) * (c.port(feed_, solids::T(n_)) - props::kT0);
-    if (sDM_) h_flow -= k_out * c.x(sH_);
+    if (sRate_) h_flow -= k_out * c.x(sH_);
     c.res(sH_) = c.xd(sH_) - (dep * props::liquid_water_enthalpy(t_liq, c.par(p_cpl_)) -
                               c.x(sVap_) * props::vapour_enthalpy(t_s) + c.x(sQ_) + h_flow);
     c.res(sT_) = c.x(sH_) - capacity * (t_s - props::kT0);  // Eq. (60), paper 001
@@ -305,9 +305,7 @@ class FluidBed : public UnitBase<FluidBed> {
     c.x(sU0_) = T(0.5);
     c.x(sVap_) = T(0.0);
     c.x(sQ_) = T(0.0);
-    if (sDM_)
-      for (int i = 0; i < n_; ++i)
-        c.x(sDM_ + i) = c.par(p_kdis_) * c.x(sM_ + i), c.x(sDW_ + i) = c.par(p_kdis_) * c.x(sW_ + i);
+    if (sRate_) c.x(sRate_) = c.par(p_kdis_);
   }
 
   template <class T>
@@ -457,7 +455,7 @@ class FluidBed : public UnitBase<FluidBed> {
   StateId sM_, sW_, sH_, sT_, sU0_, sVap_, sQ_;
   PortId wet_, gas_, inlet_, feed_;
   ParamId p_kdis_;
-  StateId sDM_, sDW_;  // discharge flows, when the bed discharges
+  StateId sRate_;  // the discharge's fraction of the hold-up per second, when the bed discharges
   ReductionId r_surface_, r_drying_, r_heat_, r_deposit_, r_capacity_, r_feed_, r_feed_water_;
   std::vector<OutputId> o_quantiles_;
   OutputId o_moisture_, o_moisture_wet_, o_particles_, o_top_, o_reg_eta_, o_reg_a_, o_water_, o_solids_, o_energy_,

@@ -246,6 +246,14 @@ def test_outlet_flows_are_computed_inline_from_the_hold_up_and_one_rate():
     assert frac[0] < 1e-3 and frac[-1] > 0.999 and np.all(np.diff(frac) > -1e-15)  # a separation curve
     assert r["gran.discharge_mdot"][-1] == pytest.approx(r["product.mdot"][-1], rel=1e-13)
     assert r["gran.mass"][-1] == pytest.approx(50.0, rel=1e-3)  # the controller holds the bed
+    # paper 001's fluid bed discharges the same way: k M_i and k W_i, computed by bed:discharge
+    fs = gf.load(os.path.join(ROOT, "flowsheets", "continuous_drying_bed.yaml"))
+    r = fs.simulate(t_end=1800.0, n_out=3)
+    assert r["bed.discharge_rate"][-1] == pytest.approx(1e-3, rel=1e-14)
+    for i in range(12):
+        for q, hold in (("mdot", "M"), ("water", "W")):
+            want = 1e-3 * r[f"bed.{hold}_{i}"][-1]
+            assert r[f"bed.discharge_{q}_{i}"][-1] == pytest.approx(want, rel=1e-13, abs=1e-300)
 
 
 def test_a_chamber_outlet_is_named_by_its_owner_in_errors():
