@@ -333,6 +333,7 @@ SimResult simulate_ida(Flowsheet& fs, const SimOptions& opt, const std::string& 
       block = detail::consistent_start(sys, user.cache, t0, ewt.data(), y.data(), yp.data(),
                                        seg == 0 && !j0.empty() ? j0.data() : nullptr);
       if (block > 0) {
+        ++res.stats.newton_starts;
         check(IDAReInit(mem, t0, y.v, yp.v), "IDAReInit");
         if (nq > 0) check(IDAQuadReInit(mem, q.v), "IDAQuadReInit");
         ida.tune_refactoring(block);
@@ -345,6 +346,7 @@ SimResult simulate_ida(Flowsheet& fs, const SimOptions& opt, const std::string& 
       // on y', whose correction is measured times h_ic. 1 % of the segment (15 residuals there); not the first
       // output time, so that results do not depend on which output times are asked for.
       const double tout1 = t0 + 0.01 * (t1 - t0);
+      ++res.stats.calcic_starts;
       user.fresh_only = true;
       int flag = IDACalcIC(mem, IDA_YA_YDP_INIT, tout1);
       user.fresh_only = false;

@@ -101,11 +101,12 @@ py::dict simulate(Scene& s, std::optional<double> t_end, std::optional<std::vect
       "steps"_a = r.stats.steps, "residuals"_a = r.stats.residuals, "jacobians"_a = r.stats.jacobians,
       "linear_setups"_a = r.stats.linear_setups, "nonlinear_iterations"_a = r.stats.nonlinear_iterations,
       "error_test_failures"_a = r.stats.error_test_failures, "nonlinear_failures"_a = r.stats.nonlinear_failures,
-      "reinits"_a = r.stats.reinits, "states"_a = r.stats.states, "explicit_states"_a = r.stats.explicit_states,
-      "quadratures"_a = r.stats.quadratures, "linear_solver"_a = r.stats.linear_solver,
-      "linear_iterations"_a = r.stats.linear_iterations, "preconditioner_setups"_a = r.stats.preconditioner_setups,
-      "linear_failures"_a = r.stats.linear_failures, "method"_a = r.stats.method,
-      "method_reason"_a = r.stats.method_reason);
+      "reinits"_a = r.stats.reinits, "newton_starts"_a = r.stats.newton_starts,
+      "calcic_starts"_a = r.stats.calcic_starts, "states"_a = r.stats.states,
+      "explicit_states"_a = r.stats.explicit_states, "quadratures"_a = r.stats.quadratures,
+      "linear_solver"_a = r.stats.linear_solver, "linear_iterations"_a = r.stats.linear_iterations,
+      "preconditioner_setups"_a = r.stats.preconditioner_setups, "linear_failures"_a = r.stats.linear_failures,
+      "method"_a = r.stats.method, "method_reason"_a = r.stats.method_reason);
   return py::dict("t"_a = as_array(r.t, {nt}), "y"_a = as_array(r.y, {nt, ns}), "yp"_a = as_array(r.yp, {nt, ns}),
                   "state_names"_a = r.state_names, "outputs"_a = as_array(r.outputs, {nt, no}),
                   "output_names"_a = r.output_names, "output_roles"_a = output_roles(*s.flowsheet),

@@ -382,9 +382,12 @@ def test_linear_solver_choice_follows_the_jacobian_fill():
     assert res.stats["linear_solver"].startswith("dense")
     assert (res.stats["states"], res.stats["explicit_states"]) == (2 * 200 + 9, 3 * 200 + 1 + 4 + 3 + 2 + 1)
     assert all(v < res.rtol for v in res.summary["balance"].values())
+    # a dense run starts each segment by the exact Newton on its algebraic states; a sparse one by IDACalcIC
+    assert (res.stats["newton_starts"], res.stats["calcic_starts"]) == (1 + res.stats["reinits"], 0)
     chain = gf.load_text(bench.tank_chain_text(600), "chain")
     res = chain.simulate(method="ida")  # auto takes the (non-stiff) chain to an explicit method: no linear solver
     assert res.stats["states"] > 1000 and res.stats["linear_solver"].startswith("sparse")
+    assert (res.stats["newton_starts"], res.stats["calcic_starts"]) == (0, 1 + res.stats["reinits"])
 
 
 def test_plots_say_when_the_size_grid_clips_a_curve(headline):

@@ -49,7 +49,12 @@ struct SolverStats {
   long nonlinear_iterations = 0;
   long error_test_failures = 0;
   long nonlinear_failures = 0;
-  long reinits = 0;                // restarts at input breakpoints
+  long reinits = 0;  // restarts at input breakpoints
+  // How IDAS segments (the first and one per breakpoint) found consistent y and y': by the exact Newton on the
+  // algebraic states (dense runs whose units keep the residual contract) or by IDACalcIC (the rest, and where that
+  // Newton gave up).
+  long newton_starts = 0;
+  long calcic_starts = 0;
   long states = 0;                 // unknowns of the integrator
   long explicit_states = 0;        // states of explicit units, evaluated inline
   long quadratures = 0;            // integrals of flows, outside the Newton system
