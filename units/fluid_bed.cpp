@@ -327,8 +327,9 @@ class FluidBed : public UnitBase<FluidBed> {
     T surface(0.0);
     for (int i = 0; i < n_; ++i) surface += M[i] * sc.spm[i];
     const GasSide<T> g = gas_side(c, c.x(sT_), tr::bed_area_ratio(surface, c.par(p_abed_)));
-    int reg_eta = 0;
-    for (int i = 0; i < n_; ++i) reg_eta += class_transfer(c, i, M[i], W[i], pm[i], g, &sc.dry[i], &sc.q[i]);
+    int reg_eta = 0;  // the classes whose Eq. (80) class_transfer() regularizes, without its transfer coefficients
+    for (int i = 0; i < n_; ++i)
+      reg_eta += p1::normalized_moisture(T(W[i] / (M[i] + kMassFloor)), g.x_eq, c.par(p_xcr_)).active;
     c.out(o_reg_eta_) = T(reg_eta);
     c.out(o_reg_a_) = T(g.activity_capped + g.saturation_capped);
     c.out(o_water_) = water;

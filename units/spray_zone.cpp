@@ -115,17 +115,21 @@ class SprayZone : public UnitBase<SprayZone> {
     for (int i = 0; i < n_; ++i) c.x(sDep_ + i) = c.x(sFwet_ + i) = c.x(sXwet_ + i) = T(0.0);
     c.x(sT_) = T(def::kSprayTemperature);
   }
+  // The closures' outputs are the unit's own states (x = f exactly when inlined), so only the flow closures run
+  // again here, for their floors; the wetted-volume cap is a function of f_wet alone.
   template <class T>
   void outputs(const Ctx<T>& c) const {
-    auto& sc = c.template ws<Work>().template scratch<T>();
-    int a = 0, b = 0;
-    closures(c, sc, &a, &b);
-    int not_fluidized = 0, tau_floored = 0;
-    for (int i = 0; i < n_; ++i) not_fluidized += sc.flow[i].not_fluidized, tau_floored += sc.flow[i].tau_floored;
+    const T& u0 = c.port(bed_, holdup::u0(n_));
+    const GasProps<T> g = gas_props(c.port(bed_, holdup::T(n_)));
+    int a = 0, b = 0, not_fluidized = 0, tau_floored = 0;
     T mass(0.0), fm(0.0);
     for (int i = 0; i < n_; ++i) {
+      const Work::Flow<T> f = class_flow(c, i, u0, g);
+      a += f.ws_floored, not_fluidized += f.not_fluidized, tau_floored += f.tau_floored;
+      const T& fwet = c.x(sFwet_ + i);
+      b += p1::wetted_volume_fraction(fwet, T(grid_->diameter_pivots()[i]), c.par(p_hpen_)).active;
       mass += c.port(bed_, holdup::mass(i));
-      fm += c.port(bed_, holdup::mass(i)) * sc.fwet[i];
+      fm += c.port(bed_, holdup::mass(i)) * fwet;
     }
     c.out(o_ws_) = T(a);
     c.out(o_cap_) = T(b);
