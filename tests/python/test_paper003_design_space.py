@@ -74,3 +74,15 @@ def test_without_seeds_the_spray_rate_only_scales_the_loop():
     assert out[1]["product.d50"] == pytest.approx(out[0]["product.d50"], rel=1e-8)
     assert out[1]["gran.mass"] == pytest.approx(1.25 * out[0]["gran.mass"], rel=1e-8)
     assert out[1]["product.mdot"] == pytest.approx(1.25 * out[0]["product.mdot"], rel=1e-8)
+
+
+def test_a_run_into_the_steady_state_lengthens_its_steps():
+    """At a steady state the solution stops changing and the integrator's step should grow. With the Newton matrix of
+    a large block kept long and IDAS's default Newton test, the error Newton left behind looked like local error, the
+    step stayed at 174 s and, the step being constant, nothing refreshed the matrix: this point crept through 600 h
+    in 13323 steps (solver_setup.cpp, kLargeBlockNewtonTest). The run must also end at the direct steady solve."""
+    fs = free_loop(100, **{"gran.m_spray": 250.0 / 3600.0, "sieve.upper_d_cut": 1.7e-3})
+    r = fs.simulate(t_end=600 * 3600.0, n_out=2)
+    assert r.stats["states"] == 103 and r.stats["steps"] < 2500
+    st = fs.steady_state()
+    assert r["product.d50"][-1] == pytest.approx(st["outputs"]["product.d50"], rel=1e-6)
