@@ -24,10 +24,10 @@ struct ParticleChamber::Work : Workspace {
   std::vector<Jet> cls_scratch;
   template <class T>
   struct Scratch {
-    std::vector<T> pm, spm, N, floor, dM, dW, dN, F, ones, temp;
+    std::vector<T> pm, spm, N, floor, dM, dW, dN, F, ones, temp, in_m, in_w;
     std::vector<int> donor;
     void resize(int n) {
-      for (auto* v : {&pm, &spm, &N, &floor, &dM, &dW, &dN, &temp}) v->assign(n, T(0.0));
+      for (auto* v : {&pm, &spm, &N, &floor, &dM, &dW, &dN, &temp, &in_m, &in_w}) v->assign(n, T(0.0));
       F.assign(n + 1, T(0.0)), ones.assign(n + 1, T(1.0)), donor.assign(n + 1, -1);
     }
   };
@@ -373,15 +373,20 @@ Status ParticleChamber::eval(const Ctx<T>& c) const {
     c.res(exchange_.rate) = c.x(exchange_.rate) - exch_rate;
   }
   const T* frac = discharge_fractions(c);
+  // What the inlets bring per class, read once: the controller sums it and every class row uses it.
+  for (int i = 0; i < n_; ++i) {
+    T m(0.0), w(0.0);
+    for (PortId p : inlets_) {
+      m += c.port(p, solids::mdot(i));
+      if (wet_) w += c.port(p, solids::water(n_, i));
+    }
+    sc.in_m[i] = m, sc.in_w[i] = w;
+  }
   if (discharge_ != Discharge::kNone) {
     if (controlled_) {
       const T mass = c.reduce(r_mass_, n_, [&](int i) { return M[i]; });
       const T weighted = frac ? c.reduce(r_tm_, n_, [&](int i) { return frac[i] * M[i]; }) : mass;
-      const T fed = c.reduce(r_in_, n_, [&](int i) {
-        T v(0.0);
-        for (PortId p : inlets_) v += c.port(p, solids::mdot(i));
-        return v;
-      });
+      const T fed = c.reduce(r_in_, n_, [&](int i) { return sc.in_m[i]; });
       const T& m_set = c.par(p_mset_);
       const T& tau_c = c.par(p_tauc_);
       const T u = fed + m_sus - exch_rate * mass + (mass - m_set) / tau_c;
@@ -399,11 +404,8 @@ Status ParticleChamber::eval(const Ctx<T>& c) const {
     m_water = c.par(p_spray_) * (1.0 - c.par(p_w_));
   }
   for (int i = 0; i < n_; ++i) {
-    T in_m(0.0), in_w(0.0), out_m(0.0), out_w(0.0);
-    for (PortId p : inlets_) {
-      in_m += c.port(p, solids::mdot(i));
-      if (wet_) in_w += c.port(p, solids::water(n_, i));
-    }
+    const T &in_m = sc.in_m[i], &in_w = sc.in_w[i];
+    T out_m(0.0), out_w(0.0);
     for (const Outlet* o : {&exchange_, &discharge_out_}) {
       if (!o->rate) continue;
       const auto [m, wo] = outlet_flow(c, *o, o == &discharge_out_ ? frac : nullptr, i);
