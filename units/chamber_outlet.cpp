@@ -1,6 +1,5 @@
 #include "chamber_outlet.hpp"
 
-#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -26,7 +25,6 @@ namespace {
 
 struct Work : Workspace {
   Classifier::Cache cls;
-  std::vector<Jet> cls_scratch;
 };
 
 class ChamberOutlet : public UnitBase<ChamberOutlet> {
@@ -60,14 +58,7 @@ class ChamberOutlet : public UnitBase<ChamberOutlet> {
   template <class T>
   Status eval(const Ctx<T>& c) const {
     const int n = spec_.classes;
-    const T* frac = nullptr;
-    if (spec_.classifier) {
-      Work& w = c.template ws<Work>();
-      if constexpr (std::is_same_v<T, double>)
-        frac = spec_.classifier->fractions(c.shared, w.cls);
-      else
-        frac = spec_.classifier->fractions(c.shared, w.cls, w.cls_scratch);
-    }
+    const T* frac = spec_.classifier ? spec_.classifier->fractions(c.shared, c.template ws<Work>().cls) : nullptr;
     const T& r = c.port(in_, holdup_fields::rate(n));
     for (int i = 0; i < n; ++i) {
       const T ri = frac ? T(r * frac[i]) : r;

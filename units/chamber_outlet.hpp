@@ -7,6 +7,7 @@
 #pragma once
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "granuflow/stream.hpp"
 #include "granuflow/unit.hpp"

@@ -39,24 +39,31 @@ class Classifier {
   int d_cut_index() const { return d_cut_; }
   const std::string& name() const { return name_; }
 
-  // Fractions to the coarse side per class, for the unit's parameters `p`; `cache` holds the doubles of the last
-  // parameter values seen (a unit keeps one per curve in its workspace).
+  // Fractions to the coarse side per class, for the unit's parameters `p` (doubles or Jets); `cache` holds the
+  // doubles of the last parameter values seen and the Jets' work array (a unit keeps one per curve in its workspace).
   struct Cache {
     std::vector<double> key, value;
-    std::vector<Jet> jets;
+    std::vector<Jet> jets, scratch;
   };
-  const double* fractions(const double* p, Cache& c) const {
-    refresh(p, c);
-    return c.value.data();
+  template <class T>
+  const T* fractions(const T* p, Cache& c) const {
+    if constexpr (std::is_same_v<T, double>) {
+      refresh(p, c);
+      return c.value.data();
+    } else {
+      return jet_fractions(p, c);
+    }
   }
-  const Jet* fractions(const Jet* p, Cache& c, std::vector<Jet>& scratch) const {
+
+ private:
+  const Jet* jet_fractions(const Jet* p, Cache& c) const {
     bool derivative = false;
     for (int k = first_; k < first_ + count_; ++k) derivative = derivative || !p[k].v.isZero();
     if (derivative) {
       const auto& de = grid_->diameter_edges();
-      scratch.resize(size());
-      for (int i = 0; i < size(); ++i) scratch[i] = curve_->cell_fraction(de[i], de[i + 1], p + first_);
-      return scratch.data();
+      c.scratch.resize(size());
+      for (int i = 0; i < size(); ++i) c.scratch[i] = curve_->cell_fraction(de[i], de[i + 1], p + first_);
+      return c.scratch.data();
     }
     std::vector<double> v(count_);
     for (int k = 0; k < count_; ++k) v[k] = p[first_ + k].a;
@@ -68,7 +75,6 @@ class Classifier {
     return c.jets.data();
   }
 
- private:
   void refresh(const double* p, Cache& c) const {
     if (!c.value.empty() && std::equal(c.key.begin(), c.key.end(), p + first_)) return;
     c.key.assign(p + first_, p + first_ + count_);

@@ -21,7 +21,6 @@ struct ParticleChamber::Work : Workspace {
   kernels::Population::WorkPtr pop;
   std::vector<double> pm, spm;  // particle mass and surface per mass of each class at the run's parameters
   Classifier::Cache cls;
-  std::vector<Jet> cls_scratch;
   template <class T>
   struct Scratch {
     std::vector<T> pm, spm, N, floor, dM, dW, dN, F, ones, temp, in_m, in_w;
@@ -322,11 +321,7 @@ kernels::Population::State<T> ParticleChamber::population_state(const Ctx<T>& c,
 template <class T>
 const T* ParticleChamber::discharge_fractions(const Ctx<T>& c) const {
   if (discharge_ != Discharge::kClassified) return nullptr;
-  Work& w = c.template ws<Work>();
-  if constexpr (std::is_same_v<T, double>)
-    return classifier_.fractions(c.p, w.cls);
-  else
-    return classifier_.fractions(c.p, w.cls, w.cls_scratch);
+  return classifier_.fractions(c.p, c.template ws<Work>().cls);
 }
 
 // What class i carries out through outlet `o`: the flows the outlet's companion computes (chamber_outlet.cpp).

@@ -16,7 +16,6 @@ namespace {
 
 struct Work : Workspace {
   Classifier::Cache upper, lower;
-  std::vector<Jet> su, sl;
 };
 
 class Sieve : public UnitBase<Sieve> {
@@ -63,11 +62,8 @@ class Sieve : public UnitBase<Sieve> {
   template <class T>
   Status eval(const Ctx<T>& c) const {
     Work& w = c.template ws<Work>();
-    const T *tu, *tl;
-    if constexpr (std::is_same_v<T, double>)
-      tu = upper_.fractions(c.p, w.upper), tl = lower_.fractions(c.p, w.lower);
-    else
-      tu = upper_.fractions(c.p, w.upper, w.su), tl = lower_.fractions(c.p, w.lower, w.sl);
+    const T* tu = upper_.fractions(c.p, w.upper);
+    const T* tl = lower_.fractions(c.p, w.lower);
     for (int i = 0; i < n_; ++i) {
       for (int f = 0; f < 2; ++f) {
         const T& in = c.port(in_, f == 0 ? solids::mdot(i) : solids::water(n_, i));

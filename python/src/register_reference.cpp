@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <map>
 #include <string>
+#include <vector>
 
 #include "granuflow/errors.hpp"
 #include "granuflow/flowsheet.hpp"
@@ -63,8 +64,11 @@ py::dict unit_reference(const std::string& type, const std::map<std::string, std
   Flowsheet fs("unit_reference");
   if (type != "particles") fs.add_unit("particles", reg.create("particles"), Settings("particles", {}));
   fs.add_unit(type, reg.create(type, "unit_reference"), Settings("unit_reference(" + type + ").settings", given));
-  const UnitInstance& inst = fs.units()[fs.unit_index(type)];
-  const UnitSpec& spec = inst.spec;
+  const int self = fs.unit_index(type);
+  const UnitSpec& spec = fs.units()[self].spec;
+  std::vector<const UnitSpec*> comp_specs;  // the companions' declarations, in the order the unit declared them
+  for (const auto& u : fs.units())
+    if (u.owner == self) comp_specs.push_back(&u.spec);
   py::list ports, params, states, outputs;
   auto port_dict = [&](const std::string& name, const PortSpec& p) {
     ports.append(py::dict("name"_a = name, "kind"_a = to_string(p.kind), "direction"_a = to_string(p.dir),
@@ -78,8 +82,7 @@ py::dict unit_reference(const std::string& type, const std::map<std::string, std
       port_dict(spec.ports()[k].name, spec.ports()[k]);
       continue;
     }
-    const UnitSpec& cs = fs.units()[fs.unit_index(type) + 1 + (c - comps.begin())].spec;
-    for (const auto& p : cs.ports())
+    for (const auto& p : comp_specs[c - comps.begin()]->ports())
       if (p.name == "out") port_dict(c->as, p);
   }
   for (const auto& p : spec.params()) params.append(param_dict(p));
@@ -88,7 +91,7 @@ py::dict unit_reference(const std::string& type, const std::map<std::string, std
                            "kind"_a = s.kind == StateKind::Differential ? "differential" : "algebraic",
                            "unit"_a = s.unit, "scale"_a = s.scale));
   for (size_t k = 0; k < comps.size(); ++k)  // a companion's states carry the unit's name, computed inline
-    for (const auto& s : fs.units()[fs.unit_index(type) + 1 + k].spec.states())
+    for (const auto& s : comp_specs[k]->states())
       states.append(py::dict("name"_a = comps[k].name + "_" + s.name, "kind"_a = "algebraic, inline", "unit"_a = s.unit,
                              "scale"_a = s.scale));
   for (const auto& o : spec.outputs()) {
@@ -98,7 +101,7 @@ py::dict unit_reference(const std::string& type, const std::map<std::string, std
                             "quantity"_a = o.quantity, "integrated"_a = quad));
   }
   return py::dict("type"_a = type, "description"_a = reg.description(type), "explicit"_a = spec.is_explicit(),
-                  "ports"_a = ports, "settings"_a = settings_list(inst.settings), "params"_a = params,
+                  "ports"_a = ports, "settings"_a = settings_list(fs.units()[self].settings), "params"_a = params,
                   "states"_a = states, "outputs"_a = outputs,
                   "particle_system"_a = spec.shared_params().empty() ? py::object(py::none())
                                                                      : py::object(py::str(spec.shared_params())));
