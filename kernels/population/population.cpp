@@ -65,6 +65,78 @@ double row_rates(const double* kh, const double* e, double Nj, const double* N, 
   }
   return death;
 }
+// Row j of the pair triangle for fixed pivot in doubles, in one pass per quantity: the event rates rt[k] =
+// h K_jk (E_jk) N_j N_k, the deaths of both partners, and the births of the run [run_first, run_last] on k and k + 1
+// (those on k + 1 into `up`, rows 1 + p for property p, n + 1 wide). The caller places the pairs off the run.
+template <bool HasE>
+void fixed_pivot_row(const FixedPivotAggregation& fp, size_t p0, int j, int n, int P, const double* kh, const double* e,
+                     const double* N, const double* pi, double* rt, double* dN, double* dq, double* up) {
+  const double Nj = N[j];
+  const int a = fp.run_first(j), b = fp.run_last(j);
+  const int r0 = a <= b ? a : n, r1 = a <= b ? b + 1 : n;  // the run is [r0, r1)
+  auto rate = [kh, e, Nj, N](int k) {  // by value: loads through captured references would not vectorize
+    if constexpr (HasE)
+      return kh[k] * e[k] * Nj * N[k];
+    else
+      return kh[k] * Nj * N[k];
+  };
+  double death = 0.0;
+#pragma omp simd reduction(+ : death)
+  for (int k = j; k < r0; ++k) {
+    rt[k] = rate(k);
+    death += rt[k];
+    dN[k] -= rt[k];
+  }
+  const double *wl = fp.w_lo() + (p0 - j), *wh = fp.w_hi() + (p0 - j);
+#pragma omp simd reduction(+ : death)
+  for (int k = r0; k < r1; ++k) {
+    const double r = rate(k);
+    rt[k] = r;
+    death += r;
+    dN[k] += wl[k] * r - r;
+    up[k + 1] += wh[k] * r;
+  }
+#pragma omp simd reduction(+ : death)
+  for (int k = r1; k < n; ++k) {
+    rt[k] = rate(k);
+    death += rt[k];
+    dN[k] -= rt[k];
+  }
+  dN[j] -= death;
+  const double *fl = fp.f_lo() + (p0 - j), *fh = fp.f_hi() + (p0 - j);
+  for (int p = 0; p < P; ++p) {
+    const double* pp = pi + size_t(p) * n;
+    double* dqp = dq + size_t(p) * n;
+    double* upq = up + size_t(1 + p) * (n + 1);
+    const double pj = pp[j];
+#pragma omp simd
+    for (int k = j; k < r0; ++k) dqp[k] -= rt[k] * pp[k];
+#pragma omp simd
+    for (int k = r0; k < r1; ++k) {
+      const double carried = rt[k] * (pj + pp[k]);
+      dqp[k] += fl[k] * carried - rt[k] * pp[k];
+      upq[k + 1] += fh[k] * carried;
+    }
+#pragma omp simd
+    for (int k = r1; k < n; ++k) dqp[k] -= rt[k] * pp[k];
+    dqp[j] -= death * pj;
+  }
+}
+
+// sum_{k = first}^{n - 1} b_k x_k: a row of the breakage tables against the classes. In doubles a SIMD reduction
+// (the sum reassociated), where the scalar loop waits on each addition.
+inline double upper_dot(const double* b, const double* x, int first, int n) {
+  double acc = 0.0;
+#pragma omp simd reduction(+ : acc)
+  for (int k = first; k < n; ++k) acc += b[k] * x[k];
+  return acc;
+}
+inline Jet upper_dot(const Jet* b, const Jet* x, int first, int n) {
+  Jet acc(0.0);
+  for (int k = first; k < n; ++k) acc += b[k] * x[k];
+  return acc;
+}
+
 Jet row_rates(const Jet* kh, const Jet* e, const Jet& Nj, const Jet* N, int j, int n, Jet* rt) {
   Jet death(0.0);
   for (int k = j; k < n; ++k) {
@@ -143,7 +215,7 @@ struct Population::Work {
   std::vector<Jet> BN_jet, BQ_jet;
   template <class T>
   struct Scratch {
-    std::vector<T> K, Kh, S, A, BN, BQ, phi, E, pi, B, V, Q, shape, amount, F, rows, dq, rate, up, mv, split;
+    std::vector<T> K, Kh, S, A, BN, BQ, phi, E, pi, B, V, Q, shape, amount, F, rows, dq, rate, up, mv, split, diag;
     std::vector<int> donor;
   };
   Scratch<double> sd;
@@ -159,21 +231,28 @@ struct Population::Work {
 };
 
 // The near-equal partners of the scheme's diagonals (one shift and one set of weights per diagonal on a geometric
-// grid) as vector loops over k, and the few pairs left (the top of the grid, irregular grids) one by one.
+// grid) as vector loops over k. The event rates of diagonal d are `stored` + d n when given (a kernel with per-pair
+// efficiencies, whose row loop formed them), else h K N_{k-d} N_k from Work::Kd; then, without `stored`, the few
+// pairs left (the top of the grid, irregular grids) one by one.
 template <class Scratch, class Place>
 void aggregate_diagonals(const Population::Work& w, Scratch& sc, const double* N, int n, int P,
                          const FixedPivotAggregation* fp, const CellAverageAggregation* ca, const Grid& g, double* dN,
-                         double* dq, Place&& place) {
+                         double* dq, Place&& place, const double* stored = nullptr) {
   const double* pi = sc.pi.data();
-  double* rt = sc.mv.data() + 4 * n;
+  double* formed = stored ? nullptr : sc.mv.data() + 4 * n;
   const int nd = fp ? static_cast<int>(fp->diagonals().size()) : static_cast<int>(ca->diagonals().size());
   const auto& x = g.pivots();
   for (int d = 0; d < nd; ++d) {
     const int last = fp ? fp->diagonals()[d].last : ca->diagonals()[d].last;
     const int s = fp ? fp->diagonals()[d].shift : ca->diagonals()[d].shift;
-    const double* kd = w.Kd.data() + size_t(d) * n;
+    const double* rt = formed;
+    if (stored) {
+      rt = stored + size_t(d) * n;
+    } else {
+      const double* kd = w.Kd.data() + size_t(d) * n;
 #pragma omp simd
-    for (int k = d; k <= last; ++k) rt[k] = kd[k] * N[k - d] * N[k];
+      for (int k = d; k <= last; ++k) formed[k] = kd[k] * N[k - d] * N[k];
+    }
     if (fp) {
       const auto& t = fp->diagonals()[d];
       double* lo = dN + s;
@@ -203,6 +282,7 @@ void aggregate_diagonals(const Population::Work& w, Scratch& sc, const double* N
       }
     }
   }
+  if (stored) return;
   for (const auto& [pr, jk] : w.rest) {
     const int j = jk.first, k = jk.second;
     if (N[j] != 0.0 && N[k] != 0.0) place(pr, j, k, w.Kh[pr] * N[j] * N[k]);
@@ -700,29 +780,56 @@ void Population::rates_t(Work& w, const State<T>& s, const Rates<T>& r, bool fol
       // vectorizable pass, the deaths, then the births. Most partners place their aggregate on k and k + 1 (fixed
       // pivot) or keep it in cell k (cell average); those runs are plain array arithmetic (about 0.2 ns per pair
       // instead of 1-2 ns through the table), the rest goes through place().
+      // With doubles, the pairs along the scheme's diagonals (near-equal partners) are stored by diagonal and summed
+      // after the rows as vector loops (aggregate_diagonals), not placed one by one.
+      int nd = 0;
+      if constexpr (std::is_same_v<T, double>) {
+        nd = static_cast<int>(fp ? fp->diagonals().size() : ca->diagonals().size());
+        if (nd > 0) sc.diag.assign(size_t(nd) * n, 0.0);
+      }
+      auto on_diagonal = [&](int d, int k) {
+        return d < nd && k <= (fp ? fp->diagonals()[d].last : ca->diagonals()[d].last);
+      };
       size_t p0 = 0;  // pair (j, j)
       for (int j = 0; j < n; p0 += n - j, ++j) {
         if (is_empty(N[j])) continue;
         const T Nj = N[j];
         const T* kh = Kh + (p0 - j);  // kh[k]: pair (j, k)
-        const T death = row_rates(kh, E ? E + (p0 - j) : nullptr, Nj, N, j, n, rt);
-#pragma omp simd
-        for (int k = j; k < n; ++k) dN[k] -= rt[k];
-        dN[j] -= death;
-        for (int p = 0; p < P; ++p) {
-          const T* pp = pi + size_t(p) * n;
-          T* dqp = dq + size_t(p) * n;
-#pragma omp simd
-          for (int k = j; k < n; ++k) dqp[k] -= rt[k] * pp[k];
-          dqp[j] -= death * pp[j];
-        }
         const int a = fp ? fp->run_first(j) : ca->run_first(j), b = fp ? fp->run_last(j) : ca->run_last(j);
+        bool fused = false;
+        if constexpr (std::is_same_v<T, double>) {
+          if (fp) {
+            const double* e = E ? E + (p0 - j) : nullptr;
+            if (e)
+              fixed_pivot_row<true>(*fp, p0, j, n, P, kh, e, N, pi, rt, dN, dq, sc.up.data());
+            else
+              fixed_pivot_row<false>(*fp, p0, j, n, P, kh, e, N, pi, rt, dN, dq, sc.up.data());
+            fused = true;
+          }
+        }
+        if (!fused) {
+          const T death = row_rates(kh, E ? E + (p0 - j) : nullptr, Nj, N, j, n, rt);
+#pragma omp simd
+          for (int k = j; k < n; ++k) dN[k] -= rt[k];
+          dN[j] -= death;
+          for (int p = 0; p < P; ++p) {
+            const T* pp = pi + size_t(p) * n;
+            T* dqp = dq + size_t(p) * n;
+#pragma omp simd
+            for (int k = j; k < n; ++k) dqp[k] -= rt[k] * pp[k];
+            dqp[j] -= death * pp[j];
+          }
+        }
         for (int k = j; k < n; ++k) {
           if (k == a) k = b + 1;  // the run, below
           if (k >= n) break;
+          if (on_diagonal(k - j, k)) {
+            sc.diag[size_t(k - j) * n + k] = rt[k];
+            continue;
+          }
           if (!is_empty(N[k])) place(p0 + (k - j), j, k, rt[k]);
         }
-        if (a > b) continue;
+        if (a > b || fused) continue;
         if (fp) {
           const double *wl = fp->w_lo() + (p0 - j), *wh = fp->w_hi() + (p0 - j);
           T* up = sc.up.data();
@@ -761,6 +868,8 @@ void Population::rates_t(Work& w, const State<T>& s, const Rates<T>& r, bool fol
           }
         }
       }
+      if constexpr (std::is_same_v<T, double>)
+        if (nd > 0) aggregate_diagonals(w, sc, N, n, P, fp, ca, *grid_, dN, dq, place, sc.diag.data());
       if (fp) {
         for (int i = 0; i < n; ++i) dN[i] += sc.up[i];
         for (int p = 0; p < P; ++p)
@@ -822,10 +931,8 @@ void Population::rates_t(Work& w, const State<T>& s, const Rates<T>& r, bool fol
       BN = w.BN_jet.data(), BQ = w.BQ_jet.data();
     }
     for (int row = 0; row < n + kOutsideRows; ++row) {
-      const T* b = BN + size_t(row) * n;
-      T acc(0.0);
       // Fragments land at or below the parent's pivot: class row r only sees parents k >= r.
-      for (int k = row < n ? row : 0; k < n; ++k) acc += b[k] * N[k];
+      const T acc = upper_dot(BN + size_t(row) * n, N, row < n ? row : 0, n);
       if (row < n)
         dN[row] += acc;
       else
@@ -834,9 +941,7 @@ void Population::rates_t(Work& w, const State<T>& s, const Rates<T>& r, bool fol
     for (int p = 0; p < P; ++p) {
       const T* q = s.q[p];
       for (int row = 0; row <= n; ++row) {
-        const T* b = BQ + size_t(row) * n;
-        T acc(0.0);
-        for (int k = row < n ? row : 0; k < n; ++k) acc += b[k] * q[k];
+        const T acc = upper_dot(BQ + size_t(row) * n, q, row < n ? row : 0, n);
         if (row < n)
           dq[size_t(p) * n + row] += acc;
         else
