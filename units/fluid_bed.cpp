@@ -405,7 +405,7 @@ class FluidBed : public UnitBase<FluidBed> {
   // Gas-side quantities shared by all classes' drying and heat transfer.
   template <class T>
   struct GasSide {
-    T t_s, t_g, y, u0, ratio, rho_da, nu, sc, pr, x_eq, y_sat;
+    T t_s, t_g, y, u0, ratio, rho_da, nu, sc, pr, x_eq, y_sat, cbrt_sc, cbrt_pr;
     bool activity_capped, saturation_capped;
   };
   template <class T>
@@ -413,13 +413,16 @@ class FluidBed : public UnitBase<FluidBed> {
     const T& t_g = c.port(gas_, gas::kT);
     const T& y = c.port(gas_, gas::kY);
     const T& p = c.port(gas_, gas::kP);
-    GasSide<T> g{t_s, t_g, y, c.x(sU0_), ratio, T(0.0), T(0.0), T(0.0), T(0.0), T(0.0), T(0.0), false, false};
+    GasSide<T> g{};
+    g.t_s = t_s, g.t_g = t_g, g.y = y, g.u0 = c.x(sU0_), g.ratio = ratio;
     const T rho = props::humid_air_density(t_g, p, y);
     g.rho_da = props::dry_air_partial_density(t_g, p, y);  // Y is per kg dry air in Eq. (72)
     const T mu = props::air_viscosity(t_g);
     g.nu = props::kinematic_viscosity(mu, rho);
     g.sc = props::schmidt_number(mu, rho, c.par(p_dv_));                                // Eq. (78)
     g.pr = props::prandtl_number(props::humid_heat_capacity(y), mu, c.par(p_lambda_));  // Eq. (89)
+    using std::cbrt;
+    g.cbrt_sc = cbrt(g.sc), g.cbrt_pr = cbrt(g.pr);  // Eqs. (75), (88) for every class
     // Eqs. (82)-(83): activity of the bulk gas at the solids temperature; BET (81) is singular at a = 1
     const auto a = kernels::cap_at(p1::water_activity(y, t_s, p), T(0.99));
     g.activity_capped = a.active;
@@ -438,13 +441,16 @@ class FluidBed : public UnitBase<FluidBed> {
     const T di(grid_->diameter_pivots()[i]);
     const T area = kernels::class_surface(T(m / particle_mass), di);  // N_i pi d_i^2 (docs/paper001_decisions.md)
     const T re0 = tr::particle_reynolds_number(g.u0, di, g.nu);       // Eq. (76)
-    const T shb = tr::bulk_sherwood(tr::sherwood_single(re0, g.sc), re0, g.sc, g.ratio, c.par(p_sh_));  // (74), (75)
+    using std::sqrt;
+    const T sqrt_re = sqrt(re0);
+    const T shb = tr::bulk_sherwood(tr::ranz_marshall_roots(sqrt_re, g.cbrt_sc), re0, g.sc, g.ratio,
+                                    c.par(p_sh_));  // Eqs. (74), (75)
     const T j = p1::drying_mass_flux(g.rho_da, tr::mass_transfer_coefficient(shb, c.par(p_dv_), di), g.y_sat,
                                      g.y);                                                     // Eqs. (72), (73)
     const auto eta = p1::normalized_moisture(T(w / (m + kMassFloor)), g.x_eq, c.par(p_xcr_));  // Eq. (80), regularized
     *dry = p1::drying_rate(p1::linear_drying_curve(eta.value), area, j);                       // Eqs. (70), (79)
-    const T nub = tr::bulk_nusselt(tr::nusselt_single(re0, g.pr), re0, g.pr, g.ratio);         // Eqs. (87), (88)
-    *q = tr::heat_transfer_coefficient(nub, c.par(p_lambda_), di) * area * (g.t_g - g.t_s);    // Eqs. (85), (86)
+    const T nub = tr::bulk_nusselt(tr::ranz_marshall_roots(sqrt_re, g.cbrt_pr), re0, g.pr, g.ratio);  // (87), (88)
+    *q = tr::heat_transfer_coefficient(nub, c.par(p_lambda_), di) * area * (g.t_g - g.t_s);           // Eqs. (85), (86)
     return eta.active;
   }
 

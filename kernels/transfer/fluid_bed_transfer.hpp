@@ -59,13 +59,18 @@ T superficial_velocity(const T& volume_flow, const T& a_inlet) {
   return volume_flow / a_inlet;
 }
 
-// Common form of Eqs. (75) and (88), paper 001 (Ranz & Marshall); `sc_or_pr` is Sc for Sh, Pr for Nu.
-// Not differentiable at Re = 0 (sqrt), which a flowing bed never reaches.
+// Common form of Eqs. (75) and (88), paper 001 (Ranz & Marshall), from sqrt(Re) and the cube root of Sc (for Sh) or
+// Pr (for Nu): a bed's size classes share Sc and Pr, and Sh and Nu of a class share Re, so callers take the roots once.
+template <class T>
+T ranz_marshall_roots(const T& sqrt_re, const T& cbrt_sc_or_pr) {
+  return 2.0 + 0.6 * sqrt_re * cbrt_sc_or_pr;
+}
+// The same from Re and Sc or Pr. Not differentiable at Re = 0 (sqrt), which a flowing bed never reaches.
 template <class T>
 T ranz_marshall(const T& re, const T& sc_or_pr) {
   using std::cbrt;
   using std::sqrt;
-  return 2.0 + 0.6 * sqrt(re) * cbrt(sc_or_pr);
+  return ranz_marshall_roots(sqrt(re), cbrt(sc_or_pr));
 }
 
 // Eq. (75), paper 001.
