@@ -70,15 +70,21 @@ class Mill : public UnitBase<Mill> {
     for (int k = 0; k < n_; ++k)
       f.in_m[k] = c.port(in_, solids::mdot(k)), f.in_w[k] = c.port(in_, solids::water(n_, k));
     if constexpr (std::is_same_v<T, double>) {
-      // Eigen's blocked triangular product (P is upper triangular: parent class k feeds classes i <= k); a dry
-      // feed skips the water column, which would be a second product of zeros
-      const Eigen::Map<const Eigen::MatrixXd> Pm(P, n_, n_);
       const bool wet = std::any_of(f.in_w.begin(), f.in_w.end(), [](double v) { return v != 0.0; });
-      Eigen::Map<Eigen::VectorXd>(f.m.data(), n_).noalias() =
-          Pm.triangularView<Eigen::Upper>() * Eigen::Map<const Eigen::VectorXd>(f.in_m.data(), n_);
-      if (wet)
-        Eigen::Map<Eigen::VectorXd>(f.w.data(), n_).noalias() =
-            Pm.triangularView<Eigen::Upper>() * Eigen::Map<const Eigen::VectorXd>(f.in_w.data(), n_);
+      if (law_->parent_independent()) {
+        // Every coarser parent puts the same share P_i,n-1 on class i: a suffix sum over the parents (O(n))
+        parent_independent_product(P, f.in_m.data(), f.m.data());
+        if (wet) parent_independent_product(P, f.in_w.data(), f.w.data());
+      } else {
+        // Eigen's blocked triangular product (P is upper triangular: parent class k feeds classes i <= k); a dry
+        // feed skips the water column, which would be a second product of zeros
+        const Eigen::Map<const Eigen::MatrixXd> Pm(P, n_, n_);
+        Eigen::Map<Eigen::VectorXd>(f.m.data(), n_).noalias() =
+            Pm.triangularView<Eigen::Upper>() * Eigen::Map<const Eigen::VectorXd>(f.in_m.data(), n_);
+        if (wet)
+          Eigen::Map<Eigen::VectorXd>(f.w.data(), n_).noalias() =
+              Pm.triangularView<Eigen::Upper>() * Eigen::Map<const Eigen::VectorXd>(f.in_w.data(), n_);
+      }
     } else {
       for (int k = 0; k < n_; ++k) {  // column by column (P is column-major)
         const T* col = P + size_t(k) * n_;
@@ -122,6 +128,15 @@ class Mill : public UnitBase<Mill> {
   }
 
  private:
+  // out = P in for a law whose fragments do not depend on the parent: out_i = P_ii in_i + P_i,n-1 sum_{k > i} in_k.
+  void parent_independent_product(const double* P, const double* in, double* out) const {
+    const double* last = P + size_t(n_ - 1) * n_;  // column n - 1: P_i,n-1 = P_ik for every parent k > i
+    double coarser = 0.0;                          // sum_{k > i} in_k
+    for (int i = n_ - 1; i >= 0; --i) {
+      out[i] = P[size_t(i) * n_ + i] * in[i] + last[i] * coarser;
+      coarser += in[i];
+    }
+  }
   // The law's matrix for this evaluation: cached per parameter values for doubles; recomputed in Jets when a law
   // parameter carries a derivative.
   const double* matrix(const Ctx<double>& c) const {

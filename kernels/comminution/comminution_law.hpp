@@ -22,6 +22,10 @@ class ComminutionLaw : public KernelBase {
   virtual void matrix(const std::vector<double>& de, const std::vector<double>& dp, const double* p,
                       double* P) const = 0;
   virtual void matrix(const std::vector<double>& de, const std::vector<double>& dp, const Jet* p, Jet* P) const = 0;
+  // True when the fragments' size distribution is the same for every parent (finer(d, D) independent of D, broken(D)
+  // constant): then P_ik = P_i,k' for all i < k < k' as built, and a mill applies P in O(n) with a suffix sum,
+  // out_i = P_ii in_i + P_i,n-1 sum_{k > i} in_k, instead of an O(n^2) product.
+  virtual bool parent_independent() const { return false; }
 };
 
 template <class Derived>

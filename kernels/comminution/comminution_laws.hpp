@@ -21,6 +21,7 @@ class LognormalMill : public ComminutionLawT<LognormalMill> {
     return {{"d50", "m", 300e-6, 1e-7, 1.0, "mass median diameter of the mill product", "operating input"},
             {"sigma_g", "-", 1.5, 1.01, 10.0, "geometric standard deviation of the mill product", "operating input"}};
   }
+  bool parent_independent() const override { return true; }
   template <class T>
   T broken(double, const T*) const {
     return T(1.0);

@@ -181,6 +181,32 @@ def test_sieve_and_mill_conserve_mass_class_by_class():
         assert r["mill.d50_out"][-1] < r["mill.d50_in"][-1]  # it grinds
 
 
+def test_the_lognormal_mill_applies_its_breakage_matrix():
+    # The log-normal law's fragments do not depend on the parent, and the mill applies its matrix with a suffix sum
+    # over the coarser classes: compare with the matrix product built here from the law, P_ik = F(e_i+1) - F(e_i) for
+    # i < k (class 0 also takes what falls below the grid), P_kk = 1 - F(e_k).
+    fs = split_scene(1.7e-3, 0.6e-3)
+    fs.set("mill.d50", 450e-6)
+    fs.set("mill.sigma_g", 1.6)
+    r = fs.simulate()
+    y = {k: r[k][-1] for k in fs.state_names}
+    dp = 1e-4 * (4e-3 / 1e-4) ** (np.arange(30) / 29)
+    de = np.sqrt(dp[:-1] * dp[1:])  # the edges between classes
+    F = np.array([0.5 * math.erfc(-math.log(d / 450e-6) / (math.log(1.6) * math.sqrt(2.0))) for d in de])
+    P = np.zeros((30, 30))
+    for k in range(30):
+        below = 0.0
+        for i in range(k):
+            P[i, k] = F[i] - below
+            below = F[i]
+        P[k, k] = 1.0 - P[:k, k].sum()
+    for q in ("mdot", "water"):
+        feed = np.array([y[f"split.out2_{q}_{i}"] for i in range(30)])
+        out = np.array([y[f"mill.{q}_{i}"] for i in range(30)])
+        assert out == pytest.approx(P @ feed, rel=1e-12, abs=1e-15 * feed.sum())
+        assert out.sum() == pytest.approx(feed.sum(), rel=1e-14)
+
+
 def test_an_ideal_sieve_splits_at_its_cut_sizes():
     # the grid: log-spaced pivots; the edges between classes are their geometric means (in volume, so in diameter)
     dp = 1e-4 * (4e-3 / 1e-4) ** (np.arange(30) / 29)
