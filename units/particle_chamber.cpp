@@ -1,5 +1,7 @@
 #include "particle_chamber.hpp"
 
+#include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
 #include <tuple>
 #include <type_traits>
@@ -19,7 +21,8 @@ using kernels::Field;
 
 struct ParticleChamber::Work : Workspace {
   kernels::Population::WorkPtr pop;
-  std::vector<double> pm, spm;  // particle mass and surface per mass of each class at the run's parameters
+  // particle mass, surface per mass and the number floor kMassFloor / m of each class at the run's parameters
+  std::vector<double> pm, spm, floor;
   Classifier::Cache cls;
   template <class T>
   struct Scratch {
@@ -241,11 +244,12 @@ std::unique_ptr<Workspace> ParticleChamber::workspace() const {
 
 void ParticleChamber::configure(const UnitSpec&, const double* p, const double* shared, Workspace& ws) const {
   Work& w = static_cast<Work&>(ws);
-  w.pm.resize(n_), w.spm.resize(n_);
+  w.pm.resize(n_), w.spm.resize(n_), w.floor.resize(n_);
   const double rho = pp_.envelope_density(shared);
   for (int i = 0; i < n_; ++i) {
     w.pm[i] = rho * grid_->pivot(i);
     w.spm[i] = kernels::sphere_surface(grid_->diameter_pivots()[i]) / w.pm[i];
+    w.floor[i] = kMassFloor / w.pm[i];  // an emptied class carries a finite moisture
   }
   pop_.configure(*w.pop, p, std::string("unit ") + type());
   w.cls = {};
@@ -254,8 +258,8 @@ void ParticleChamber::configure(const UnitSpec&, const double* p, const double* 
 
 void ParticleChamber::check(const UnitSpec&, const double*) const {}
 
-// Particle masses and surfaces per mass for this evaluation: cached for doubles; Jets recompute them, so that
-// sensitivities to the particle system's density carry through.
+// Particle masses, surfaces per mass and number floors for this evaluation: cached for doubles; Jets recompute them,
+// so that sensitivities to the particle system's density carry through.
 namespace {
 template <class T, class W, class S>
 const T* particle_tables(const Ctx<T>& c, const W& w, S& sc, const ParticleParams& pp, const kernels::Grid& g) {
@@ -263,11 +267,13 @@ const T* particle_tables(const Ctx<T>& c, const W& w, S& sc, const ParticleParam
   if constexpr (std::is_same_v<T, double>) {
     std::copy(w.spm.begin(), w.spm.end(), sc.spm.begin());
     std::copy(w.pm.begin(), w.pm.end(), sc.pm.begin());
+    std::copy(w.floor.begin(), w.floor.end(), sc.floor.begin());
   } else {
     const T rho = pp.envelope_density(c.shared);
     for (int i = 0; i < n; ++i) {
       sc.pm[i] = rho * g.pivot(i);
       sc.spm[i] = kernels::sphere_surface(g.diameter_pivots()[i]) / sc.pm[i];
+      sc.floor[i] = kMassFloor / sc.pm[i];
     }
   }
   return sc.pm.data();
@@ -342,11 +348,15 @@ Status ParticleChamber::eval(const Ctx<T>& c) const {
   // branch, or an integrator step too long): refuse it, so that the step is cut. The integrator's own round-off in
   // emptied classes stays many orders of magnitude below the threshold.
   double held = 0.0, lowest = 0.0;
-  for (int i = 0; i < n_; ++i) held += std::abs(value_of(M[i])), lowest = std::min(lowest, value_of(M[i]));
+  if constexpr (std::is_same_v<T, double>) {  // vectorized: the order of the sum does not matter to the test
+    const Eigen::Map<const Eigen::ArrayXd> m(M, n_);
+    held = m.abs().sum(), lowest = std::min(0.0, m.minCoeff());
+  } else {
+    for (int i = 0; i < n_; ++i) held += std::abs(value_of(M[i])), lowest = std::min(lowest, value_of(M[i]));
+  }
   if (lowest < -1e-6 * held) return Status::kRecoverable;
   for (int i = 0; i < n_; ++i) {
     sc.N[i] = M[i] / pm[i];
-    sc.floor[i] = kMassFloor / pm[i];  // an emptied class carries a finite moisture
     sc.dM[i] = sc.dW[i] = T(0.0);
   }
   const T m_sus = spray_solids(c);
@@ -425,7 +435,7 @@ void ParticleChamber::analytic_jacobian(const Ctx<double>& c, double, JacobianSi
   const double* pm = particle_tables(c, w, sc, pp_, *grid_);
   const double* M = &c.x(sM_);
   const double* W = wet_ ? &c.x(sW_) : nullptr;
-  for (int i = 0; i < n_; ++i) sc.N[i] = M[i] / pm[i], sc.floor[i] = kMassFloor / pm[i];
+  for (int i = 0; i < n_; ++i) sc.N[i] = M[i] / pm[i];
   if (spray_) {
     const double rho = pp_.envelope_density(c.shared);
     const double amount = spray_solids(c) / rho;

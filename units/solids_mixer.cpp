@@ -20,6 +20,7 @@ struct Work : Workspace {
   template <class T>
   struct Flows {
     std::vector<T> cap, h;  // per class: capacity and enthalpy flows summed over the inlets
+    std::vector<T> dt;      // per inlet: T_j - T0
   };
   Flows<double> fd;
   Flows<Jet> fj;
@@ -63,13 +64,15 @@ class SolidsMixer : public UnitBase<SolidsMixer> {
     const T cp_s = c.sh(pp_.cp_s);
     const T& cp_l = c.par(p_cpl_);
     // one pass over the inlets' classes: flows, capacity flows C_ji and enthalpy flows C_ji (T_j - T0)
+    f.dt.resize(in_.size());
+    for (size_t j = 0; j < in_.size(); ++j) f.dt[j] = c.port(in_[j], solids::T(n_)) - props::kT0;
     for (int i = 0; i < n_; ++i) {
       T m(0.0), w(0.0), cap(0.0), h(0.0);
-      for (PortId p : in_) {
-        const T& mp = c.port(p, solids::mdot(i));
-        const T& wp = c.port(p, solids::water(n_, i));
+      for (size_t j = 0; j < in_.size(); ++j) {
+        const T& mp = c.port(in_[j], solids::mdot(i));
+        const T& wp = c.port(in_[j], solids::water(n_, i));
         const T cp = mp * cp_s + wp * cp_l;
-        m += mp, w += wp, cap += cp, h += cp * (c.port(p, solids::T(n_)) - props::kT0);
+        m += mp, w += wp, cap += cp, h += cp * f.dt[j];
       }
       c.res(sM_ + i) = c.x(sM_ + i) - m;
       c.res(sW_ + i) = c.x(sW_ + i) - w;
