@@ -58,20 +58,20 @@ void FvGrowth::setup(const Grid& g) {
   for (int f = 0; f <= n_; ++f) dx_face_[f] = g.pivot_ext(f) - g.pivot_ext(f - 1);
 }
 
-template <class T, bool kDerivatives>
-FvGrowth::Face<T> FvGrowth::face(const T* N, int f, bool upward) const {
+template <class T, bool kDerivatives, class Dens>
+FvGrowth::Face<T> FvGrowth::face(Dens dens, int f, bool upward) const {
   Face<T> r{T(0.0), {-1, -1, -1}, {0, 0, 0}};
   // Donor cell and the neighbours downwind (towards the face) and upwind; mirrored for downward growth.
   const int donor = upward ? f - 1 : f;
   if (donor < 0 || donor >= n_) return r;  // inflow through the boundary: none
   const int down = upward ? donor + 1 : donor - 1, up = upward ? donor - 1 : donor + 1;
-  const T nd = N[donor] / width_[donor];
+  const T nd = dens(donor);
   r.phi = nd;
   r.cols[0] = donor;
   r.d[0] = 1.0 / width_[donor];
   if (limiter_ == Limiter::kNone || down < 0 || down >= n_ || up < 0 || up >= n_) return r;
   const double cd = upward ? cplus_[donor] : cminus_[donor], cu = upward ? cminus_[donor] : cplus_[donor];
-  const T a = (N[down] / width_[down] - nd) * cd, b = (nd - N[up] / width_[up]) * cu;
+  const T a = (dens(down) - nd) * cd, b = (nd - dens(up)) * cu;
   double da, db;
   r.phi += 0.5 * (limiter_ == Limiter::kKoren ? koren<T, kDerivatives>(a, b, da, db)
                                               : van_albada<T, kDerivatives>(a, b, da, db));
@@ -129,13 +129,14 @@ void FvGrowth::faces_and_growth(const T* N, const GrowthTerms<T>& g, std::vector
                                 std::vector<T>& inv_integral) const {
   const int nf = n_ + 1;
   fc.resize(nf);
+  auto dens = [this, N](int k) -> T { return N[k] / width_[k]; };
   if (g.normalized) {
     // Volume-normalized laws grow (a_k >= 0, s_k >= 0): upwind from below.
-    for (int f = 0; f < nf; ++f) fc[f] = face<T, true>(N, f, true);
+    for (int f = 0; f < nf; ++f) fc[f] = face<T, true>(dens, f, true);
     growth_at_faces(fc, g, G, inv_integral);
   } else {
     growth_at_faces(fc, g, G, inv_integral);  // phi is not needed for absolute laws
-    for (int f = 0; f < nf; ++f) fc[f] = face<T, true>(N, f, !(G[f] < 0.0));
+    for (int f = 0; f < nf; ++f) fc[f] = face<T, true>(dens, f, !(G[f] < 0.0));
   }
 }
 
@@ -150,8 +151,11 @@ T FvGrowth::flux_values(const T* N, const GrowthTerms<T>& g, T* F, int* donor) c
   std::vector<TermScale<T>> heap(g.terms > kTerms ? g.terms : 0);
   TermScale<T>* ts = g.terms > kTerms ? heap.data() : stack;
   if (g.normalized) {
-    for (int f = 0; f < nf; ++f) {
-      const Face<T> fc = face<T, false>(N, f, true);
+    // Each cell's density once, into F (nf > n); then the faces from the top down, each written over a cell that no
+    // lower face reads (face f reads cells f - 2 to f).
+    for (int k = 0; k < n_; ++k) F[k] = N[k] / width_[k];
+    for (int f = nf - 1; f >= 0; --f) {
+      const Face<T> fc = face<T, false>([F](int k) -> T { return F[k]; }, f, true);
       F[f] = fc.phi, donor[f] = fc.cols[0];
     }
     term_scales(
@@ -162,7 +166,7 @@ T FvGrowth::flux_values(const T* N, const GrowthTerms<T>& g, T* F, int* donor) c
         g, [](int) { return T(0.0); }, ts);  // absolute laws read no face density
     for (int f = 0; f < nf; ++f) {
       const T G = rate_at(g, ts, f);
-      const Face<T> fc = face<T, false>(N, f, !(G < 0.0));
+      const Face<T> fc = face<T, false>([this, N](int k) -> T { return N[k] / width_[k]; }, f, !(G < 0.0));
       F[f] = G * fc.phi, donor[f] = fc.cols[0];
     }
   }

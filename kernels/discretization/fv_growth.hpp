@@ -60,8 +60,9 @@ class FvGrowth {
     int cols[3];
     double d[3];  // d phi / d N_col (double path only)
   };
-  template <class T, bool kDerivatives>
-  Face<T> face(const T* N, int f, bool upward) const;
+  // dens(k): the number density N_k / w_k of cell k.
+  template <class T, bool kDerivatives, class Dens>
+  Face<T> face(Dens dens, int f, bool upward) const;
   // Face densities (upwind by the sign of G) and the growth rates at the faces, shared by rates and Jacobian.
   template <class T>
   void faces_and_growth(const T* N, const GrowthTerms<T>& g, std::vector<Face<T>>& fc, std::vector<T>& G,
