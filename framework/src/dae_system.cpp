@@ -595,15 +595,44 @@ void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj,
   // Row-major, so that the rows of Z added in land on contiguous memory; one pass then subtracts it from the
   // column-major result, each entry once (adding straight into the result's rows strode through it, ~14 % of the
   // sieve-mill loop's run).
-  schur_c_.setZero(nr, n_);
+  // Where J_RS is dense (a bed's aggregation reads every class's wetted fraction), the product goes column by column
+  // instead: each entry of Z adds a column of J_RS, a contiguous vector update, into a column-major result. Each
+  // result entry receives the same terms in the same order (explicit columns ascending), so both ways agree to the
+  // bit; the dense way is taken when its work is below kDenseGain times the entries the sparse way visits.
+  constexpr double kDenseGain = 4.0;
+  auto z_count = [&](int col) {
+    const int s = n_ + col, u = fs_.state_unit(s), r = s - units[u].offset;
+    return z_rows_[u].start[r + 1] - z_rows_[u].start[r];
+  };
+  double sparse_work = 0.0, dense_work = 0.0;
+  schur_seen_.assign(size_t(m), 0);
   for (const auto& e : schur_t_) {
-    const int s = n_ + e.col(), u = fs_.state_unit(s), r = s - units[u].offset;
-    const SparseRows& z = z_rows_[u];
-    double* row = schur_c_.data() + size_t(e.row()) * n_;
-    const double a = e.value();
-    for (int q = z.start[r]; q < z.start[r + 1]; ++q) row[z.col[q]] += a * z.val[q];
+    const int nz = z_count(e.col());
+    sparse_work += nz;
+    if (!schur_seen_[e.col()]) schur_seen_[e.col()] = 1, dense_work += double(nz) * nr;
   }
-  for (const auto& [pos, row, len] : schur_row_runs_) out.middleRows(row, len) -= schur_c_.middleRows(pos, len);
+  if (dense_work < kDenseGain * sparse_work) {
+    schur_jd_.setZero(nr, m);
+    for (const auto& e : schur_t_) schur_jd_(e.row(), e.col()) = e.value();  // each (row, column) listed once
+    schur_cd_.setZero(nr, n_);
+    for (int col = 0; col < m; ++col) {
+      if (!schur_seen_[col]) continue;
+      const int s = n_ + col, u = fs_.state_unit(s), r = s - units[u].offset;
+      const SparseRows& z = z_rows_[u];
+      for (int q = z.start[r]; q < z.start[r + 1]; ++q) schur_cd_.col(z.col[q]) += z.val[q] * schur_jd_.col(col);
+    }
+    for (const auto& [pos, row, len] : schur_row_runs_) out.middleRows(row, len) -= schur_cd_.middleRows(pos, len);
+  } else {
+    schur_c_.setZero(nr, n_);
+    for (const auto& e : schur_t_) {
+      const int s = n_ + e.col(), u = fs_.state_unit(s), r = s - units[u].offset;
+      const SparseRows& z = z_rows_[u];
+      double* row = schur_c_.data() + size_t(e.row()) * n_;
+      const double a = e.value();
+      for (int q = z.start[r]; q < z.start[r + 1]; ++q) row[z.col[q]] += a * z.val[q];
+    }
+    for (const auto& [pos, row, len] : schur_row_runs_) out.middleRows(row, len) -= schur_c_.middleRows(pos, len);
+  }
   // The factored outer products u w^T of J_RS: u (w^T Z), w^T Z accumulated over the rows of Z it weights.
   for (size_t k = 0; k < n_rs_outer_; ++k) {
     const OuterTerm& term = rs_outer_[k];

@@ -143,7 +143,9 @@ class DaeSystem {
   class IntegratedSink;
   Eigen::MatrixXd schur_u_, schur_au_, schur_p_;
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> schur_c_;  // J_RS Z on the rows reading S
-  struct SparseRows {                                                               // compressed sparse rows
+  Eigen::MatrixXd schur_jd_, schur_cd_;  // J_RS held dense and J_RS Z, when J_RS is dense enough (column updates)
+  std::vector<int> schur_seen_;          // explicit column -> last Jacobian that listed it in schur_t_
+  struct SparseRows {                    // compressed sparse rows
     std::vector<int> start{0}, col, next;
     std::vector<double> val;
     int rows() const { return static_cast<int>(start.size()) - 1; }
