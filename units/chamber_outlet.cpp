@@ -11,12 +11,7 @@ namespace granuflow::units {
 StreamKind chamber_holdup() {
   static const StreamType t{"chamber hold-up",
                             "a chamber's state for its outlet: per class dry solids and water, T, rate", [](int n) {
-                              std::vector<FieldSpec> f;
-                              append_class_fields(f, "mass", n, "kg");
-                              append_class_fields(f, "water", n, "kg");
-                              f.push_back({"T", "K"});
-                              f.push_back({"rate", "1/s"});
-                              return f;
+                              return holdup_field_specs(n, {"rate", "1/s"});
                             }};
   return &t;
 }

@@ -11,6 +11,7 @@
 
 #include "granuflow/stream.hpp"
 #include "granuflow/unit.hpp"
+#include "particles.hpp"
 
 namespace granuflow::units {
 
@@ -20,10 +21,8 @@ class Classifier;
 // of one outlet (1/s).
 StreamKind chamber_holdup();
 namespace holdup_fields {
-inline int mass(int i) { return i; }
-inline int water(int classes, int i) { return classes + i; }
-inline int T(int classes) { return 2 * classes; }
-inline int rate(int classes) { return 2 * classes + 1; }
+using holdup_layout::mass, holdup_layout::water, holdup_layout::T;
+inline int rate(int classes) { return holdup_layout::last(classes); }
 }  // namespace holdup_fields
 
 struct ChamberOutletSpec {

@@ -5,12 +5,7 @@ namespace granuflow::units::paper001 {
 StreamKind holdup_stream() {
   static const StreamType t{"holdup", "a bed's state: per class dry-solid and water mass, temperature, gas velocity",
                             [](int n) {
-                              std::vector<FieldSpec> f;
-                              append_class_fields(f, "mass", n, "kg");
-                              append_class_fields(f, "water", n, "kg");
-                              f.push_back({"T", "K"});
-                              f.push_back({"u0", "m/s"});
-                              return f;
+                              return holdup_field_specs(n, {"u0", "m/s"});
                             }};
   return &t;
 }

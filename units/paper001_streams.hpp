@@ -6,6 +6,7 @@
 //     moisture (Eq. (55)), then the liquid temperature.
 #pragma once
 #include "granuflow/stream.hpp"
+#include "particles.hpp"
 
 namespace granuflow::units::paper001 {
 
@@ -13,10 +14,8 @@ StreamKind holdup_stream();
 StreamKind wetting_stream();
 
 namespace holdup {
-inline int mass(int i) { return i; }
-inline int water(int classes, int i) { return classes + i; }
-inline int T(int classes) { return 2 * classes; }
-inline int u0(int classes) { return 2 * classes + 1; }
+using holdup_layout::mass, holdup_layout::water, holdup_layout::T;
+inline int u0(int classes) { return holdup_layout::last(classes); }
 }  // namespace holdup
 namespace wetting {
 inline int mdot(int i) { return i; }

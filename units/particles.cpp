@@ -1,6 +1,7 @@
 #include "particles.hpp"
 
 #include <cmath>
+#include <utility>
 
 #include "granuflow/errors.hpp"
 #include "granuflow/flowsheet.hpp"
@@ -59,6 +60,15 @@ const ParticleSystem& particle_system(UnitSpec& s, Settings& st) {
                       "`particles:` section (settings: grid, classes, d_min, d_max; params: rho_s, eps_intra, ...)");
   s.use_shared_params(name);
   return *ps;
+}
+
+std::vector<FieldSpec> holdup_field_specs(int classes, FieldSpec last) {
+  std::vector<FieldSpec> f;
+  append_class_fields(f, "mass", classes, "kg");
+  append_class_fields(f, "water", classes, "kg");
+  f.push_back({"T", "K"});
+  f.push_back(std::move(last));
+  return f;
 }
 
 void register_particles(Registry<Unit>& r) {

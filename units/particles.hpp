@@ -6,6 +6,7 @@
 // density of paper 001's closures (Table 9) and the solid heat capacity.
 #pragma once
 #include <memory>
+#include <vector>
 
 #include "granuflow/registry.hpp"
 #include "granuflow/unit.hpp"
@@ -45,5 +46,15 @@ class ParticleSystem : public UnitBase<ParticleSystem> {
 const ParticleSystem& particle_system(UnitSpec& s, Settings& st);
 
 void register_particles(Registry<Unit>& r);
+
+// A particle hold-up as another unit reads it (a bed's for its spray zone, a chamber's for its outlets): per class
+// dry-solid and water mass (kg), the temperature (K), then one scalar the stream kind names.
+std::vector<FieldSpec> holdup_field_specs(int classes, FieldSpec last);
+namespace holdup_layout {
+inline int mass(int i) { return i; }
+inline int water(int classes, int i) { return classes + i; }
+inline int T(int classes) { return 2 * classes; }
+inline int last(int classes) { return 2 * classes + 1; }
+}  // namespace holdup_layout
 
 }  // namespace granuflow::units
