@@ -72,7 +72,8 @@ void DaeSystem::precondition_setup(double t, const double* y_in, const double* y
       inst.unit->precondition_setup(c, cj);
       continue;
     }
-    if (!jets) {  // the AD sweeps read every state as a Jet
+    if (!jets) {        // the AD sweeps read every state as a Jet
+      jets_plain_ = 0;  // its sweeps seed their own directions
       for (int i = 0; i < n_ext_; ++i) xj_[i] = Jet(y[i]), xdj_[i] = Jet(yp[i]);
       params_as_jets();
       jets = true;

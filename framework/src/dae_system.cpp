@@ -417,7 +417,7 @@ class SparseSink : public JacobianSink {
 // apart: the Schur complement applies them as rank-one updates instead of through a dense product.
 class DaeSystem::FactoringSink : public JacobianSink {
  public:
-  FactoringSink(DaeSystem& sys, int unit, int row0) : sys_(sys), unit_(unit), row0_(row0) {}
+  FactoringSink(DaeSystem& sys, int unit) : sys_(sys), unit_(unit), rows_(sys.zs_triplets_[unit]) {}
   void add_outer(int n_rows, const double* u, int n_cols, const int* cols, const double* w) override {
     for (int k = 0; k < n_cols; ++k)
       if (cols[k] >= sys_.n_) return JacobianSink::add_outer(n_rows, u, n_cols, cols, w);
@@ -427,13 +427,28 @@ class DaeSystem::FactoringSink : public JacobianSink {
   }
 
  protected:
+  // Straight into the unit's J_SR rows, or into the J_SS block of its read of another explicit unit (that unit's
+  // columns come in runs: the owner is looked up when a run starts). Its own block is the identity of x - f.
   void add_entry(int local_row, int global_col, double value) override {
-    if (value != 0.0) sys_.ext_entries_.emplace_back(row0_ + local_row, global_col, value);
+    if (value == 0.0) return;
+    if (global_col < sys_.n_) {
+      rows_.emplace_back(local_row, global_col, value);
+      return;
+    }
+    if (global_col < lo_ || global_col >= hi_) {
+      const auto& units = sys_.fs_.units();
+      const int w = sys_.fs_.state_unit(global_col);
+      lo_ = units[w].offset, hi_ = lo_ + static_cast<int>(units[w].spec.states().size());
+      block_ = w == unit_ ? -1 : sys_.read_index_[size_t(unit_) * units.size() + w];
+    }
+    if (block_ >= 0) sys_.read_blocks_[block_].emplace_back(local_row, global_col - lo_, value);
   }
 
  private:
   DaeSystem& sys_;
-  int unit_, row0_;
+  int unit_;
+  std::vector<Eigen::Triplet<double>>& rows_;
+  int lo_ = 0, hi_ = 0, block_ = -1;
 };
 
 // An integrated unit's rows in the inlined path: dense, but the part of an outer product on explicit columns is kept
@@ -520,6 +535,8 @@ void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj,
   evaluate_explicit(t, y_ext_.data(), yp_ext_.data(), pvals_, scratch_);
   jac_ext_.resize(size_t(n_) * n_ext_);  // the integrated units' rows over every column
   n_outer_ = n_rs_outer_ = 0;
+  zs_triplets_.resize(fs_.units().size());
+  read_blocks_.resize(explicit_reads_.size());
   assemble(t, y_ext_.data(), yp_ext_.data(), cj, n_ext_, jac_ext_.data(), nullptr, true);
   // Chain rule through the explicit states: dF_R/dy_R = J_RR - J_RS J_SS^-1 J_SR, with J_SR = D + sum u_k w_k^T
   // (D sparse in practice: each explicit state reads few integrated ones, apart from the outer products).
@@ -533,9 +550,6 @@ void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj,
   // ones), so the products cost their nonzeros, not the blocks' area; explicit_reads_ lists every read of a unit
   // after all reads of the units it reads, so Z_v is final when Z_u uses it.
   z_rows_.resize(units.size());
-  zs_triplets_.resize(units.size());
-  read_blocks_.resize(explicit_reads_.size());
-  const int nu_all = static_cast<int>(units.size());
   double* const base = jac_ext_.data();
   std::copy(base, base + size_t(n_) * n_, dense);  // J_RR
   std::fill(base, base + size_t(n_) * n_, 0.0);
@@ -553,21 +567,8 @@ void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj,
     }
     pos += len;
   }
-  // The explicit units' rows from the entries they wrote: each unit's J_SR rows and the J_SS block of each read
+  // The explicit units' rows as their sinks sorted them: each unit's J_SR rows and the J_SS block of each read
   // between explicit units (an entry listed twice is summed by the products below, which are linear in each entry).
-  for (int u : explicit_order_) zs_triplets_[u].clear();
-  for (auto& b : read_blocks_) b.clear();
-  for (const auto& e : ext_entries_) {
-    const int row = e.row(), col = e.col();
-    const int u = fs_.state_unit(row), r = row - units[u].offset;
-    if (col < n_) {
-      zs_triplets_[u].emplace_back(r, col, e.value());
-    } else {
-      const int w = fs_.state_unit(col);  // u's own block is the identity of x - f
-      const int k = w == u ? -1 : read_index_[size_t(u) * nu_all + w];
-      if (k >= 0) read_blocks_[k].emplace_back(r, col - units[w].offset, e.value());
-    }
-  }
   ext_clean_ = true;
   for (int u : explicit_order_) z_rows_[u].assign(static_cast<int>(units[u].spec.states().size()), zs_triplets_[u]);
   Eigen::MatrixXd& zu = schur_u_;
@@ -678,12 +679,13 @@ void DaeSystem::assemble(double t, const double* y, const double* yp, double cj,
   const auto& units = fs_.units();
   // The inlined path (factor_outer): `dense` holds the integrated units' rows over every column (leading dimension
   // n_), cleared by the Schur pass that reads it (jacobian()), or whole when an evaluation did not get that far;
-  // explicit units list their entries in ext_entries_.
+  // explicit units list their entries in zs_triplets_ and read_blocks_ (FactoringSink).
   const int ld = factor_outer ? n_ : dim;
   if (dense && factor_outer) {
     if (!ext_clean_) std::fill(dense, dense + size_t(n_) * dim, 0.0);
     ext_clean_ = false;
-    ext_entries_.clear();
+    for (int u : explicit_order_) zs_triplets_[u].clear();
+    for (auto& b : read_blocks_) b.clear();
   } else if (dense) {
     std::fill(dense, dense + size_t(dim) * dim, 0.0);
   }
@@ -691,10 +693,10 @@ void DaeSystem::assemble(double t, const double* y, const double* yp, double cj,
     pattern();  // built on first use
     std::fill(sparse, sparse + pattern_.nnz(), 0.0);
   }
-  for (int i = 0; i < dim; ++i) {
-    xj_[i] = Jet(y[i]);
-    xdj_[i] = Jet(yp[i]);
-  }
+  const int plain = std::min(jets_plain_, dim);
+  for (int i = 0; i < plain; ++i) xj_[i].a = y[i], xdj_[i].a = yp[i];
+  for (int i = plain; i < dim; ++i) xj_[i] = Jet(y[i]), xdj_[i] = Jet(yp[i]);
+  jets_plain_ = 0;  // until every sweep has restored its seeds (a unit may throw)
   params_as_jets();
   for (size_t u = 0; u < units.size(); ++u) {
     const int ns = static_cast<int>(units[u].spec.states().size());
@@ -705,7 +707,7 @@ void DaeSystem::assemble(double t, const double* y, const double* yp, double cj,
       if (!units[u].spec.analytic_complete()) ad_unit(static_cast<int>(u), t, y, yp, cj, sink);
     };
     if (dense && factor_outer && units[u].spec.is_explicit()) {
-      FactoringSink sink(*this, static_cast<int>(u), units[u].offset);
+      FactoringSink sink(*this, static_cast<int>(u));
       run(sink);
     } else if (dense && factor_outer) {
       IntegratedSink sink(*this, static_cast<int>(u), dense, ld, units[u].offset);
@@ -718,6 +720,7 @@ void DaeSystem::assemble(double t, const double* y, const double* yp, double cj,
       run(sink);
     }
   }
+  jets_plain_ = dim;
 }
 
 // Forward AD of one unit's residual: its directions (AdPlan) kAdChunk at a time, the entries distributed to their
@@ -727,6 +730,7 @@ void DaeSystem::reference_jacobian(double t, const double* y, const double* yp, 
   fill_params(t);
   const auto& units = fs_.units();
   std::fill(dense, dense + size_t(n_) * n_, 0.0);
+  jets_plain_ = 0;
   for (int i = 0; i < n_; ++i) xj_[i] = Jet(y[i]), xdj_[i] = Jet(yp[i]);
   params_as_jets();
   for (size_t u = 0; u < units.size(); ++u) {
@@ -808,6 +812,7 @@ void DaeSystem::seed(int id, int u, size_t slot, std::vector<Jet>& pj) const {
 // without `ypS`), and every unit's parameters seeded with the directions of the parameters they are or follow.
 void DaeSystem::load_directions(const double* y, const double* yp, const std::vector<int>& params, size_t d0, size_t d1,
                                 const double* const* yS, const double* const* ypS, int n_loaded) {
+  jets_plain_ = 0;
   for (int i = 0; i < n_loaded; ++i) {
     xj_[i] = Jet(y[i]);
     xdj_[i] = Jet(yp[i]);

@@ -166,7 +166,6 @@ class DaeSystem {
   std::vector<std::vector<Eigen::Triplet<double>>> zs_triplets_;  // per unit: an explicit unit's J_SR rows
   std::vector<std::vector<Eigen::Triplet<double>>> read_blocks_;  // per explicit read (u, v): J_SS block
   std::vector<int> read_index_;                                   // u * units + v -> index in explicit_reads_, or -1
-  std::vector<Eigen::Triplet<double>> ext_entries_;               // what the explicit units wrote (global row, column)
   std::vector<int> schur_rows_, schur_cols_;                      // where the Schur correction can be nonzero
   std::vector<int> schur_col_pos_;                                // integrated column -> position in schur_cols_, or -1
   std::vector<std::tuple<int, int, int>> schur_row_runs_;         // (position in schur_rows_, first row, length)
@@ -182,6 +181,9 @@ class DaeSystem {
   mutable std::vector<std::unordered_map<int, int>> col_map_;  // per unit: global column -> local column
   mutable SparsityPattern pattern_;
   std::vector<Jet> xj_, xdj_, rj_, jet_scratch_, qj_;
+  // xj_ and xdj_ below this index carry zero derivative parts (the Jacobian's sweeps restore the zeros they seed), so
+  // a Jacobian only writes their values; paths that load directions lower it.
+  int jets_plain_ = 0;
   std::vector<std::vector<Jet>> pj_;  // per unit: parameters as Jets (seeded for sensitivities)
   std::vector<double> rbuf_;
   struct BlockPreconditioner;
