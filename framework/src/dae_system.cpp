@@ -345,9 +345,16 @@ template <class T>
 void DaeSystem::evaluate_explicit(double t, T* x, T* xd, const std::vector<std::vector<T>>& params,
                                   std::vector<T>& scratch) {
   const auto& units = fs_.units();
+  // The explicit states have no derivatives: in yp_ext_ (written nowhere else) their zeros are set once.
+  bool zero_xd = true;
+  if constexpr (std::is_same_v<T, double>) {
+    zero_xd = xd != yp_ext_.data() || !yp_ext_zero_;
+    if (xd == yp_ext_.data()) yp_ext_zero_ = true;
+  }
   for (int u : explicit_order_) {
     const int ns = static_cast<int>(units[u].spec.states().size()), off = units[u].offset;
-    for (int k = 0; k < ns; ++k) x[off + k] = T(0.0), xd[off + k] = T(0.0);
+    std::fill(x + off, x + off + ns, T(0.0));  // x = 0: the residual x - f is then -f exactly
+    if (zero_xd) std::fill(xd + off, xd + off + ns, T(0.0));
     scratch.resize(ns);
     units[u].unit->residual(ctx<T>(u, t, x, xd, params, scratch.data()));
     for (int k = 0; k < ns; ++k) x[off + k] = -scratch[k];
