@@ -134,6 +134,24 @@ DaeSystem::DaeSystem(const Flowsheet& fs, bool inline_explicit) : fs_(fs) {
     explicit_order_.push_back(*next);
     pending.erase(next);
   }
+  // The explicit units the quadrature rates need: those whose states a unit with quadratures reads, and the
+  // explicit units these read in turn. A quadrature evaluation (once per integrator step) skips the others.
+  {
+    std::vector<char> need(units.size(), 0);
+    auto mark = [&](int u) {
+      if (units[u].spec.is_explicit()) need[u] = 1;
+      for (const auto& port : units[u].port_index)
+        for (int c : port)
+          if (c >= 0 && units[fs_.state_unit(c)].spec.is_explicit()) need[fs_.state_unit(c)] = 1;
+    };
+    for (size_t u = 0; u < units.size(); ++u)
+      if (!units[u].spec.quadratures().empty()) mark(static_cast<int>(u));
+    for (auto it = explicit_order_.rbegin(); it != explicit_order_.rend(); ++it)  // readers before what they read
+      if (need[*it])
+        for (int v : reads[*it]) need[v] = 1;
+    for (int u : explicit_order_)
+      if (need[u]) quad_explicit_.push_back(u);
+  }
   const int n_all = n_ext_;
   pvals_.resize(units.size());
   pconst_.resize(units.size());
@@ -343,7 +361,7 @@ void DaeSystem::build_sparse_maps() const {
 // Evaluates the explicit units in order: with their states set to zero, residual = -f.
 template <class T>
 void DaeSystem::evaluate_explicit(double t, T* x, T* xd, const std::vector<std::vector<T>>& params,
-                                  std::vector<T>& scratch) {
+                                  std::vector<T>& scratch, const std::vector<int>* only) {
   const auto& units = fs_.units();
   // The explicit states have no derivatives: in yp_ext_ (written nowhere else) their zeros are set once.
   bool zero_xd = true;
@@ -351,7 +369,7 @@ void DaeSystem::evaluate_explicit(double t, T* x, T* xd, const std::vector<std::
     zero_xd = xd != yp_ext_.data() || !yp_ext_zero_;
     if (xd == yp_ext_.data()) yp_ext_zero_ = true;
   }
-  for (int u : explicit_order_) {
+  for (int u : only ? *only : explicit_order_) {
     const int ns = static_cast<int>(units[u].spec.states().size()), off = units[u].offset;
     std::fill(x + off, x + off + ns, T(0.0));  // x = 0: the residual x - f is then -f exactly
     if (zero_xd) std::fill(xd + off, xd + off + ns, T(0.0));
@@ -863,7 +881,7 @@ Status DaeSystem::quadrature(double t, const double* y, const double* yp, double
   if (inline_) {
     std::copy(y, y + n_, y_ext_.begin());
     std::copy(yp, yp + n_, yp_ext_.begin());
-    evaluate_explicit(t, y_ext_.data(), yp_ext_.data(), pvals_, scratch_);
+    evaluate_explicit(t, y_ext_.data(), yp_ext_.data(), pvals_, scratch_, &quad_explicit_);
     y = y_ext_.data();
     yp = yp_ext_.data();
   }

@@ -108,7 +108,8 @@ class DaeSystem {
   template <class T>
   Ctx<T> ctx(int u, double t, const T* y, const T* yp, const std::vector<std::vector<T>>& params, T* r) const;
   template <class T>
-  void evaluate_explicit(double t, T* x, T* xd, const std::vector<std::vector<T>>& params, std::vector<T>& scratch);
+  void evaluate_explicit(double t, T* x, T* xd, const std::vector<std::vector<T>>& params, std::vector<T>& scratch,
+                         const std::vector<int>* only = nullptr);  // `only`: these explicit units (in order)
   // With `factor_outer`, explicit units' outer products are collected in outer_ instead of added to `dense`.
   void assemble(double t, const double* y, const double* yp, double cj, int dim, double* dense, double* sparse,
                 bool factor_outer = false);
@@ -127,6 +128,7 @@ class DaeSystem {
   double fill_ = 0.0;
   std::vector<std::unique_ptr<Workspace>> ws_;       // per unit, this run's
   std::vector<int> explicit_order_;                  // explicit units, each after the explicit units it reads
+  std::vector<int> quad_explicit_;                   // the explicit units the quadrature rates read, in that order
   std::vector<std::pair<int, int>> explicit_reads_;  // (u, v): explicit unit u reads explicit unit v, in order
   // u w^T on the rows of `unit` and the columns `cols`: outer_ for explicit units, rs_outer_ for integrated ones
   struct OuterTerm {
