@@ -25,13 +25,12 @@ struct Work : Workspace {
     T tau, ws, t_cross;
     bool ws_floored, not_fluidized, tau_floored;
   };
+  // Per class, as arrays of each quantity (the flow closures of a double evaluation then run as vector loops).
   template <class T>
   struct Scratch {
-    std::vector<Flow<T>> flow;
-    std::vector<T> m_dep, fwet, xwet;
+    std::vector<T> tau, ws, t_cross, m_dep, fwet, xwet;
     void resize(int n) {
-      flow.resize(n);
-      m_dep.resize(n), fwet.resize(n), xwet.resize(n);
+      for (auto* v : {&tau, &ws, &t_cross, &m_dep, &fwet, &xwet}) v->resize(n);
     }
   };
   Scratch<double> sd;
@@ -121,10 +120,11 @@ class SprayZone : public UnitBase<SprayZone> {
   void outputs(const Ctx<T>& c) const {
     const T& u0 = c.port(bed_, holdup::u0(n_));
     const GasProps<T> g = gas_props(c.port(bed_, holdup::T(n_)));
+    const FlowParams<T> q = flow_params(c);
     int a = 0, b = 0, not_fluidized = 0, tau_floored = 0;
     T mass(0.0), fm(0.0);
     for (int i = 0; i < n_; ++i) {
-      const Work::Flow<T> f = class_flow(c, i, u0, g);
+      const Work::Flow<T> f = class_flow(q, grid_->diameter_pivots()[i], u0, g);
       a += f.ws_floored, not_fluidized += f.not_fluidized, tau_floored += f.tau_floored;
       const T& fwet = c.x(sFwet_ + i);
       b += p1::wetted_volume_fraction(fwet, T(grid_->diameter_pivots()[i]), c.par(p_hpen_)).active;
@@ -151,24 +151,32 @@ class SprayZone : public UnitBase<SprayZone> {
     return {rho, mu, props::kinematic_viscosity(mu, rho)};
   }
 
-  // DEM-surrogate closures of class i, Eqs. (29)-(33), (47)-(49).
+  // The parameters of the flow closures, read once per evaluation.
   template <class T>
-  Work::Flow<T> class_flow(const Ctx<T>& c, int i, const T& u0, const GasProps<T>& g) const {
-    const T d(grid_->diameter_pivots()[i]);
-    const T umf = kernels::transfer::wen_yu_umf(d, c.sh(pp_.rho_p), g.rho, g.mu);  // Eqs. (31)-(33)
+  struct FlowParams {
+    T rho_p, wsf, ws1, ws2, ws3, tau1, tau2, v1, v2, zone;
+  };
+  template <class T>
+  FlowParams<T> flow_params(const Ctx<T>& c) const {
+    return {c.sh(pp_.rho_p), c.par(p_wsf_),  c.par(p_ws1_), c.par(p_ws2_), c.par(p_ws3_),
+            c.par(p_tau1_),  c.par(p_tau2_), c.par(p_v1_),  c.par(p_v2_),  c.par(p_zone_)};
+  }
+  // DEM-surrogate closures of a class of diameter d, Eqs. (29)-(33), (47)-(49).
+  template <class T>
+  static Work::Flow<T> class_flow(const FlowParams<T>& q, double d_class, const T& u0, const GasProps<T>& g) {
+    const T d(d_class);
+    const T umf = kernels::transfer::wen_yu_umf(d, q.rho_p, g.rho, g.mu);  // Eqs. (31)-(33)
     // Eq. (30). A class with u0 < u_mf is not fluidized, outside the range the DEM surrogates were fitted on: it is
     // taken at incipient fluidization (Re = 0), where the fits give a positive velocity and residence time (a
     // negative velocity would make its wetted fraction, and with it aggregation rates, negative).
     const auto re = kernels::floor_at(kernels::transfer::excess_reynolds_number(u0, umf, d, g.nu), T(0.0));
-    const auto w =
-        p1::spray_zone_solids_fraction(re.value, c.par(p_wsf_), c.par(p_ws1_), c.par(p_ws2_), c.par(p_ws3_));  // (47)
+    const auto w = p1::spray_zone_solids_fraction(re.value, q.wsf, q.ws1, q.ws2, q.ws3);  // (47)
     // Eq. (29) turns negative above Re = -c2 / c1 (77 with Table 8): no time in the spray zone, not a negative one
-    const auto tau =
-        kernels::floor_at(p1::dimensionless_residence_time(re.value, c.par(p_tau1_), c.par(p_tau2_)), T(0.0));
+    const auto tau = kernels::floor_at(p1::dimensionless_residence_time(re.value, q.tau1, q.tau2), T(0.0));
     return {tau.value,
             w.value,
-            p1::spray_zone_crossing_time(p1::spray_zone_particle_velocity(re.value, c.par(p_v1_), c.par(p_v2_)),
-                                         c.par(p_zone_)),  // Eqs. (48), (49)
+            p1::spray_zone_crossing_time(p1::spray_zone_particle_velocity(re.value, q.v1, q.v2),
+                                         q.zone),  // Eqs. (48), (49)
             w.active,
             re.active,
             tau.active};
@@ -180,9 +188,9 @@ class SprayZone : public UnitBase<SprayZone> {
   }
   // Weight of class i in the liquid split of Eq. (44): N_i tau_i d_i^2 (default) or tau_i d_i^2 (literal).
   template <class T>
-  T split_weight(const Ctx<T>& c, int i, const T& mass, const Work::Flow<T>& f) const {
+  T split_weight(const Ctx<T>& c, int i, const T& mass, const T& tau) const {
     const double d = grid_->diameter_pivots()[i];
-    const T w = f.tau * d * d;
+    const T w = tau * d * d;
     return split_ == p1::LiquidSplit::kClassSurface ? T(w * mass / particle_mass(c, i)) : w;
   }
 
@@ -190,16 +198,16 @@ class SprayZone : public UnitBase<SprayZone> {
   // weights; returns whether Eq. (57)'s cap was active.
   template <class T>
   bool class_outputs(const Ctx<T>& c, int i, const T& mass, const T& water, const T& m_liquid, const T& weight_sum,
-                     const Work::Flow<T>& f, T* m_dep, T* fwet, T* xwet) const {
+                     const Work::Scratch<T>& f, T* m_dep, T* fwet, T* xwet) const {
     const T d(grid_->diameter_pivots()[i]);
-    *m_dep = split_weight(c, i, mass, f) * m_liquid / weight_sum;  // Eq. (44)
+    *m_dep = split_weight(c, i, mass, f.tau[i]) * m_liquid / weight_sum;  // Eq. (44)
     // Eqs. (43), (45), (46): X_LS = m_dep / (w_s M / t). With the default split, m_dep is proportional to
     // N_i = M_i / m_particle, so the ratio stays finite for an empty class.
     T x_ls;
     if (split_ == p1::LiquidSplit::kClassSurface)
-      x_ls = m_liquid * f.tau * d * d / weight_sum * f.t_cross / (f.ws * particle_mass(c, i));
+      x_ls = m_liquid * f.tau[i] * d * d / weight_sum * f.t_cross[i] / (f.ws[i] * particle_mass(c, i));
     else
-      x_ls = *m_dep * f.t_cross / (f.ws * (mass > T(1e-15) ? mass : T(1e-15)));
+      x_ls = *m_dep * f.t_cross[i] / (f.ws[i] * (mass > T(1e-15) ? mass : T(1e-15)));
     // Eq. (42) is linear in X_LS: phi = kappa X_LS
     const T kappa = p1::coating_number(T(1.0), d, c.par(p_drop_), c.sh(pp_.rho_p), c.par(p_rdrop_));
     const T phi = kappa * x_ls;
@@ -222,18 +230,25 @@ class SprayZone : public UnitBase<SprayZone> {
   // All classes; counts the floors and caps that replaced the literal equations.
   template <class T>
   void closures(const Ctx<T>& c, Work::Scratch<T>& sc, int* ws_floored, int* vol_capped) const {
-    const T& u0 = c.port(bed_, holdup::u0(n_));
+    const T u0 = c.port(bed_, holdup::u0(n_));
     const GasProps<T> g = gas_props(c.port(bed_, holdup::T(n_)));
+    const FlowParams<T> q = flow_params(c);
+    // Parameters and gas properties in locals, the results in arrays of their own: with doubles a vector loop.
+    const double* d = grid_->diameter_pivots().data();
+    T *tau = sc.tau.data(), *ws = sc.ws.data(), *t_cross = sc.t_cross.data();
+    int floored = 0;
     for (int i = 0; i < n_; ++i) {
-      sc.flow[i] = class_flow(c, i, u0, g);
-      *ws_floored += sc.flow[i].ws_floored;
+      const Work::Flow<T> f = class_flow(q, d[i], u0, g);
+      tau[i] = f.tau, ws[i] = f.ws, t_cross[i] = f.t_cross;
+      floored += f.ws_floored;
     }
+    *ws_floored += floored;
     const T sum =
-        c.reduce(r_weights_, n_, [&](int i) { return split_weight(c, i, c.port(bed_, holdup::mass(i)), sc.flow[i]); });
+        c.reduce(r_weights_, n_, [&](int i) { return split_weight(c, i, c.port(bed_, holdup::mass(i)), sc.tau[i]); });
     const T& m_liquid = c.port(liquid_, liquid::kMdot);
     for (int i = 0; i < n_; ++i)
       *vol_capped += class_outputs(c, i, c.port(bed_, holdup::mass(i)), c.port(bed_, holdup::water(n_, i)), m_liquid,
-                                   sum, sc.flow[i], &sc.m_dep[i], &sc.fwet[i], &sc.xwet[i]);
+                                   sum, sc, &sc.m_dep[i], &sc.fwet[i], &sc.xwet[i]);
   }
 
   int n_ = def::kSizeClasses;
