@@ -10,7 +10,7 @@ import numpy as np
 
 from . import _core, accuracy, outputs
 from .quantity import is_number, parse_time
-from .result import GridWarning, Result
+from .result import GridWarning, Layout, Result
 from .textfile import check_regular, check_yaml, short
 
 ConfigError = _core.ConfigError
@@ -25,6 +25,8 @@ class Flowsheet:
 
     def __init__(self, scene: "_core.Scene"):
         self._scene = scene
+        self._layout: Layout | None = None  # what every result of this flowsheet shares, from its first run
+        self._summary_map: dict = {}
 
     # -- identity -------------------------------------------------------------------------------
     @property
@@ -267,12 +269,16 @@ class Flowsheet:
         if isinstance(sensitivities, str):
             raise ConfigError(f"simulate(): sensitivities = {short(sensitivities)}: expected a list of parameter "
                               "names, e.g. ['inlet.T']")
+        layout = self._layout  # names, roles and units: the first run brings them
         raw = self._scene.simulate(
             t_end=None if t_end is None else _end_time(t_end, "simulate()"),
             t_out=t_out, n_out=None if n_out is None else int(n_out), rtol=rtol, atol=atol,
             sensitivities=list(sensitivities), linear_solver=linear_solver,
-            max_steps=None if max_steps is None else int(max_steps), method=method)
-        res = Result(raw, scene_name=self.name, summary_map=dict(self._scene.summary_map), units=self.units())
+            max_steps=None if max_steps is None else int(max_steps), method=method, names=layout is None)
+        if layout is None:
+            layout = self._layout = Layout(raw, self.units())
+            self._summary_map = dict(self._scene.summary_map)
+        res = Result(raw, scene_name=self.name, summary_map=self._summary_map, layout=layout)
         if error_estimate:
             res.error_estimate = self._error_estimate(res, linear_solver=linear_solver, max_steps=max_steps,
                                                       method=method)

@@ -16,6 +16,19 @@ class GridWarning(UserWarning):
     """A result whose size grid clips the distribution (:attr:`Result.warnings`)."""
 
 
+class Layout:
+    """What the results of one flowsheet share: state and output names, output roles, units and the name index.
+    Built from a raw result that carries the names; a flowsheet keeps one and passes it to every later result."""
+
+    def __init__(self, raw: dict, units: dict | None = None):
+        self.state_names = tuple(raw["state_names"])
+        self.output_names = tuple(raw["output_names"])
+        self.output_roles = tuple(tuple(r) for r in raw["output_roles"])
+        self.units = dict(units or {})
+        self.index = {n: ("y", i) for i, n in enumerate(self.state_names)}
+        self.index.update({n: ("o", i) for i, n in enumerate(self.output_names)})
+
+
 class Result:
     """The outcome of one simulation.
 
@@ -26,14 +39,15 @@ class Result:
     """
 
     def __init__(self, raw: dict, scene_name: str = "", summary_map: dict | None = None,
-                 units: dict | None = None):
+                 units: dict | None = None, layout: Layout | None = None):
+        layout = layout or Layout(raw, units)
         self.t = raw["t"]
         self.y = raw["y"]
         self.yp = raw["yp"]
-        self.state_names = list(raw["state_names"])
+        self.state_names = list(layout.state_names)
         self.outputs = raw["outputs"]
-        self.output_names = list(raw["output_names"])
-        self.output_roles = [tuple(r) for r in raw["output_roles"]]  # (role, quantity, class, unit) per output
+        self.output_names = list(layout.output_names)
+        self.output_roles = list(layout.output_roles)  # (role, quantity, class, unit) per output
         self.output_sens = raw.get("output_sens")
         self.sens = raw["sens"]
         self.sens_params = list(raw["sens_params"])
@@ -45,9 +59,8 @@ class Result:
         self.t_end = raw.get("t_end", float(self.t[-1]))
         self.scene_name = scene_name
         self.summary_map = dict(summary_map or {})
-        self.units = dict(units or {})
-        self._index = {n: ("y", i) for i, n in enumerate(self.state_names)}
-        self._index.update({n: ("o", i) for i, n in enumerate(self.output_names)})
+        self.units = dict(layout.units)
+        self._index = layout.index  # shared between the results of one flowsheet, never changed
 
     def __getitem__(self, name: str) -> np.ndarray:
         """Time series of a state or reported output by its qualified name."""

@@ -20,10 +20,13 @@ using namespace pybind11::literals;
 namespace granuflow::python {
 namespace {
 
-py::array_t<double> as_array(const std::vector<double>& v, std::vector<py::ssize_t> shape) {
-  py::array_t<double> a(shape);
-  std::copy(v.begin(), v.end(), a.mutable_data());
-  return a;
+// The vector's storage handed to NumPy (owned by the array from then on), not copied: a run's states and outputs
+// at every output time are most of what simulate() returns.
+py::array_t<double> as_array(std::vector<double>&& v, std::vector<py::ssize_t> shape) {
+  if (v.empty()) return py::array_t<double>(shape);
+  auto* owned = new std::vector<double>(std::move(v));
+  py::capsule free_when_done(owned, [](void* p) { delete static_cast<std::vector<double>*>(p); });
+  return py::array_t<double>(shape, owned->data(), free_when_done);
 }
 
 double value_for(const Scene& s, const std::string& name, const py::handle& v) {
@@ -60,7 +63,7 @@ py::list output_roles(const Flowsheet& fs) {
 py::dict simulate(Scene& s, std::optional<double> t_end, std::optional<std::vector<double>> t_out,
                   std::optional<int> n_out, std::optional<double> rtol, std::optional<double> atol,
                   std::vector<std::string> sensitivities, std::optional<std::string> linear_solver,
-                  std::optional<long> max_steps, std::optional<std::string> method) {
+                  std::optional<long> max_steps, std::optional<std::string> method, bool names) {
   SimOptions o = s.options;
   // An empty list would silently mean "the scene's output times"; the scene file refuses `times: []` too.
   if (t_out && t_out->empty())
@@ -107,12 +110,18 @@ py::dict simulate(Scene& s, std::optional<double> t_end, std::optional<std::vect
       "linear_solver"_a = r.stats.linear_solver, "linear_iterations"_a = r.stats.linear_iterations,
       "preconditioner_setups"_a = r.stats.preconditioner_setups, "linear_failures"_a = r.stats.linear_failures,
       "method"_a = r.stats.method, "method_reason"_a = r.stats.method_reason);
-  return py::dict("t"_a = as_array(r.t, {nt}), "y"_a = as_array(r.y, {nt, ns}), "yp"_a = as_array(r.yp, {nt, ns}),
-                  "state_names"_a = r.state_names, "outputs"_a = as_array(r.outputs, {nt, no}),
-                  "output_names"_a = r.output_names, "output_roles"_a = output_roles(*s.flowsheet),
-                  "output_sens"_a = as_array(r.output_sens, {nt, np, no}), "sens"_a = as_array(r.sens, {nt, np, ns}),
-                  "sens_params"_a = r.sens_params, "stats"_a = stats, "wall_time_s"_a = r.wall_time_s,
-                  "rtol"_a = o.rtol, "atol"_a = o.atol, "t_end"_a = o.t_end);
+  py::dict out("t"_a = as_array(std::move(r.t), {nt}), "y"_a = as_array(std::move(r.y), {nt, ns}),
+               "yp"_a = as_array(std::move(r.yp), {nt, ns}), "outputs"_a = as_array(std::move(r.outputs), {nt, no}),
+               "output_sens"_a = as_array(std::move(r.output_sens), {nt, np, no}),
+               "sens"_a = as_array(std::move(r.sens), {nt, np, ns}), "sens_params"_a = r.sens_params, "stats"_a = stats,
+               "wall_time_s"_a = r.wall_time_s, "rtol"_a = o.rtol, "atol"_a = o.atol, "t_end"_a = o.t_end);
+  // The names and roles depend on the flowsheet's structure only: a caller that keeps them asks once.
+  if (names) {
+    out["state_names"] = r.state_names;
+    out["output_names"] = r.output_names;
+    out["output_roles"] = output_roles(*s.flowsheet);
+  }
+  return out;
 }
 
 // Median wall time of one residual and of one Jacobian (dense below dense_limit states, else sparse) at the
@@ -273,7 +282,7 @@ void register_flowsheet(py::module_& m) {
           "stability"_a = false)
       .def("simulate", &simulate, py::kw_only(), "t_end"_a = py::none(), "t_out"_a = py::none(), "n_out"_a = py::none(),
            "rtol"_a = py::none(), "atol"_a = py::none(), "sensitivities"_a = std::vector<std::string>{},
-           "linear_solver"_a = py::none(), "max_steps"_a = py::none(), "method"_a = py::none());
+           "linear_solver"_a = py::none(), "max_steps"_a = py::none(), "method"_a = py::none(), "names"_a = true);
 
   m.def(
       "load_scene", [&reg](const std::string& path) { return load_scene(path, reg); }, "path"_a);

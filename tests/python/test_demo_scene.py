@@ -47,6 +47,26 @@ def test_parameter_change_without_reload_and_units_at_the_edge():
     assert cold == pytest.approx(exact_tank_temperatures(t_end, Q1=0.0)[1], rel=1e-6)
 
 
+def test_later_runs_share_the_names_and_own_their_arrays():
+    # The second run of a flowsheet takes its names, roles and units from the first (the core sends them once) and
+    # its arrays from the core's buffers without a copy: each result must still be complete and independent.
+    fs = gf.load(DEMO)
+    first = fs.simulate(t_end=500.0)
+    fs.set("tank1.Q", "30 kW")
+    second = fs.simulate(t_end=500.0)
+    assert second.state_names == first.state_names and second.output_names == first.output_names
+    assert second.output_roles == first.output_roles and second.units == first.units
+    assert second["tank2.T"][-1] > first["tank2.T"][-1] + 1.0  # more heat: its own values, not the first run's
+    second.state_names.append("not a state")
+    assert "not a state" not in first.state_names and "not a state" not in fs.simulate(t_end=500.0).state_names
+    assert first.summary["balance"]["energy_rel"] < 1e-6
+    y = first.y.copy()
+    del second
+    assert np.array_equal(first.y, y) and first.y.flags.writeable  # a buffer of its own, alive as long as it is
+    first.y[0, 0] += 1.0
+    assert first.y[0, 0] == y[0, 0] + 1.0
+
+
 def test_sensitivity_from_python_equals_finite_difference():
     fs = gf.load(DEMO)
     res = fs.simulate(t_end=500, sensitivities=["tank1.Q"], rtol=1e-10, atol=1e-12)
