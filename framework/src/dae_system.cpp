@@ -301,18 +301,20 @@ void DaeSystem::reconfigure() {
     }
   }
   pvals_ = pconst_;
+  inputs_.clear();
+  for (size_t u = 0; u < units.size(); ++u)
+    for (size_t k = 0; k < units[u].inputs.size(); ++k)
+      if (units[u].inputs[k]) inputs_.push_back({static_cast<int>(u), static_cast<int>(k)});
   fill_params(0.0);
 }
 
 void DaeSystem::fill_params(double t) {
   const auto& units = fs_.units();
-  for (size_t u = 0; u < units.size(); ++u)
-    for (size_t k = 0; k < units[u].inputs.size(); ++k) {
-      const auto& in = units[u].inputs[k];
-      if (!in) continue;
-      const bool step = in->interp() == PiecewiseLinear::Interp::kStep;
-      pvals_[u][k] = (*in)(step ? segment_start_ : t);
-    }
+  for (const auto& [u, k] : inputs_) {
+    const auto& in = units[u].inputs[k];
+    const bool step = in->interp() == PiecewiseLinear::Interp::kStep;
+    pvals_[u][k] = (*in)(step ? segment_start_ : t);
+  }
 }
 
 void DaeSystem::params_as_jets() {

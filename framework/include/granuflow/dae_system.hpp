@@ -129,6 +129,7 @@ class DaeSystem {
   std::vector<std::unique_ptr<Workspace>> ws_;       // per unit, this run's
   std::vector<int> explicit_order_;                  // explicit units, each after the explicit units it reads
   std::vector<int> quad_explicit_;                   // the explicit units the quadrature rates read, in that order
+  std::vector<std::pair<int, int>> inputs_;          // (unit, parameter) of every parameter driven by an input
   std::vector<std::pair<int, int>> explicit_reads_;  // (u, v): explicit unit u reads explicit unit v, in order
   // u w^T on the rows of `unit` and the columns `cols`: outer_ for explicit units, rs_outer_ for integrated ones
   struct OuterTerm {
