@@ -14,6 +14,7 @@
 #include "kernels/limited.hpp"
 #include "kernels/particle_geometry.hpp"
 #include "kernels/population/population.hpp"
+#include "kernels/simd_math.hpp"
 #include "kernels/transfer/fluid_bed_transfer.hpp"
 #include "paper001_streams.hpp"
 #include "particles.hpp"
@@ -222,7 +223,11 @@ class FluidBed : public UnitBase<FluidBed> {
     // Eqs. (70)-(89): drying and heat transfer per class; the bed's particle surface enters Eqs. (74), (87).
     const T surface = c.reduce(r_surface_, n_, [&](int i) { return M[i] * sc.spm[i]; });
     const GasSide<T> g = gas_side(c, t_s, tr::bed_area_ratio(surface, c.par(p_abed_)));
-    for (int i = 0; i < n_; ++i) class_transfer(c, i, M[i], W[i], pm[i], g, &sc.dry[i], &sc.q[i]);
+    const TransferParams<T> tp = transfer_params(c);
+    const double* d = grid_->diameter_pivots().data();
+    T *dry = sc.dry.data(), *q = sc.q.data();
+#pragma omp simd  // in doubles a vector loop (libmvec's log1p, kernels/simd_math.hpp)
+    for (int i = 0; i < n_; ++i) class_transfer(tp, d[i], M[i], W[i], pm[i], g, &dry[i], &q[i]);
     const T m_vap = c.reduce(r_drying_, n_, [&](int i) { return sc.dry[i]; });
     const T q_sum = c.reduce(r_heat_, n_, [&](int i) { return sc.q[i]; });
     const T dep = c.reduce(r_deposit_, n_, [&](int i) { return deposit(c, i, wet); });
@@ -433,25 +438,32 @@ class FluidBed : public UnitBase<FluidBed> {
     return g;
   }
 
-  // Drying rate (Eqs. (70)-(80)) and gas-to-solid heat flow (Eqs. (85)-(89)) of class i; returns whether the
-  // Eq. (80) regularization replaced the literal equation.
+  // The parameters of the class transfer, read once per evaluation.
   template <class T>
-  bool class_transfer(const Ctx<T>& c, int i, const T& m, const T& w, const T& particle_mass, const GasSide<T>& g,
-                      T* dry, T* q) const {
-    const T di(grid_->diameter_pivots()[i]);
+  struct TransferParams {
+    T sh, dv, xcr, lambda;
+  };
+  template <class T>
+  TransferParams<T> transfer_params(const Ctx<T>& c) const {
+    return {c.par(p_sh_), c.par(p_dv_), c.par(p_xcr_), c.par(p_lambda_)};
+  }
+  // Drying rate (Eqs. (70)-(80)) and gas-to-solid heat flow (Eqs. (85)-(89)) of a class of diameter d_class.
+  template <class T>
+  static void class_transfer(const TransferParams<T>& tp, double d_class, const T& m, const T& w,
+                             const T& particle_mass, const GasSide<T>& g, T* dry, T* q) {
+    const T di(d_class);
     const T area = kernels::class_surface(T(m / particle_mass), di);  // N_i pi d_i^2 (docs/paper001_decisions.md)
     const T re0 = tr::particle_reynolds_number(g.u0, di, g.nu);       // Eq. (76)
     using std::sqrt;
     const T sqrt_re = sqrt(re0);
     const T shb = tr::bulk_sherwood(tr::ranz_marshall_roots(sqrt_re, g.cbrt_sc), re0, g.sc, g.ratio,
-                                    c.par(p_sh_));  // Eqs. (74), (75)
-    const T j = p1::drying_mass_flux(g.rho_da, tr::mass_transfer_coefficient(shb, c.par(p_dv_), di), g.y_sat,
-                                     g.y);                                                     // Eqs. (72), (73)
-    const auto eta = p1::normalized_moisture(T(w / (m + kMassFloor)), g.x_eq, c.par(p_xcr_));  // Eq. (80), regularized
-    *dry = p1::drying_rate(p1::linear_drying_curve(eta.value), area, j);                       // Eqs. (70), (79)
+                                    tp.sh);  // Eqs. (74), (75)
+    const T j = p1::drying_mass_flux(g.rho_da, tr::mass_transfer_coefficient(shb, tp.dv, di), g.y_sat,
+                                     g.y);                                              // Eqs. (72), (73)
+    const auto eta = p1::normalized_moisture(T(w / (m + kMassFloor)), g.x_eq, tp.xcr);  // Eq. (80), regularized
+    *dry = p1::drying_rate(p1::linear_drying_curve(eta.value), area, j);                // Eqs. (70), (79)
     const T nub = tr::bulk_nusselt(tr::ranz_marshall_roots(sqrt_re, g.cbrt_pr), re0, g.pr, g.ratio);  // (87), (88)
-    *q = tr::heat_transfer_coefficient(nub, c.par(p_lambda_), di) * area * (g.t_g - g.t_s);           // Eqs. (85), (86)
-    return eta.active;
+    *q = tr::heat_transfer_coefficient(nub, tp.lambda, di) * area * (g.t_g - g.t_s);                  // Eqs. (85), (86)
   }
 
   int n_ = def::kSizeClasses;

@@ -6,6 +6,7 @@
 #include "granuflow/flowsheet.hpp"
 #include "granuflow/properties.hpp"
 #include "kernels/particle_geometry.hpp"
+#include "kernels/simd_math.hpp"
 #include "kernels/transfer/fluid_bed_transfer.hpp"
 #include "kernels/wetting/paper001_spray_zone.hpp"
 #include "paper001_streams.hpp"
@@ -28,9 +29,9 @@ struct Work : Workspace {
   // Per class, as arrays of each quantity (the flow closures of a double evaluation then run as vector loops).
   template <class T>
   struct Scratch {
-    std::vector<T> tau, ws, t_cross, m_dep, fwet, xwet;
+    std::vector<T> tau, ws, t_cross, mass, water, m_dep, fwet, xwet;
     void resize(int n) {
-      for (auto* v : {&tau, &ws, &t_cross, &m_dep, &fwet, &xwet}) v->resize(n);
+      for (auto* v : {&tau, &ws, &t_cross, &mass, &water, &m_dep, &fwet, &xwet}) v->resize(n);
     }
   };
   Scratch<double> sd;
@@ -182,49 +183,50 @@ class SprayZone : public UnitBase<SprayZone> {
             tau.active};
   }
 
+  // The parameters of the liquid split and the wetting closures, read once per evaluation.
   template <class T>
-  T particle_mass(const Ctx<T>& c, int i) const {
-    return pp_.envelope_density(c.shared) * grid_->pivot(i);
+  struct OutputParams {
+    T rho_env, d_drop, rho_p, rho_drop, h_pen;
+    p1::LiquidSplit split;
+  };
+  template <class T>
+  OutputParams<T> output_params(const Ctx<T>& c) const {
+    return {pp_.envelope_density(c.shared), c.par(p_drop_), c.sh(pp_.rho_p), c.par(p_rdrop_), c.par(p_hpen_), split_};
   }
-  // Weight of class i in the liquid split of Eq. (44): N_i tau_i d_i^2 (default) or tau_i d_i^2 (literal).
+  // Weight of a class (diameter d, pivot volume v) in the liquid split of Eq. (44): N_i tau_i d_i^2 (default) or
+  // tau_i d_i^2 (literal).
   template <class T>
-  T split_weight(const Ctx<T>& c, int i, const T& mass, const T& tau) const {
-    const double d = grid_->diameter_pivots()[i];
+  static T split_weight(const OutputParams<T>& o, double d, double v, const T& mass, const T& tau) {
     const T w = tau * d * d;
-    return split_ == p1::LiquidSplit::kClassSurface ? T(w * mass / particle_mass(c, i)) : w;
+    return o.split == p1::LiquidSplit::kClassSurface ? T(w * mass / (o.rho_env * v)) : w;
   }
 
-  // Liquid deposited on class i, its wetted surface fraction and wet-spot moisture, given the sum of the split
+  // Liquid deposited on a class, its wetted surface fraction and wet-spot moisture, given the sum of the split
   // weights; returns whether Eq. (57)'s cap was active.
   template <class T>
-  bool class_outputs(const Ctx<T>& c, int i, const T& mass, const T& water, const T& m_liquid, const T& weight_sum,
-                     const Work::Scratch<T>& f, T* m_dep, T* fwet, T* xwet) const {
-    const T d(grid_->diameter_pivots()[i]);
-    *m_dep = split_weight(c, i, mass, f.tau[i]) * m_liquid / weight_sum;  // Eq. (44)
+  static bool class_outputs(const OutputParams<T>& o, double d_class, double v, const T& mass, const T& water,
+                            const T& m_liquid, const T& weight_sum, const T& tau, const T& ws, const T& t_cross,
+                            T* m_dep, T* fwet, T* xwet) {
+    const T d(d_class);
+    *m_dep = split_weight(o, d_class, v, mass, tau) * m_liquid / weight_sum;  // Eq. (44)
     // Eqs. (43), (45), (46): X_LS = m_dep / (w_s M / t). With the default split, m_dep is proportional to
     // N_i = M_i / m_particle, so the ratio stays finite for an empty class.
-    T x_ls;
-    if (split_ == p1::LiquidSplit::kClassSurface)
-      x_ls = m_liquid * f.tau[i] * d * d / weight_sum * f.t_cross[i] / (f.ws[i] * particle_mass(c, i));
-    else
-      x_ls = *m_dep * f.t_cross[i] / (f.ws[i] * (mass > T(1e-15) ? mass : T(1e-15)));
+    const T x_ls = o.split == p1::LiquidSplit::kClassSurface
+                       ? T(m_liquid * tau * d * d / weight_sum * t_cross / (ws * (o.rho_env * v)))
+                       : T(*m_dep * t_cross / (ws * (mass > T(1e-15) ? mass : T(1e-15))));
     // Eq. (42) is linear in X_LS: phi = kappa X_LS
-    const T kappa = p1::coating_number(T(1.0), d, c.par(p_drop_), c.sh(pp_.rho_p), c.par(p_rdrop_));
+    const T kappa = p1::coating_number(T(1.0), d, o.d_drop, o.rho_p, o.rho_drop);
     const T phi = kappa * x_ls;
-    *fwet = p1::surface_coverage(phi);                                       // Eq. (41)
-    const auto frac = p1::wetted_volume_fraction(*fwet, d, c.par(p_hpen_));  // Eq. (57)
+    *fwet = p1::surface_coverage(phi);  // Eq. (41)
+    // Eq. (57): whether wetted_volume_fraction() caps it (its Limited return would keep this loop scalar)
+    const bool capped = p1::wetted_volume_ratio(*fwet, d, o.h_pen) > def::kWetVolumeFractionCap;
     // Eqs. (55)-(56): X_wet - X0 = m_dep / (m_s frac) = X_LS / frac. Uncapped, frac = (h A / V) f_wet, so
     // X_LS / frac = (phi / f_wet) / (kappa h A / V), and phi / f_wet -> 1 + phi / 2 as the spray goes to zero:
     // a droplet's wet spot keeps its moisture however few droplets there are.
-    T dx;
-    if (frac.active) {
-      dx = x_ls;
-    } else {
-      const T g = value_of(phi) < 1e-8 ? T(1.0 + 0.5 * phi) : T(phi / *fwet);
-      dx = g / (kappa * c.par(p_hpen_) * kernels::sphere_surface(d) / kernels::sphere_volume(d));
-    }
+    const T g = value_of(phi) < 1e-8 ? T(1.0 + 0.5 * phi) : T(phi / *fwet);
+    const T dx = capped ? x_ls : T(g / (kappa * o.h_pen * kernels::sphere_surface(d) / kernels::sphere_volume(d)));
     *xwet = dx + water / (mass + kMassFloor);  // Eq. (55): plus the bed moisture of the class
-    return frac.active;
+    return capped;
   }
 
   // All classes; counts the floors and caps that replaced the literal equations.
@@ -243,12 +245,19 @@ class SprayZone : public UnitBase<SprayZone> {
       floored += f.ws_floored;
     }
     *ws_floored += floored;
-    const T sum =
-        c.reduce(r_weights_, n_, [&](int i) { return split_weight(c, i, c.port(bed_, holdup::mass(i)), sc.tau[i]); });
-    const T& m_liquid = c.port(liquid_, liquid::kMdot);
+    T *mass = sc.mass.data(), *water = sc.water.data();
+    for (int i = 0; i < n_; ++i) mass[i] = c.port(bed_, holdup::mass(i)), water[i] = c.port(bed_, holdup::water(n_, i));
+    const OutputParams<T> o = output_params(c);
+    const double* v = grid_->pivots().data();
+    const T sum = c.reduce(r_weights_, n_, [&](int i) { return split_weight(o, d[i], v[i], mass[i], tau[i]); });
+    const T m_liquid = c.port(liquid_, liquid::kMdot);
+    T *m_dep = sc.m_dep.data(), *fwet = sc.fwet.data(), *xwet = sc.xwet.data();
+    int capped = 0;
+#pragma omp simd reduction(+ : capped)  // in doubles a vector loop (libmvec's expm1, kernels/simd_math.hpp)
     for (int i = 0; i < n_; ++i)
-      *vol_capped += class_outputs(c, i, c.port(bed_, holdup::mass(i)), c.port(bed_, holdup::water(n_, i)), m_liquid,
-                                   sum, sc, &sc.m_dep[i], &sc.fwet[i], &sc.xwet[i]);
+      capped += class_outputs(o, d[i], v[i], mass[i], water[i], m_liquid, sum, tau[i], ws[i], t_cross[i], &m_dep[i],
+                              &fwet[i], &xwet[i]);
+    *vol_capped += capped;
   }
 
   int n_ = def::kSizeClasses;

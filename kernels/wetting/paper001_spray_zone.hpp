@@ -133,13 +133,19 @@ T geometric_success_factor(const T& f_wet_i, const T& f_wet_j) {
   return either_of(f_wet_i, f_wet_j);
 }
 
+// Eq. (57), paper 001, before the cap of wetted_volume_fraction(): h_pen A f_wet / V of a particle of diameter d.
+template <class T>
+T wetted_volume_ratio(const T& f_wet, const T& d, const T& h_pen) {
+  return h_pen * sphere_surface(d) * f_wet / sphere_volume(d);
+}
+
 // Eq. (57), paper 001, as the fraction V_wet / V_particle that Eq. (56) needs: a cylinder of depth h_pen under
 // the wetted surface. Capped at `cap` (1: the whole particle, docs/paper001_decisions.md) because h_pen A f_wet exceeds
 // the particle volume for d < 6 h_pen f_wet.
 template <class T>
 Limited<T> wetted_volume_fraction(const T& f_wet, const T& d, const T& h_pen = T(defaults::kPenetrationDepth),
                                   const T& cap = T(defaults::kWetVolumeFractionCap)) {
-  return cap_at(T(h_pen * sphere_surface(d) * f_wet / sphere_volume(d)), cap);
+  return cap_at(wetted_volume_ratio(f_wet, d, h_pen), cap);
 }
 
 // Eq. (57), paper 001, as a volume (m^3), capped at the particle volume like wetted_volume_fraction().

@@ -1,0 +1,14 @@
+// Vector forms of libm functions for `#pragma omp simd` loops. glibc's libmvec implements expm1, log1p and tanh
+// for 2, 4 and 8 doubles at a time, but its header announces them to GCC only under -ffast-math; declaring them
+// here lets GCC call them from a vectorized loop without the rest of -ffast-math. They agree with the scalar
+// functions to a few units in the last place (glibc documents at most 4 ulp), so a vectorized closure can move a
+// result in its last bits. With other compilers the scalar functions are called.
+#pragma once
+#include <cmath>
+
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__GLIBC__)
+extern "C" {
+__attribute__((simd("notinbranch"))) double expm1(double) noexcept;
+__attribute__((simd("notinbranch"))) double log1p(double) noexcept;
+}
+#endif
