@@ -6,7 +6,9 @@
 #pragma once
 #include <cmath>
 
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__GLIBC__)
+// libmvec has had expm1 and log1p since glibc 2.35 (Debian 12, Ubuntu 22.04); older systems use the scalar ones.
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__GLIBC__) && \
+    (__GLIBC__ > 2 || (__GLIBC__ == 2 && __GLIBC_MINOR__ >= 35))
 extern "C" {
 __attribute__((simd("notinbranch"))) double expm1(double) noexcept;
 __attribute__((simd("notinbranch"))) double log1p(double) noexcept;
