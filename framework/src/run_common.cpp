@@ -51,6 +51,15 @@ Recorder::Recorder(Flowsheet& fs, DaeSystem& sys, const SimOptions& opt, std::ve
   res.state_names = fs.state_names();
   res.output_names = fs.output_names();
   res.sens_params = opt.sensitivities;
+  // The result's arrays at their final size (no reallocation and copy as output times are added).
+  const size_t nt = output_times(opt).size();
+  res.t.reserve(nt), res.y.reserve(nt * n_full), res.yp.reserve(nt * n_full), res.outputs.reserve(nt * no);
+  if (ns > 0) res.sens.reserve(nt * ns * n_full), res.output_sens.reserve(nt * ns * no);
+  // The inventories that must not fall below zero, with what the solver may leave there (check_nonnegative).
+  for (int i = 0; i < n_full; ++i) {
+    const StateSpec& st = fs.state_spec(i);
+    if (st.nonnegative) floors_.push_back({i, -100.0 * opt.atol * st.scale});
+  }
 }
 
 void Recorder::record(double t, const double* y, const double* yp, const double* q, const double* const* yS,
@@ -58,7 +67,8 @@ void Recorder::record(double t, const double* y, const double* yp, const double*
   const int ns = static_cast<int>(sens_ids_.size()), no = static_cast<int>(out_.size());
   if (!q) q = q_zero_.data();
   sys_.extend(t, y, yp, y_full_.data(), yp_full_.data());
-  check_nonnegative(fs_, opt_, t, y_full_);
+  for (const auto& [i, floor] : floors_)
+    if (!(y_full_[i] >= floor)) check_nonnegative(fs_, opt_, t, y_full_);  // throws, naming the state
   res_.t.push_back(t);
   res_.y.insert(res_.y.end(), y_full_.begin(), y_full_.end());
   res_.yp.insert(res_.yp.end(), yp_full_.begin(), yp_full_.end());

@@ -32,6 +32,7 @@ class Recorder {
   SimResult& res_;
   std::vector<double> y_full_, yp_full_, out_, q_zero_;
   std::vector<std::vector<double>> s_full_, dout_, qs_zero_;
+  std::vector<std::pair<int, double>> floors_;  // nonnegative inventories: index, lowest value the solver may leave
 };
 
 // An inventory below zero by more than the solver can be blamed for means a rate that is not positivity-preserving
