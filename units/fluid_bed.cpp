@@ -1,6 +1,7 @@
 #include "fluid_bed.hpp"
 
 #include <cmath>
+#include <iterator>
 #include <tuple>
 #include <type_traits>
 #include <vector>
@@ -323,8 +324,9 @@ class FluidBed : public UnitBase<FluidBed> {
     T m(0.0), water(0.0), number(0.0);
     for (int i = 0; i < n_; ++i) m += M[i], water += W[i], number += M[i] / pm[i];
     const double q[] = {0.1, 0.5, 0.9, 0.05, 0.16, 0.25, 0.75, 0.84, 0.95};  // order of o_quantiles_
-    for (size_t k = 0; k < o_quantiles_.size(); ++k)
-      c.out(o_quantiles_[k]) = kernels::characteristic_diameter_of_mass(grid_->diameter_edges(), M, q[k]);
+    T dq[std::size(q)];
+    kernels::characteristic_diameters_of_mass(grid_->diameter_edges(), M, q, static_cast<int>(o_quantiles_.size()), dq);
+    for (size_t k = 0; k < o_quantiles_.size(); ++k) c.out(o_quantiles_[k]) = dq[k];
     c.out(o_moisture_) = water / m;
     c.out(o_moisture_wet_) = water / (m + water);
     c.out(o_particles_) = number;

@@ -531,8 +531,9 @@ void ParticleChamber::outputs(const Ctx<T>& c) const {
   c.out(o_mass_) = mass;
   if (wet_) c.out(o_moisture_) = water / (mass + kMassFloor);
   const double q[3] = {0.1, 0.5, 0.9};
-  for (int k = 0; k < 3; ++k)
-    c.out(o_d_[k]) = mass > 0.0 ? kernels::characteristic_diameter_of_mass(grid_->diameter_edges(), M, q[k]) : T(0.0);
+  T dq[3] = {T(0.0), T(0.0), T(0.0)};
+  if (mass > 0.0) kernels::characteristic_diameters_of_mass(grid_->diameter_edges(), M, q, 3, dq);
+  for (int k = 0; k < 3; ++k) c.out(o_d_[k]) = dq[k];
   const bool any = mu[0] > 0.0;
   c.out(o_d32_) = any ? T(mu[3] / mu[2]) : T(0.0);
   const T mean = any ? T(mu[1] / mu[0]) : T(0.0);

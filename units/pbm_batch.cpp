@@ -206,8 +206,9 @@ class PbmBatch : public UnitBase<PbmBatch> {
     c.out(o_number_) = number;
     c.out(o_mass_) = rho * volume;
     const double q[3] = {0.1, 0.5, 0.9};
-    for (int k = 0; k < 3; ++k)
-      c.out(o_d_[k]) = characteristic_diameter_of_mass(grid_->diameter_edges(), v.data(), q[k]);
+    T dq[3];
+    characteristic_diameters_of_mass(grid_->diameter_edges(), v.data(), q, 3, dq);
+    for (int k = 0; k < 3; ++k) c.out(o_d_[k]) = dq[k];
     c.out(o_above_) = rho * above;
     c.out(o_below_) = rho * below;
     c.out(o_grown_) = rho * grown;

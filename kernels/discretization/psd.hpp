@@ -26,18 +26,40 @@ double characteristic_diameter(const Grid& g, const double* N, double x);
 // The same from the mass (or volume) of each of the n cells between the n + 1 diameter edges (m); negative
 // amounts count as empty. A template, so that sensitivities of d_x to the class masses are exact (Jets).
 template <class T>
+void characteristic_diameters_of_mass(const std::vector<double>& d, const T* mass, const double* x, int count, T* out);
+template <class T>
 T characteristic_diameter_of_mass(const std::vector<double>& d, const T* mass, double x) {
-  if (!(x > 0 && x < 1)) throw ConfigError(violation("characteristic diameter fraction", x, "", "0 < x < 1"));
+  T out;
+  characteristic_diameters_of_mass(d, mass, &x, 1, &out);
+  return out;
+}
+// Several at once (fractions x[0..count-1] into out), sharing one pass over the distribution: a summary's d10, d50,
+// d90 and the rest at every output time.
+template <class T>
+void characteristic_diameters_of_mass(const std::vector<double>& d, const T* mass, const double* x, int count, T* out) {
+  for (int k = 0; k < count; ++k)
+    if (!(x[k] > 0 && x[k] < 1))
+      throw ConfigError(violation("characteristic diameter fraction", x[k], "", "0 < x < 1"));
   const int n = static_cast<int>(d.size()) - 1;
-  std::vector<T> q(n + 1, T(0.0));
+  std::vector<T> q(n + 1, T(0.0));  // Q3 at the edges
   for (int i = 0; i < n; ++i) q[i + 1] = q[i] + (mass[i] > 0.0 ? mass[i] : T(0.0));
-  if (!(q[n] > 0.0)) return T(std::nan(""));
-  for (int i = 0; i < n; ++i) {
-    const T lo = q[i] / q[n], hi = q[i + 1] / q[n];
-    using std::pow;
-    if (hi >= x && hi > lo) return d[i] * pow(d[i + 1] / d[i], (x - lo) / (hi - lo));
+  const T total = q[n];
+  if (!(total > 0.0)) {
+    for (int k = 0; k < count; ++k) out[k] = T(std::nan(""));
+    return;
   }
-  return T(d[n]);
+  for (int i = 0; i <= n; ++i) q[i] = q[i] / total;
+  for (int k = 0; k < count; ++k) {
+    out[k] = T(d[n]);
+    for (int i = 0; i < n; ++i) {
+      const T &lo = q[i], &hi = q[i + 1];
+      using std::pow;
+      if (hi >= x[k] && hi > lo) {
+        out[k] = d[i] * pow(d[i + 1] / d[i], (x[k] - lo) / (hi - lo));
+        break;
+      }
+    }
+  }
 }
 
 }  // namespace granuflow::kernels

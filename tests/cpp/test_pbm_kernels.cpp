@@ -71,6 +71,40 @@ TEST(PbmGrid, CharacteristicDiametersInterpolateTheCumulativeMassInLogD) {
   EXPECT_NEAR(volume_moment(f, M.data(), 1), 1e-3, 1e-9);
 }
 
+TEST(PbmGrid, SeveralCharacteristicDiametersAtOnceEqualEachAlone) {
+  // The batched form shares the cumulative distribution between fractions given in any order; each result must be
+  // the one-fraction form's to the bit, including the exact edge (x = Q3 at an edge), the top class and NaN when
+  // the population is empty. Class 0 below zero counts as empty.
+  const auto g = Grid::geometric(1.0, 1, 6);
+  const std::vector<double> d = g.diameter_edges();
+  const std::vector<double> m = {-1e-3, 0.2, 0.0, 0.3, 0.5, 1e-12};
+  const double x[] = {0.9, 0.2, 0.5, 0.999999999999, 0.05, 0.2 / 1.0};
+  double out[6];
+  characteristic_diameters_of_mass(d, m.data(), x, 6, out);
+  // The definition written out: Q3 at the edges, the first cell whose upper edge reaches x, log-linear inside it.
+  auto reference = [&](double xk) {
+    std::vector<double> q(7, 0.0);
+    for (int i = 0; i < 6; ++i) q[i + 1] = q[i] + std::max(m[i], 0.0);
+    for (int i = 0; i < 6; ++i) {
+      const double lo = q[i] / q[6], hi = q[i + 1] / q[6];
+      if (hi >= xk && hi > lo) return d[i] * std::pow(d[i + 1] / d[i], (xk - lo) / (hi - lo));
+    }
+    return d[6];
+  };
+  for (int k = 0; k < 6; ++k) {
+    EXPECT_EQ(out[k], reference(x[k])) << k;
+    EXPECT_EQ(out[k], characteristic_diameter_of_mass(d, m.data(), x[k])) << k;
+  }
+  EXPECT_NEAR(out[1], d[3], 1e-9 * d[3]);  // Q3 = 0.2 (up to the 1e-12 in the top class) from d[2] to d[3]: empty
+  EXPECT_GT(out[0], d[4]);
+  EXPECT_LT(out[0], d[5]);
+  const std::vector<double> none(6, 0.0);
+  characteristic_diameters_of_mass(d, none.data(), x, 2, out);
+  EXPECT_TRUE(std::isnan(out[0]) && std::isnan(out[1]));
+  EXPECT_THROW(characteristic_diameters_of_mass(d, m.data(), std::vector<double>{0.5, 1.0}.data(), 2, out),
+               granuflow::ConfigError);
+}
+
 TEST(PbmGrid, MomentBinningKeepsNumberAndVolumeOfTheCells) {
   const auto g = Grid::geometric(std::exp2(-12.0), 2, 54);
   std::vector<double> num(g.size()), vol(g.size()), N(g.size());
