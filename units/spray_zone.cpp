@@ -119,18 +119,23 @@ class SprayZone : public UnitBase<SprayZone> {
   // again here, for their floors; the wetted-volume cap is a function of f_wet alone.
   template <class T>
   void outputs(const Ctx<T>& c) const {
-    const T& u0 = c.port(bed_, holdup::u0(n_));
+    const T u0 = c.port(bed_, holdup::u0(n_));
     const GasProps<T> g = gas_props(c.port(bed_, holdup::T(n_)));
     const FlowParams<T> q = flow_params(c);
+    const T h_pen = c.par(p_hpen_);
+    const double* d = grid_->diameter_pivots().data();
+    const T* fwet = &c.x(sFwet_);
     int a = 0, b = 0, not_fluidized = 0, tau_floored = 0;
+#pragma omp simd reduction(+ : a, b, not_fluidized, tau_floored)  // the closures' floors and caps, counted
+    for (int i = 0; i < n_; ++i) {
+      const Work::Flow<T> f = class_flow(q, d[i], u0, g);
+      a += f.ws_floored, not_fluidized += f.not_fluidized, tau_floored += f.tau_floored;
+      b += p1::wetted_volume_ratio(fwet[i], T(d[i]), h_pen) > def::kWetVolumeFractionCap;  // Eq. (57)'s cap
+    }
     T mass(0.0), fm(0.0);
     for (int i = 0; i < n_; ++i) {
-      const Work::Flow<T> f = class_flow(q, grid_->diameter_pivots()[i], u0, g);
-      a += f.ws_floored, not_fluidized += f.not_fluidized, tau_floored += f.tau_floored;
-      const T& fwet = c.x(sFwet_ + i);
-      b += p1::wetted_volume_fraction(fwet, T(grid_->diameter_pivots()[i]), c.par(p_hpen_)).active;
       mass += c.port(bed_, holdup::mass(i));
-      fm += c.port(bed_, holdup::mass(i)) * fwet;
+      fm += c.port(bed_, holdup::mass(i)) * fwet[i];
     }
     c.out(o_ws_) = T(a);
     c.out(o_cap_) = T(b);
