@@ -365,12 +365,10 @@ template <class T>
 void DaeSystem::evaluate_explicit(double t, T* x, T* xd, const std::vector<std::vector<T>>& params,
                                   std::vector<T>& scratch, const std::vector<int>* only) {
   const auto& units = fs_.units();
-  // The explicit states have no derivatives: in yp_ext_ (written nowhere else) their zeros are set once.
+  // The explicit states have no derivatives: yp_ext_ holds their zeros from its construction (nothing else writes
+  // them), other arrays get them here.
   bool zero_xd = true;
-  if constexpr (std::is_same_v<T, double>) {
-    zero_xd = xd != yp_ext_.data() || !yp_ext_zero_;
-    if (xd == yp_ext_.data()) yp_ext_zero_ = true;
-  }
+  if constexpr (std::is_same_v<T, double>) zero_xd = xd != yp_ext_.data();
   for (int u : only ? *only : explicit_order_) {
     const int ns = static_cast<int>(units[u].spec.states().size()), off = units[u].offset;
     std::fill(x + off, x + off + ns, T(0.0));  // x = 0: the residual x - f is then -f exactly

@@ -187,7 +187,6 @@ class DaeSystem {
   // xj_ and xdj_ below this index carry zero derivative parts (the Jacobian's sweeps restore the zeros they seed), so
   // a Jacobian only writes their values; paths that load directions lower it.
   int jets_plain_ = 0;
-  bool yp_ext_zero_ = false;          // yp_ext_ holds zeros on the explicit states (evaluate_explicit)
   std::vector<std::vector<Jet>> pj_;  // per unit: parameters as Jets (seeded for sensitivities)
   std::vector<double> rbuf_;
   struct BlockPreconditioner;
