@@ -56,6 +56,7 @@ class FluidBed : public UnitBase<FluidBed> {
 
   void declare(UnitSpec& s, Settings& st) override {
     const ParticleSystem& ps = particle_system(s, st);
+    require_water(ps, st, "the paper-001 bed dries per-class water");
     pp_ = ps.params();
     grid_ = ps.grid();
     n_ = grid_->size();

@@ -42,7 +42,8 @@ class Mill : public UnitBase<Mill> {
     for (const ParamSpec& p : law_->params()) s.add_param(p);
     count_ = static_cast<int>(s.params().size()) - first_;
     sM_ = s.add_states("mdot", n_, StateKind::Algebraic, "kg/s", 1e-2);
-    sW_ = s.add_states("water", n_, StateKind::Algebraic, "kg/s", 1e-3);
+    wet_ = ps.water();
+    if (wet_) sW_ = s.add_states("water", n_, StateKind::Algebraic, "kg/s", 1e-3);
     s.set_explicit();
     s.set_analytic_part(true);
     const auto& d = grid_->diameter_pivots();
@@ -52,8 +53,9 @@ class Mill : public UnitBase<Mill> {
     s.set_port_grid(out, d);
     for (int i = 0; i < n_; ++i) {
       s.provide(out, solids::mdot(i), sM_ + i);
-      s.provide(out, solids::water(n_, i), sW_ + i);
+      if (wet_) s.provide(out, solids::water(n_, i), sW_ + i);
     }
+    if (!wet_) forward_dry_water(s, out, in_, n_);
     s.forward(out, solids::T(n_), in_, solids::T(n_));
     o_m_ = s.add_output("mdot", "kg/s");
     o_d50_in_ = s.add_output("d50_in", "m");
@@ -65,10 +67,11 @@ class Mill : public UnitBase<Mill> {
   Status eval(const Ctx<T>& c) const {
     const T* P = matrix(c);
     auto& f = per_scalar<T>(c.template ws<Work>().fd, c.template ws<Work>().fj);
-    f.in_m.resize(n_), f.in_w.resize(n_);
+    f.in_m.resize(n_), f.in_w.assign(n_, T(0.0));
     f.m.assign(n_, T(0.0)), f.w.assign(n_, T(0.0));
-    for (int k = 0; k < n_; ++k)
-      f.in_m[k] = c.port(in_, solids::mdot(k)), f.in_w[k] = c.port(in_, solids::water(n_, k));
+    for (int k = 0; k < n_; ++k) f.in_m[k] = c.port(in_, solids::mdot(k));
+    if (wet_)
+      for (int k = 0; k < n_; ++k) f.in_w[k] = c.port(in_, solids::water(n_, k));
     if constexpr (std::is_same_v<T, double>) {
       const bool wet = std::any_of(f.in_w.begin(), f.in_w.end(), [](double v) { return v != 0.0; });
       if (law_->parent_independent()) {
@@ -91,10 +94,9 @@ class Mill : public UnitBase<Mill> {
         for (int i = 0; i <= k; ++i) f.m[i] += col[i] * f.in_m[k], f.w[i] += col[i] * f.in_w[k];
       }
     }
-    for (int i = 0; i < n_; ++i) {
-      c.res(sM_ + i) = c.x(sM_ + i) - f.m[i];
-      c.res(sW_ + i) = c.x(sW_ + i) - f.w[i];
-    }
+    for (int i = 0; i < n_; ++i) c.res(sM_ + i) = c.x(sM_ + i) - f.m[i];
+    if (wet_)
+      for (int i = 0; i < n_; ++i) c.res(sW_ + i) = c.x(sW_ + i) - f.w[i];
     return Status::kOk;
   }
   void analytic_jacobian(const Ctx<double>& c, double, JacobianSink& sink) const override {
@@ -102,11 +104,11 @@ class Mill : public UnitBase<Mill> {
     const auto& ports = *c.port_index;
     for (int i = 0; i < n_; ++i) {
       sink.add(sM_.i + i, c.offset + sM_.i + i, 1.0);
-      sink.add(sW_.i + i, c.offset + sW_.i + i, 1.0);
+      if (wet_) sink.add(sW_.i + i, c.offset + sW_.i + i, 1.0);
       for (int k = i; k < n_; ++k) {
         const double a = P[size_t(k) * n_ + i];
         if (a == 0.0) continue;
-        const int cm = ports[in_.i][solids::mdot(k)], cw = ports[in_.i][solids::water(n_, k)];
+        const int cm = ports[in_.i][solids::mdot(k)], cw = wet_ ? ports[in_.i][solids::water(n_, k)] : -1;
         if (cm >= 0) sink.add(sM_.i + i, cm, -a);
         if (cw >= 0) sink.add(sW_.i + i, cw, -a);
       }
@@ -114,7 +116,9 @@ class Mill : public UnitBase<Mill> {
   }
   template <class T>
   void init(InitCtx<T>& c) const {
-    for (int i = 0; i < n_; ++i) c.x(sM_ + i) = c.x(sW_ + i) = T(0.0);
+    for (int i = 0; i < n_; ++i) c.x(sM_ + i) = T(0.0);
+    if (wet_)
+      for (int i = 0; i < n_; ++i) c.x(sW_ + i) = T(0.0);
   }
   template <class T>
   void outputs(const Ctx<T>& c) const {
@@ -168,6 +172,7 @@ class Mill : public UnitBase<Mill> {
   }
 
   int n_ = 0, first_ = 0, count_ = 0;
+  bool wet_ = true;  // the particle system carries water
   std::shared_ptr<const kernels::Grid> grid_;
   std::unique_ptr<kernels::ComminutionLaw> law_;
   PortId in_;

@@ -84,6 +84,7 @@ void ParticleChamber::declare(UnitSpec& s, Settings& st) {
   wet_ = st.get_choice("drying", "none", {"none", "first_order"},
                        "water on the particles: none (sprayed and fed water evaporates at once) or per-class water "
                        "drying at (W - X_eq M) / tau_dry") == "first_order";
+  if (wet_) require_water(ps, st, "drying: first_order keeps per-class water on the particles");
   if (role_ != ChamberRole::kSprayZone) {
     const std::string d = st.get_choice("discharge", role_ == ChamberRole::kGranulator ? "unclassified" : "none",
                                         {"none", "unclassified", "classified"},

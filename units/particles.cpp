@@ -38,6 +38,9 @@ void ParticleSystem::declare(UnitSpec& s, Settings& st) {
     grid_ = std::make_shared<const kernels::Grid>(
         kernels::Grid::geometric(v_min, static_cast<int>(q), static_cast<int>(n)));
   }
+  water_ = st.get_bool("water", true,
+                       "solids streams carry per-class water; false for a dry process (layering without drying, "
+                       "sieves, mills): no unit computes water, every stream's water is zero");
   params_.rho_s = s.add_param({"rho_s", "kg/m3", def::kSolidSkeletalDensity, 100.0, 5000.0,
                                "skeletal density of the solid", "paper 001, Table 6"});
   params_.eps_intra = s.add_param({"eps_intra", "-", def::kIntraParticleVoidFraction, 0.0, 0.9,
@@ -60,6 +63,17 @@ const ParticleSystem& particle_system(UnitSpec& s, Settings& st) {
                       "`particles:` section (settings: grid, classes, d_min, d_max; params: rho_s, eps_intra, ...)");
   s.use_shared_params(name);
   return *ps;
+}
+
+void forward_dry_water(UnitSpec& s, PortId out, PortId in, int classes) {
+  for (int i = 0; i < classes; ++i) s.forward(out, solids::water(classes, i), in, solids::water(classes, i));
+}
+
+void require_water(const ParticleSystem& ps, const Settings& st, const std::string& what) {
+  if (!ps.water())
+    throw ConfigError(st.where() + ": " + what +
+                      ", but the particle system is dry (particles: settings: water: "
+                      "false); set water: true, or leave this unit out");
 }
 
 std::vector<FieldSpec> holdup_field_specs(int classes, FieldSpec last) {

@@ -35,10 +35,14 @@ class ParticleSystem : public UnitBase<ParticleSystem> {
   void init(InitCtx<T>&) const {}
   std::shared_ptr<const kernels::Grid> grid() const { return grid_; }
   const ParticleParams& params() const { return params_; }
+  // False for a dry process (setting `water: false`): no unit holds or moves water, and the water fields of every
+  // solids stream are the one zero of the unit the stream starts from, passed on unchanged (forward_dry_water).
+  bool water() const { return water_; }
 
  private:
   std::shared_ptr<const kernels::Grid> grid_;
   ParticleParams params_;
+  bool water_ = true;
 };
 
 // The particle system a unit uses (setting `particles` names the instance); marks the unit as reading its
@@ -46,6 +50,12 @@ class ParticleSystem : public UnitBase<ParticleSystem> {
 const ParticleSystem& particle_system(UnitSpec& s, Settings& st);
 
 void register_particles(Registry<Unit>& r);
+
+// In a dry particle system, the outlet `out`'s per-class water fields pass on those of the inlet `in` (both solids
+// streams): a unit that splits, mills or mixes dry solids computes no water.
+void forward_dry_water(UnitSpec& s, PortId out, PortId in, int classes);
+// ConfigError naming the unit when it holds or moves water (`what`) in a dry particle system.
+void require_water(const ParticleSystem& ps, const Settings& st, const std::string& what);
 
 // A particle hold-up as another unit reads it (a bed's for its spray zone, a chamber's for its outlets): per class
 // dry-solid and water mass (kg), the temperature (K), then one scalar the stream kind names.

@@ -31,9 +31,10 @@ class Sieve : public UnitBase<Sieve> {
                    1e-3);
     in_ = s.add_port("in", streams::solids(), PortDir::In, n_);
     const char* names[3] = {"oversize", "product", "undersize"};
+    wet_ = ps.water();
     for (int o = 0; o < 3; ++o) {
       sM_[o] = s.add_states(std::string(names[o]) + "_mdot", n_, StateKind::Algebraic, "kg/s", 1e-2);
-      sW_[o] = s.add_states(std::string(names[o]) + "_water", n_, StateKind::Algebraic, "kg/s", 1e-3);
+      if (wet_) sW_[o] = s.add_states(std::string(names[o]) + "_water", n_, StateKind::Algebraic, "kg/s", 1e-3);
     }
     s.set_explicit();
     const auto& d = grid_->diameter_pivots();
@@ -43,12 +44,17 @@ class Sieve : public UnitBase<Sieve> {
       s.set_port_grid(out, d);
       for (int i = 0; i < n_; ++i) {
         s.provide(out, solids::mdot(i), sM_[o] + i);
-        s.provide(out, solids::water(n_, i), sW_[o] + i);
+        if (wet_) s.provide(out, solids::water(n_, i), sW_[o] + i);
       }
+      if (!wet_) forward_dry_water(s, out, in_, n_);
       s.forward(out, solids::T(n_), in_, solids::T(n_));
     }
-    s.set_classes(
-        {n_, {sM_[0], sW_[0], sM_[1], sW_[1], sM_[2], sW_[2]}, {{in_, solids::mdot(0)}, {in_, solids::water(n_, 0)}}});
+    if (wet_)
+      s.set_classes({n_,
+                     {sM_[0], sW_[0], sM_[1], sW_[1], sM_[2], sW_[2]},
+                     {{in_, solids::mdot(0)}, {in_, solids::water(n_, 0)}}});
+    else
+      s.set_classes({n_, {sM_[0], sM_[1], sM_[2]}, {{in_, solids::mdot(0)}}});
     for (int o = 0; o < 3; ++o) o_m_[o] = s.add_output(std::string(names[o]) + "_mdot", "kg/s");
     o_frac_ = s.add_output("product_fraction", "-");
   }
@@ -65,7 +71,7 @@ class Sieve : public UnitBase<Sieve> {
     const T* tu = upper_.fractions(c.p, w.upper);
     const T* tl = lower_.fractions(c.p, w.lower);
     for (int i = 0; i < n_; ++i) {
-      for (int f = 0; f < 2; ++f) {
+      for (int f = 0; f < (wet_ ? 2 : 1); ++f) {
         const T& in = c.port(in_, f == 0 ? solids::mdot(i) : solids::water(n_, i));
         const T over = tu[i] * in;
         const T prod = tl[i] * (in - over);
@@ -80,7 +86,10 @@ class Sieve : public UnitBase<Sieve> {
   template <class T>
   void init(InitCtx<T>& c) const {
     for (int o = 0; o < 3; ++o)
-      for (int i = 0; i < n_; ++i) c.x(sM_[o] + i) = c.x(sW_[o] + i) = T(0.0);
+      for (int i = 0; i < n_; ++i) {
+        c.x(sM_[o] + i) = T(0.0);
+        if (wet_) c.x(sW_[o] + i) = T(0.0);
+      }
   }
   template <class T>
   void outputs(const Ctx<T>& c) const {
@@ -94,6 +103,7 @@ class Sieve : public UnitBase<Sieve> {
 
  private:
   int n_ = 0;
+  bool wet_ = true;  // the particle system carries water
   std::shared_ptr<const kernels::Grid> grid_;
   Classifier upper_, lower_;
   PortId in_;

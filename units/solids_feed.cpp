@@ -27,17 +27,30 @@ class SolidsFeed : public UnitBase<SolidsFeed> {
     p_t_ = s.add_param({"T", "K", 293.15, 200.0, 700.0, "temperature", "operating input"});
     p_cpl_ = s.add_param({"cp_l", "J/(kg K)", kernels::paper001::defaults::kLiquidCp, 100.0, 1e4,
                           "heat capacity of the water carried", "paper 001, Table 6"});
+    wet_ = ps.water();
     sM_ = s.add_states("mdot", n_, StateKind::Algebraic, "kg/s", 1e-3);
-    sW_ = s.add_states("water", n_, StateKind::Algebraic, "kg/s", 1e-4);
+    // a dry feed's water fields are one zero (the particle system carries none)
+    sW_ = wet_ ? s.add_states("water", n_, StateKind::Algebraic, "kg/s", 1e-4)
+               : s.add_state("water", StateKind::Algebraic, "kg/s", 1e-4);
     sT_ = s.add_state("T", StateKind::Algebraic, "K", 300.0);
     s.set_explicit();
     const PortId out = s.add_port("out", streams::solids(), PortDir::Out, n_);
     s.set_port_grid(out, grid_->diameter_pivots());
-    s.provide_all(out, sM_);
-    s.set_classes({n_, {sM_, sW_}, {}});
+    if (wet_) {
+      s.provide_all(out, sM_);
+      s.set_classes({n_, {sM_, sW_}, {}});
+    } else {
+      for (int i = 0; i < n_; ++i) s.provide(out, solids::mdot(i), sM_ + i), s.provide(out, solids::water(n_, i), sW_);
+      s.provide(out, solids::T(n_), sT_);
+      s.set_classes({n_, {sM_}, {}});
+    }
     q_solids_ = s.add_quadrature("balance_solids_in", "kg", 1.0, OutputRole::kBalanceIn, "solids");
     q_water_ = s.add_quadrature("balance_water_in", "kg", 0.1, OutputRole::kBalanceIn, "water");
     q_energy_ = s.add_quadrature("balance_energy_in", "J", 1e5, OutputRole::kBalanceIn, "energy");
+  }
+  void check(const UnitSpec&, const double* p) const override {
+    if (!wet_ && p[p_x_.i] != 0.0)
+      throw ConfigError(violation("X", p[p_x_.i], "kg/kg", "0: the particle system is dry (particles: water: false)"));
   }
   // Mass fraction of class i of a log-normal mass distribution over the cells (tails in the end classes).
   template <class T>
@@ -53,15 +66,16 @@ class SolidsFeed : public UnitBase<SolidsFeed> {
     for (int i = 0; i < n_; ++i) {
       const T m = c.par(p_m_) * fraction(i, c.p);
       c.res(sM_ + i) = c.x(sM_ + i) - m;
-      c.res(sW_ + i) = c.x(sW_ + i) - m * c.par(p_x_);
+      if (wet_) c.res(sW_ + i) = c.x(sW_ + i) - m * c.par(p_x_);
     }
+    if (!wet_) c.res(sW_) = c.x(sW_);
     c.res(sT_) = c.x(sT_) - c.par(p_t_);
     return Status::kOk;
   }
   template <class T>
   void quad(const Ctx<T>& c) const {
     T m(0.0), w(0.0);
-    for (int i = 0; i < n_; ++i) m += c.x(sM_ + i), w += c.x(sW_ + i);
+    for (int i = 0; i < n_; ++i) m += c.x(sM_ + i), w += wet_ ? c.x(sW_ + i) : T(0.0);
     c.r[q_solids_.i] = m;
     c.r[q_water_.i] = w;
     c.r[q_energy_.i] = (m * c.sh(pp_.cp_s) + w * c.par(p_cpl_)) * (c.x(sT_) - props::kT0);
@@ -70,13 +84,15 @@ class SolidsFeed : public UnitBase<SolidsFeed> {
   void init(InitCtx<T>& c) const {
     for (int i = 0; i < n_; ++i) {
       c.x(sM_ + i) = c.par(p_m_) * fraction(i, c.p);
-      c.x(sW_ + i) = c.x(sM_ + i) * c.par(p_x_);
+      if (wet_) c.x(sW_ + i) = c.x(sM_ + i) * c.par(p_x_);
     }
+    if (!wet_) c.x(sW_) = T(0.0);
     c.x(sT_) = c.par(p_t_);
   }
 
  private:
   int n_ = 0;
+  bool wet_ = true;  // the particle system carries water
   ParticleParams pp_;
   std::shared_ptr<const kernels::Grid> grid_;
   ParamId p_m_, p_d50_, p_sigma_, p_x_, p_t_, p_cpl_;

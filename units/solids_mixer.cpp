@@ -36,22 +36,30 @@ class SolidsMixer : public UnitBase<SolidsMixer> {
     const int inlets = static_cast<int>(st.get_int("inlets", 2, 2, 16, "number of inlet ports in1..inN"));
     p_cpl_ = s.add_param({"cp_l", "J/(kg K)", kernels::paper001::defaults::kLiquidCp, 100.0, 1e4,
                           "heat capacity of the water carried", "paper 001, Table 6"});
+    wet_ = ps.water();
     sM_ = s.add_states("mdot", n_, StateKind::Algebraic, "kg/s", 1e-2);
-    sW_ = s.add_states("water", n_, StateKind::Algebraic, "kg/s", 1e-3);
+    if (wet_) sW_ = s.add_states("water", n_, StateKind::Algebraic, "kg/s", 1e-3);
     sT_ = s.add_state("T", StateKind::Algebraic, "K", 300.0);
     s.set_explicit();
     const auto& d = ps.grid()->diameter_pivots();
-    ClassLayout layout{n_, {sM_, sW_}, {}};
+    ClassLayout layout{n_, {sM_}, {}};
+    if (wet_) layout.state_blocks.push_back(sW_);
     for (int j = 0; j < inlets; ++j) {
       const PortId p = s.add_port("in" + std::to_string(j + 1), streams::solids(), PortDir::In, n_);
       s.set_port_grid(p, d);
       in_.push_back(p);
       layout.field_blocks.push_back({p, solids::mdot(0)});
-      layout.field_blocks.push_back({p, solids::water(n_, 0)});
+      if (wet_) layout.field_blocks.push_back({p, solids::water(n_, 0)});
     }
     const PortId out = s.add_port("out", streams::solids(), PortDir::Out, n_);
     s.set_port_grid(out, d);
-    s.provide_all(out, sM_);
+    if (wet_) {
+      s.provide_all(out, sM_);
+    } else {  // every inlet's water is the same zero: the first one's passes on
+      for (int i = 0; i < n_; ++i) s.provide(out, solids::mdot(i), sM_ + i);
+      forward_dry_water(s, out, in_[0], n_);
+      s.provide(out, solids::T(n_), sT_);
+    }
     s.set_classes(layout);
     r_capacity_ = s.add_reduction("capacity flow");
     r_enthalpy_ = s.add_reduction("enthalpy flow");
@@ -70,12 +78,17 @@ class SolidsMixer : public UnitBase<SolidsMixer> {
       T m(0.0), w(0.0), cap(0.0), h(0.0);
       for (size_t j = 0; j < in_.size(); ++j) {
         const T& mp = c.port(in_[j], solids::mdot(i));
+        if (!wet_) {
+          const T cp = mp * cp_s;
+          m += mp, cap += cp, h += cp * f.dt[j];
+          continue;
+        }
         const T& wp = c.port(in_[j], solids::water(n_, i));
         const T cp = mp * cp_s + wp * cp_l;
         m += mp, w += wp, cap += cp, h += cp * f.dt[j];
       }
       c.res(sM_ + i) = c.x(sM_ + i) - m;
-      c.res(sW_ + i) = c.x(sW_ + i) - w;
+      if (wet_) c.res(sW_ + i) = c.x(sW_ + i) - w;
       f.cap[i] = cap, f.h[i] = h;
     }
     const T cap = c.reduce(r_capacity_, n_, [&](int i) { return f.cap[i]; });
@@ -87,7 +100,10 @@ class SolidsMixer : public UnitBase<SolidsMixer> {
   std::unique_ptr<Workspace> workspace() const override { return std::make_unique<Work>(); }
   template <class T>
   void init(InitCtx<T>& c) const {
-    for (int i = 0; i < n_; ++i) c.x(sM_ + i) = c.x(sW_ + i) = T(0.0);
+    for (int i = 0; i < n_; ++i) {
+      c.x(sM_ + i) = T(0.0);
+      if (wet_) c.x(sW_ + i) = T(0.0);
+    }
     c.x(sT_) = T(props::kT0 + 20.0);
   }
   template <class T>
@@ -99,6 +115,7 @@ class SolidsMixer : public UnitBase<SolidsMixer> {
 
  private:
   int n_ = 0;
+  bool wet_ = true;  // the particle system carries water
   ParticleParams pp_;
   ParamId p_cpl_;
   std::vector<PortId> in_;

@@ -19,9 +19,10 @@ class SolidsSplitter : public UnitBase<SolidsSplitter> {
     const auto& d = ps.grid()->diameter_pivots();
     in_ = s.add_port("in", streams::solids(), PortDir::In, n_);
     s.set_port_grid(in_, d);
+    wet_ = ps.water();
     for (int o = 0; o < 2; ++o) {
       sM_[o] = s.add_states("out" + std::to_string(o + 1) + "_mdot", n_, StateKind::Algebraic, "kg/s", 1e-2);
-      sW_[o] = s.add_states("out" + std::to_string(o + 1) + "_water", n_, StateKind::Algebraic, "kg/s", 1e-3);
+      if (wet_) sW_[o] = s.add_states("out" + std::to_string(o + 1) + "_water", n_, StateKind::Algebraic, "kg/s", 1e-3);
     }
     s.set_explicit();
     for (int o = 0; o < 2; ++o) {
@@ -29,21 +30,26 @@ class SolidsSplitter : public UnitBase<SolidsSplitter> {
       s.set_port_grid(out, d);
       for (int i = 0; i < n_; ++i) {
         s.provide(out, solids::mdot(i), sM_[o] + i);
-        s.provide(out, solids::water(n_, i), sW_[o] + i);
+        if (wet_) s.provide(out, solids::water(n_, i), sW_[o] + i);
       }
+      if (!wet_) forward_dry_water(s, out, in_, n_);
       s.forward(out, solids::T(n_), in_, solids::T(n_));
     }
-    s.set_classes({n_, {sM_[0], sW_[0], sM_[1], sW_[1]}, {{in_, solids::mdot(0)}, {in_, solids::water(n_, 0)}}});
+    if (wet_)
+      s.set_classes({n_, {sM_[0], sW_[0], sM_[1], sW_[1]}, {{in_, solids::mdot(0)}, {in_, solids::water(n_, 0)}}});
+    else
+      s.set_classes({n_, {sM_[0], sM_[1]}, {{in_, solids::mdot(0)}}});
   }
   template <class T>
   Status eval(const Ctx<T>& c) const {
     const T& f = c.par(p_f_);
     for (int i = 0; i < n_; ++i) {
       const T& m = c.port(in_, solids::mdot(i));
-      const T& w = c.port(in_, solids::water(n_, i));
       c.res(sM_[0] + i) = c.x(sM_[0] + i) - f * m;
-      c.res(sW_[0] + i) = c.x(sW_[0] + i) - f * w;
       c.res(sM_[1] + i) = c.x(sM_[1] + i) - (m - f * m);
+      if (!wet_) continue;
+      const T& w = c.port(in_, solids::water(n_, i));
+      c.res(sW_[0] + i) = c.x(sW_[0] + i) - f * w;
       c.res(sW_[1] + i) = c.x(sW_[1] + i) - (w - f * w);
     }
     return Status::kOk;
@@ -51,11 +57,15 @@ class SolidsSplitter : public UnitBase<SolidsSplitter> {
   template <class T>
   void init(InitCtx<T>& c) const {
     for (int o = 0; o < 2; ++o)
-      for (int i = 0; i < n_; ++i) c.x(sM_[o] + i) = c.x(sW_[o] + i) = T(0.0);
+      for (int i = 0; i < n_; ++i) {
+        c.x(sM_[o] + i) = T(0.0);
+        if (wet_) c.x(sW_[o] + i) = T(0.0);
+      }
   }
 
  private:
   int n_ = 0;
+  bool wet_ = true;  // the particle system carries water
   ParamId p_f_;
   PortId in_;
   StateId sM_[2], sW_[2];

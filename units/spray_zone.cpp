@@ -47,6 +47,7 @@ class SprayZone : public UnitBase<SprayZone> {
   std::string type() const override { return "spray_zone"; }
   void declare(UnitSpec& s, Settings& settings) override {
     const ParticleSystem& ps = particle_system(s, settings);
+    require_water(ps, settings, "the paper-001 spray zone wets the particles");
     pp_ = ps.params();
     grid_ = ps.grid();
     n_ = grid_->size();

@@ -91,6 +91,35 @@ connections: [seed.out -> mix.in1, sieve.undersize -> split.in, split.out1 -> mi
               sieve.product -> product.in]
 )";
 
+// The same loop dry (particles: water: false): no unit computes water, every solids stream passes on the seed
+// feed's one zero; an unclassified discharge and a log-normal mill for variety.
+const char* kDrySieveMillLoop = R"(
+scene: dry_sieve_mill_loop
+t_end: 2 h
+output: {n: 5}
+solver: {rtol: 1e-8, atol: 1e-10}
+particles: {settings: {classes: 12, d_min: 2.0e-4, d_max: 3.0e-3, water: false}, params: {rho_s: 1500, eps_intra: 0}}
+units:
+  seed: {type: solids_feed, params: {mdot: 5 kg/h, d50: 400 um, sigma: 1.3, T: 30 degC}}
+  gran:
+    type: granulator
+    settings: {discharge: unclassified, bed_mass: controlled, aggregation: constant, aggregation_scheme: fixed_pivot}
+    params: {bed_mass: 20 kg, M_set: 22 kg, tau_c: 120 s, mdot_max: 0.5, d50_0: 800 um, sigma_0: 1.4,
+             m_spray: 60 kg/h, w_spray: 0.3, agg_beta0: 1e-12}
+  sieve:
+    type: sieve
+    settings: {upper_curve: plitt, lower_curve: plitt}
+    params: {upper_d_cut: 1.5 mm, lower_d_cut: 1.0 mm}
+  mill: {type: mill, settings: {law: lognormal}, params: {d50: 450 um, sigma_g: 1.5}}
+  split: {type: solids_splitter, params: {fraction: 0.8}}
+  mix: {type: solids_mixer, settings: {inlets: 3}}
+  product: {type: solids_product}
+  fines_out: {type: solids_product}
+connections: [seed.out -> mix.in1, sieve.undersize -> split.in, split.out1 -> mix.in2, split.out2 -> fines_out.in,
+              mill.out -> mix.in3, mix.out -> gran.feed, gran.discharge -> sieve.in, sieve.oversize -> mill.in,
+              sieve.product -> product.in]
+)";
+
 // The two-compartment bed of paper 003 (Eqs. (7.37)-(7.39)) run continuously: spray zone and drying zone exchanging
 // particles, the drying zone fed and discharged (free hold-up), the water of the spray drying in both zones.
 const char* kTwoZone = R"(
@@ -119,6 +148,7 @@ std::vector<std::pair<std::string, Scene>> scenes() {
   v.emplace_back("pbm", scene_from_text(kPbmMechanisms));
   v.emplace_back("pbm 2d", scene_from_text(pbm_2d_scene()));
   v.emplace_back("sieve-mill loop", scene_from_text(kSieveMillLoop));
+  v.emplace_back("dry sieve-mill loop", scene_from_text(kDrySieveMillLoop));
   v.emplace_back("two-zone bed", scene_from_text(kTwoZone));
   return v;
 }

@@ -181,6 +181,35 @@ def test_sieve_and_mill_conserve_mass_class_by_class():
         assert r["mill.d50_out"][-1] < r["mill.d50_in"][-1]  # it grinds
 
 
+def test_a_dry_particle_system_computes_the_same_flows_without_water():
+    """particles: water: false: the sieve, mill, splitter and mixer declare no water states (their outlets pass on the
+    feed's one zero), and every flow they compute is bit for bit the one of the same scene carrying zero water."""
+    dry_text = SPLIT.replace("classes: 30,", "classes: 30, water: false,").replace(", X: 0.05", "")
+    dry_text = dry_text.replace("UPPER", "1.7e-3").replace("LOWER", "0.6e-3").replace("LAW", "vogel_peukert")
+    wet_text = dry_text.replace(", water: false", "")
+    dry, wet = gf.load_text(dry_text, "dry"), gf.load_text(wet_text, "wet")
+    rd, rw = dry.simulate(), wet.simulate()
+    water = [k for k in wet.state_names if "water" in k]
+    assert len(water) == 30 * (2 + 3 + 1) + 30 and not [k for k in dry.state_names if "water_" in k]
+    assert "feed.water" in dry.state_names and rd["feed.water"][-1] == 0.0  # the one zero the outlets pass on
+    assert set(dry.state_names) == set(wet.state_names) - set(water) | {"feed.water"}
+    for k in set(dry.state_names) - {"feed.water"}:
+        assert np.array_equal(rd[k], rw[k]), k
+    for k in rd.output_names:
+        assert np.array_equal(rd[k], rw[k]), k
+    assert rd.stats["explicit_states"] == rw.stats["explicit_states"] - len(water) + 1
+
+
+def test_a_dry_particle_system_refuses_water():
+    dry = SPLIT.replace("classes: 30,", "classes: 30, water: false,")
+    dry = dry.replace("UPPER", "1.7e-3").replace("LOWER", "0.6e-3").replace("LAW", "lognormal")
+    with pytest.raises(gf.ConfigError, match=r"feed.*X.*0\.05.*the particle system is dry"):
+        gf.load_text(dry, "dry").simulate()
+    wet_gran = CLASSIFIED.replace("d_max: 4.0e-3}", "d_max: 4.0e-3, water: false}")
+    with pytest.raises(gf.ConfigError, match=r"gran.*drying: first_order.*particle system is dry"):
+        gf.load_text(wet_gran, "wet_gran")
+
+
 def test_the_lognormal_mill_applies_its_breakage_matrix():
     # The log-normal law's fragments do not depend on the parent, and the mill applies its matrix with a suffix sum
     # over the coarser classes: compare with the matrix product built here from the law, P_ik = F(e_i+1) - F(e_i) for
