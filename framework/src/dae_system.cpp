@@ -308,6 +308,12 @@ void DaeSystem::reconfigure() {
   fill_params(0.0);
 }
 
+void DaeSystem::begin_run() {
+  segment_start_ = 0.0;  // before reconfigure(): step inputs are read at the segment start
+  n_res_ = n_jac_ = 0;
+  reconfigure();
+}
+
 void DaeSystem::fill_params(double t) {
   const auto& units = fs_.units();
   for (const auto& [u, k] : inputs_) {

@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <mutex>
 #include <set>
 #include <sstream>
 
+#include "granuflow/dae_system.hpp"
 #include "granuflow/errors.hpp"
 
 namespace granuflow {
@@ -253,7 +255,40 @@ void Flowsheet::finalize() {
       }
     }
   }
+  pool_ = std::make_shared<SystemPool>();
   finalized_ = true;
+}
+
+// ---------------------------------------------------------------- systems kept between runs
+struct Flowsheet::SystemPool {
+  std::mutex mutex;
+  std::vector<std::unique_ptr<DaeSystem>> kept[2];  // [inline_explicit]
+};
+
+// Beyond this many of a kind, a returned system is freed: a sweep over a thread pool keeps one per worker, and a
+// system of a large flowsheet holds megabytes (the extended Jacobian).
+constexpr size_t kKeptSystems = 8;
+
+std::shared_ptr<DaeSystem> Flowsheet::take_system(bool inline_explicit) const {
+  if (!finalized_) throw std::logic_error("take_system before finalize");
+  std::unique_ptr<DaeSystem> sys;
+  {
+    std::lock_guard<std::mutex> lock(pool_->mutex);
+    auto& kept = pool_->kept[inline_explicit];
+    if (!kept.empty()) sys = std::move(kept.back()), kept.pop_back();
+  }
+  if (sys)
+    sys->begin_run();
+  else
+    sys = std::make_unique<DaeSystem>(*this, inline_explicit);
+  std::weak_ptr<SystemPool> pool = pool_;
+  return std::shared_ptr<DaeSystem>(sys.release(), [pool, inline_explicit](DaeSystem* done) {
+    std::unique_ptr<DaeSystem> owned(done);
+    if (auto p = pool.lock()) {
+      std::lock_guard<std::mutex> lock(p->mutex);
+      if (p->kept[inline_explicit].size() < kKeptSystems) p->kept[inline_explicit].push_back(std::move(owned));
+    }
+  });
 }
 
 // Global state index behind field f of port p of unit u, or -1 (an optional port left open reads zero).

@@ -457,7 +457,8 @@ SimResult simulate_ode(Flowsheet& fs, const SimOptions& opt, const std::string& 
     throw NotAnOde("BDF with sparse linear algebra needs the explicit units as unknowns");
   if (gmres && !opt.sensitivities.empty())
     throw ConfigError("sensitivities need a direct linear solver (solver.linear_solver: dense or sparse), not gmres");
-  DaeSystem sys(fs, true);
+  const std::shared_ptr<DaeSystem> held = fs.take_system(true);
+  DaeSystem& sys = *held;
   const int n = sys.size(), nq = sys.n_quadratures();
   const std::vector<int> sens_ids = sensitivity_ids(fs, opt);
   const std::vector<double> t_out = output_times(opt);

@@ -143,7 +143,8 @@ SimResult simulate_ida(Flowsheet& fs, const SimOptions& opt, const std::string& 
   const bool dense = kind == LinearSolverKind::kDense;
   if (kind == LinearSolverKind::kGmres && !opt.sensitivities.empty())
     throw ConfigError("sensitivities need a direct linear solver (solver.linear_solver: dense or sparse), not gmres");
-  DaeSystem sys(fs, dense);
+  const std::shared_ptr<DaeSystem> held = fs.take_system(dense);
+  DaeSystem& sys = *held;
   const int n = sys.size(), n_full = sys.full_size(), nq = sys.n_quadratures();
   if (n == 0) throw ConfigError("flowsheet '" + fs.name() + "' has no states to integrate");
   // The inlined system's Jacobian at the initial values serves the structural check and the consistent start.

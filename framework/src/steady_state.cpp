@@ -465,7 +465,8 @@ SteadyResult solve_steady_state(Flowsheet& fs, const SteadyOptions& opt, const s
   const auto wall0 = std::chrono::steady_clock::now();
   if (!fs.finalized()) fs.finalize();
   const bool dense = use_dense(fs, "auto", SimOptions().dense_limit);
-  DaeSystem sys(fs, dense);
+  const std::shared_ptr<DaeSystem> held = fs.take_system(dense);
+  DaeSystem& sys = *held;
   const int n = sys.size();
   if (n == 0) throw ConfigError("flowsheet '" + fs.name() + "' has no states to solve for");
   sys.set_segment_start(opt.t);

@@ -36,6 +36,8 @@ class DaeSystem {
   explicit DaeSystem(const Flowsheet& fs, bool inline_explicit = true);
   ~DaeSystem();
   void reconfigure();
+  // For a system kept from an earlier run (Flowsheet::take_system): reconfigure(), segment start 0, counters 0.
+  void begin_run();
 
   int size() const { return n_; }           // unknowns of the integrator
   int full_size() const { return n_ext_; }  // every state of the flowsheet, explicit ones last
