@@ -69,9 +69,8 @@ class Mill : public UnitBase<Mill> {
     auto& f = per_scalar<T>(c.template ws<Work>().fd, c.template ws<Work>().fj);
     f.in_m.resize(n_), f.in_w.assign(n_, T(0.0));
     f.m.assign(n_, T(0.0)), f.w.assign(n_, T(0.0));
-    for (int k = 0; k < n_; ++k) f.in_m[k] = c.port(in_, solids::mdot(k));
-    if (wet_)
-      for (int k = 0; k < n_; ++k) f.in_w[k] = c.port(in_, solids::water(n_, k));
+    read_field(c, solids::mdot(0), f.in_m.data());
+    if (wet_) read_field(c, solids::water(n_, 0), f.in_w.data());
     if constexpr (std::is_same_v<T, double>) {
       const bool wet = std::any_of(f.in_w.begin(), f.in_w.end(), [](double v) { return v != 0.0; });
       if (law_->parent_independent()) {
@@ -113,6 +112,15 @@ class Mill : public UnitBase<Mill> {
         if (cw >= 0) sink.add(sW_.i + i, cw, -a);
       }
     }
+  }
+  // The inlet's n classes of one field from `first` on, into `to` (one copy when they sit in consecutive states).
+  template <class T>
+  void read_field(const Ctx<T>& c, int first, T* to) const {
+    if (const T* block = c.port_block(in_, first, n_)) {
+      std::copy(block, block + n_, to);
+      return;
+    }
+    for (int k = 0; k < n_; ++k) to[k] = c.port(in_, first + k);
   }
   template <class T>
   void init(InitCtx<T>& c) const {

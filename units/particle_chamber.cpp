@@ -286,6 +286,36 @@ T ParticleChamber::spray_solids(const Ctx<T>& c) const {
   return spray_ ? T(c.par(p_spray_) * c.par(p_w_)) : T(0.0);
 }
 
+template <class T>
+void ParticleChamber::inlet_flows(const Ctx<T>& c, T* in_m, T* in_w) const {
+  if constexpr (std::is_same_v<T, double>) {
+    // inlets whose flows are arrays, in vector loops: per class the same sums in the same order as below
+    bool blocks = true;
+    for (PortId p : inlets_)
+      blocks = blocks && c.port_block(p, solids::mdot(0), n_) && (!wet_ || c.port_block(p, solids::water(n_, 0), n_));
+    if (blocks) {
+      std::fill(in_m, in_m + n_, 0.0);
+      std::fill(in_w, in_w + n_, 0.0);
+      for (PortId p : inlets_) {
+        const double* m = c.port_block(p, solids::mdot(0), n_);
+        for (int i = 0; i < n_; ++i) in_m[i] += m[i];
+        if (!wet_) continue;
+        const double* w = c.port_block(p, solids::water(n_, 0), n_);
+        for (int i = 0; i < n_; ++i) in_w[i] += w[i];
+      }
+      return;
+    }
+  }
+  for (int i = 0; i < n_; ++i) {
+    T m(0.0), w(0.0);
+    for (PortId p : inlets_) {
+      m += c.port(p, solids::mdot(i));
+      if (wet_) w += c.port(p, solids::water(n_, i));
+    }
+    in_m[i] = m, in_w[i] = w;
+  }
+}
+
 // Paper 003, Eqs. (7.32)-(7.34): the number fluxes F_f through the faces of the cells (fv_growth.hpp), normalized so
 // that the created volume is M_sus / rho; in mass, class i gains m_i F_i and loses m_i F_{i+1}; what grows past the
 // top face is kept in the top class with its volume (x_hi), so the mass gained is exactly M_sus. Water moves with the
@@ -380,14 +410,7 @@ Status ParticleChamber::eval(const Ctx<T>& c) const {
   }
   const T* frac = discharge_fractions(c);
   // What the inlets bring per class, read once: the controller sums it and every class row uses it.
-  for (int i = 0; i < n_; ++i) {
-    T m(0.0), w(0.0);
-    for (PortId p : inlets_) {
-      m += c.port(p, solids::mdot(i));
-      if (wet_) w += c.port(p, solids::water(n_, i));
-    }
-    sc.in_m[i] = m, sc.in_w[i] = w;
-  }
+  inlet_flows(c, sc.in_m.data(), sc.in_w.data());
   if (discharge_ != Discharge::kNone) {
     if (controlled_) {
       const T mass = c.reduce(r_mass_, n_, [&](int i) { return M[i]; });

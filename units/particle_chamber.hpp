@@ -86,6 +86,9 @@ class ParticleChamber : public UnitBase<ParticleChamber> {
   T spray_solids(const Ctx<T>& c) const;
   template <class T>
   void growth_rates(const Ctx<T>& c, const T* N, const T* W, const T& amount, T* dM, T* dW) const;
+  // What the inlets bring per class (dry solids, water), summed over the inlets in their order.
+  template <class T>
+  void inlet_flows(const Ctx<T>& c, T* in_m, T* in_w) const;
   template <class T>
   kernels::Population::State<T> population_state(const Ctx<T>& c, const T* N, const T* floor, T* temp) const;
 

@@ -284,6 +284,7 @@ Ctx<T> DaeSystem::ctx(int u, double t, const T* y, const T* yp, const std::vecto
   const UnitInstance& inst = fs_.units()[u];
   Ctx<T> c{t, y, yp, params[u].data(), r, inst.offset, &inst.port_index, segment_start_};
   c.work = ws_[u].get();
+  c.port_runs = &inst.port_runs;
   if (inst.shared >= 0) c.shared = params[inst.shared].data();
   return c;
 }

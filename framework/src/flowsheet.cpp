@@ -255,6 +255,16 @@ void Flowsheet::finalize() {
       }
     }
   }
+  for (auto& inst : units_) {  // runs of consecutive states, counted from the end of each port
+    inst.port_runs.resize(inst.port_index.size());
+    for (size_t p = 0; p < inst.port_index.size(); ++p) {
+      const auto& idx = inst.port_index[p];
+      auto& run = inst.port_runs[p];
+      run.assign(idx.size(), 0);
+      for (size_t f = idx.size(); f-- > 0;)
+        if (idx[f] >= 0) run[f] = f + 1 < idx.size() && idx[f + 1] == idx[f] + 1 ? run[f + 1] + 1 : 1;
+    }
+  }
   pool_ = std::make_shared<SystemPool>();
   finalized_ = true;
 }

@@ -56,6 +56,7 @@ struct UnitInstance {
   std::vector<double> params;                          // current constant values (SI)
   std::vector<std::optional<PiecewiseLinear>> inputs;  // per param: time-dependent override
   std::vector<std::vector<int>> port_index;            // per port, per field: global state index
+  std::vector<std::vector<int>> port_runs;             // per port, per field: consecutive states from it on
   std::vector<std::pair<int, int>> peers;              // per port: (unit index, port index) of the connected port
   int quad_offset = 0;                                 // global index of own quadrature 0
   int shared = -1;  // unit index of the particle system whose parameters it reads (UnitSpec::use_shared_params)

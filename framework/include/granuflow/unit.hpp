@@ -254,7 +254,8 @@ struct Ctx {
   Workspace* work = nullptr;                        // this run's workspace of the unit
   const T* shared = nullptr;  // parameters of the particle system the unit reads (UnitSpec::use_shared_params)
   const T* quad = nullptr;    // this unit's quadratures (report only)
-  ReductionRecorder* recorder = nullptr;  // set in the framework's coloured Jacobian sweeps only
+  ReductionRecorder* recorder = nullptr;                     // set in the framework's coloured Jacobian sweeps only
+  const std::vector<std::vector<int>>* port_runs = nullptr;  // UnitInstance::port_runs, where the framework sets it
 
   const T& x(StateId k) const { return y[offset + k.i]; }
   const T& xd(StateId k) const { return yp[offset + k.i]; }
@@ -267,6 +268,12 @@ struct Ctx {
   const T& port(PortId p, int field) const {
     const int i = (*port_index)[p.i][field];
     return i >= 0 ? y[i] : zero();
+  }
+  // Fields first .. first + count - 1 of port p as one array when their states are consecutive (a block of the unit
+  // that provides them), else nullptr: loops over a stream's classes then read it directly, and vectorize.
+  const T* port_block(PortId p, int first, int count) const {
+    if (!port_runs || (*port_runs)[p.i][first] < count) return nullptr;
+    return y + (*port_index)[p.i][first];
   }
   bool connected(PortId p) const {
     for (int i : (*port_index)[p.i])
