@@ -69,6 +69,7 @@ class FvGrowth {
                         std::vector<T>& inv_integral) const;
   template <class T>
   T flux_values(const T* N, const GrowthTerms<T>& g, T* F, int* donor) const;
+  double normalized_fluxes(const double* N, const GrowthTerms<double>& g, double* F, int* donor) const;
   template <class T>
   void growth_at_faces(const std::vector<Face<T>>& fc, const GrowthTerms<T>& g, std::vector<T>& G,
                        std::vector<T>& inv_integral) const;
