@@ -9,6 +9,7 @@
 
 #include <map>
 #include <set>
+#include <string>
 #include <thread>
 
 #include "granuflow/dae_system.hpp"
@@ -62,7 +63,7 @@ units:
 // Paper 003's continuous units in one loop: a wet granulator with aggregation and a classified discharge held at its
 // set mass, a two-deck sieve (sharp upper deck, Molerus-Hoffmann lower deck), a Vogel-Peukert mill on the oversize,
 // part of the undersize split off, and a mixer returning fines, milled oversize and fresh seeds.
-const char* kSieveMillLoop = R"(
+const char* kSieveMillLoopHead = R"(
 scene: sieve_mill_loop
 t_end: 2 h
 output: {n: 5}
@@ -82,7 +83,10 @@ units:
     settings: {upper_curve: sharp, lower_curve: molerus_hoffmann}
     params: {upper_d_cut: 1.5 mm, lower_d_cut: 1.0 mm, lower_k: 8}
   mill: {type: mill, settings: {law: vogel_peukert}, params: {W_m: 300, E_mat: 100, W_min: 20, q: 1.2}}
-  split: {type: solids_splitter, params: {fraction: 0.8}}
+)";
+
+// The loop's splitter, mixer, product sinks and connections, the same wet or dry.
+const char* kLoopTail = R"(  split: {type: solids_splitter, params: {fraction: 0.8}}
   mix: {type: solids_mixer, settings: {inlets: 3}}
   product: {type: solids_product}
   fines_out: {type: solids_product}
@@ -93,7 +97,7 @@ connections: [seed.out -> mix.in1, sieve.undersize -> split.in, split.out1 -> mi
 
 // The same loop dry (particles: water: false): no unit computes water, every solids stream passes on the seed
 // feed's one zero; an unclassified discharge and a log-normal mill for variety.
-const char* kDrySieveMillLoop = R"(
+const char* kDrySieveMillLoopHead = R"(
 scene: dry_sieve_mill_loop
 t_end: 2 h
 output: {n: 5}
@@ -111,13 +115,6 @@ units:
     settings: {upper_curve: plitt, lower_curve: plitt}
     params: {upper_d_cut: 1.5 mm, lower_d_cut: 1.0 mm}
   mill: {type: mill, settings: {law: lognormal}, params: {d50: 450 um, sigma_g: 1.5}}
-  split: {type: solids_splitter, params: {fraction: 0.8}}
-  mix: {type: solids_mixer, settings: {inlets: 3}}
-  product: {type: solids_product}
-  fines_out: {type: solids_product}
-connections: [seed.out -> mix.in1, sieve.undersize -> split.in, split.out1 -> mix.in2, split.out2 -> fines_out.in,
-              mill.out -> mix.in3, mix.out -> gran.feed, gran.discharge -> sieve.in, sieve.oversize -> mill.in,
-              sieve.product -> product.in]
 )";
 
 // The two-compartment bed of paper 003 (Eqs. (7.37)-(7.39)) run continuously: spray zone and drying zone exchanging
@@ -147,8 +144,8 @@ std::vector<std::pair<std::string, Scene>> scenes() {
   v.emplace_back("continuous dryer", scene_from_file("flowsheets/continuous_drying_bed.yaml"));
   v.emplace_back("pbm", scene_from_text(kPbmMechanisms));
   v.emplace_back("pbm 2d", scene_from_text(pbm_2d_scene()));
-  v.emplace_back("sieve-mill loop", scene_from_text(kSieveMillLoop));
-  v.emplace_back("dry sieve-mill loop", scene_from_text(kDrySieveMillLoop));
+  v.emplace_back("sieve-mill loop", scene_from_text(std::string(kSieveMillLoopHead) + kLoopTail));
+  v.emplace_back("dry sieve-mill loop", scene_from_text(std::string(kDrySieveMillLoopHead) + kLoopTail));
   v.emplace_back("two-zone bed", scene_from_text(kTwoZone));
   return v;
 }
