@@ -312,6 +312,7 @@ void DaeSystem::reconfigure() {
 void DaeSystem::begin_run() {
   segment_start_ = 0.0;  // before reconfigure(): step inputs are read at the segment start
   n_res_ = n_jac_ = 0;
+  completed_ = false;
   reconfigure();
 }
 

@@ -294,6 +294,7 @@ std::shared_ptr<DaeSystem> Flowsheet::take_system(bool inline_explicit) const {
   std::weak_ptr<SystemPool> pool = pool_;
   return std::shared_ptr<DaeSystem>(sys.release(), [pool, inline_explicit](DaeSystem* done) {
     std::unique_ptr<DaeSystem> owned(done);
+    if (!owned->completed()) return;
     if (auto p = pool.lock()) {
       std::lock_guard<std::mutex> lock(p->mutex);
       if (p->kept[inline_explicit].size() < kKeptSystems) p->kept[inline_explicit].push_back(std::move(owned));

@@ -608,6 +608,7 @@ SimResult simulate_ode(Flowsheet& fs, const SimOptions& opt, const std::string& 
   res.stats.residuals = sys.residual_count();
   res.stats.jacobians = sys.jacobian_count();
   res.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  sys.end_run();
   return res;
 }
 

@@ -394,6 +394,7 @@ SimResult simulate_ida(Flowsheet& fs, const SimOptions& opt, const std::string& 
   res.stats.method = "bdf (IDAS)";
   res.stats.method_reason = reason;
   res.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  sys.end_run();
   return res;
 }
 

@@ -571,6 +571,7 @@ SteadyResult solve_steady_state(Flowsheet& fs, const SteadyOptions& opt, const s
     stability(s, y, s.kept.size(), r);
     r.stability_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
+  sys.end_run();
   return r;
 }
 

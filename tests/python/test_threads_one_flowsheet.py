@@ -4,6 +4,7 @@ estimate, which builds refined flowsheets of its own."""
 import concurrent.futures as cf
 
 import numpy as np
+import pytest
 
 from conftest import SCENE
 
@@ -58,3 +59,9 @@ def test_a_run_on_a_kept_system_equals_a_run_on_a_new_flowsheet():
         assert np.array_equal(got.y, want.y) and np.array_equal(got.outputs, want.outputs)
         assert got.stats["residuals"] == want.stats["residuals"] and got.stats["jacobians"] == want.stats["jacobians"]
     assert not np.array_equal(got.y, first.y)  # the changed parameters did change the run
+    # a run that fails gives its system up; the next run starts like a new one
+    with pytest.raises(gf.SolverError):
+        fs.simulate(t_end=900.0, warn=False, max_steps=20)
+    got = fs.simulate(t_end=900.0, warn=False)
+    want = fresh(**{"bed.ln_beta0": -16.5, "nozzle.mdot": 1.5e-3}).simulate(t_end=900.0, warn=False)
+    assert np.array_equal(got.y, want.y) and got.stats["residuals"] == want.stats["residuals"]

@@ -38,6 +38,10 @@ class DaeSystem {
   void reconfigure();
   // For a system kept from an earlier run (Flowsheet::take_system): reconfigure(), segment start 0, counters 0.
   void begin_run();
+  // A run that ends normally says so; only such systems are kept for the next run (one a unit or the integrator
+  // threw out of may hold half-updated tables).
+  void end_run() { completed_ = true; }
+  bool completed() const { return completed_; }
 
   int size() const { return n_; }           // unknowns of the integrator
   int full_size() const { return n_ext_; }  // every state of the flowsheet, explicit ones last
@@ -194,6 +198,7 @@ class DaeSystem {
   struct BlockPreconditioner;
   std::shared_ptr<BlockPreconditioner> prec_;  // shared_ptr: the type is complete in block_preconditioner.cpp only
   long n_res_ = 0, n_jac_ = 0;
+  bool completed_ = false;
 };
 
 }  // namespace granuflow

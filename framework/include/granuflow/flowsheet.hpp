@@ -147,7 +147,8 @@ class Flowsheet {
   // with the current parameters and inputs, else a new one. Building one configures every unit and allocates its
   // work arrays (0.56 ms of the 100-class sieve-mill loop's 42 ms, 0.08 ms of the headline's 7 ms, and the first
   // evaluations touch the memory again); runs in parallel threads each hold their own. The system goes back to the
-  // flowsheet when the last copy of the handle is gone. After finalize().
+  // flowsheet when the last copy of the handle is gone, if its run ended normally (DaeSystem::end_run). After
+  // finalize().
   std::shared_ptr<DaeSystem> take_system(bool inline_explicit) const;
 
  private:
@@ -167,7 +168,7 @@ class Flowsheet {
   int n_explicit_ = 0;
   int n_quads_ = 0;
   bool finalized_ = false;
-  struct SystemPool;  // dae_system.cpp
+  struct SystemPool;  // flowsheet.cpp
   std::shared_ptr<SystemPool> pool_;
 };
 
