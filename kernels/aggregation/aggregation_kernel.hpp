@@ -18,6 +18,7 @@
 //     template <class T> void features(const ClassState<T>& s, int i, const T* p, T* phi) const;      // phi_i
 //     template <class T> T efficiency(const T* phi_i, const T* phi_j, const T* p) const;              // symmetric
 #pragma once
+#include <algorithm>
 #include <memory>
 #include <vector>
 
@@ -51,6 +52,11 @@ class AggregationKernel : public KernelBase {
   // E for every pair i <= j of n classes, in row-major upper-triangle order (one call per residual).
   virtual void efficiencies(const double* phi, int n, const double* p, double* E) const = 0;
   virtual void efficiencies(const Jet* phi, int n, const Jet* p, Jet* E) const = 0;
+  // E and its derivatives by the partners' features for every pair, in the same order, for the engine's analytic
+  // Jacobian: dEa[q * m + c] = dE/dphi_i[c], dEb[q * m + c] = dE/dphi_j[c] (m = n_features(), p the kernel's np
+  // parameters). One call per Jacobian, forward AD with 2 m directions per pair.
+  virtual void efficiency_gradients(const double* phi, int n, const double* p, int np, double* E, double* dEa,
+                                    double* dEb) const = 0;
   // The efficiency as a short sum of products, E(phi_i, phi_j) = sum_t sign_t h_t(phi_i) h_t(phi_j) for every pair,
   // exactly: fills h[t * n + i] for n classes and sign[t] (+1 or -1) and returns the number of terms (at most
   // kMaxEfficiencyTerms), or 0 when E has no such form. The 2-D population (population/population2d.hpp) then
@@ -98,6 +104,29 @@ class PairKernel : public AggregationKernel {
   Jet efficiency(const Jet* a, const Jet* b, const Jet* p) const override { return eff(a, b, p); }
   void efficiencies(const double* phi, int n, const double* p, double* E) const override { all(phi, n, p, E); }
   void efficiencies(const Jet* phi, int n, const Jet* p, Jet* E) const override { all(phi, n, p, E); }
+  void efficiency_gradients(const double* phi, int n, const double* p, int np, double* E, double* dEa,
+                            double* dEb) const override {
+    constexpr int m = features_of<Derived>();
+    const size_t pairs = size_t(n) * (n + 1) / 2;
+    if constexpr (m == 0) {
+      std::fill(E, E + pairs, 1.0);
+    } else {
+      using Dual = ceres::Jet<double, 2 * m>;  // the directions of both partners' features, no more
+      std::vector<Dual> pd(p, p + np);
+      Dual a[m], b[m];
+      size_t q = 0;
+      for (int i = 0; i < n; ++i)
+        for (int j = i; j < n; ++j, ++q) {
+          for (int c = 0; c < m; ++c) {
+            a[c] = Dual(phi[size_t(i) * m + c]), a[c].v[c] = 1.0;
+            b[c] = Dual(phi[size_t(j) * m + c]), b[c].v[m + c] = 1.0;
+          }
+          const Dual e = self().efficiency(a, b, pd.data());
+          E[q] = e.a;
+          for (int c = 0; c < m; ++c) dEa[q * m + c] = e.v[c], dEb[q * m + c] = e.v[m + c];
+        }
+    }
+  }
 
  private:
   const Derived& self() const { return static_cast<const Derived&>(*this); }

@@ -29,6 +29,9 @@ class CallbackKernel : public AggregationKernel {
   void efficiencies(const Jet*, int n, const Jet*, Jet* E) const override {
     std::fill(E, E + size_t(n) * (n + 1) / 2, Jet(1.0));
   }
+  void efficiency_gradients(const double*, int n, const double*, int, double* E, double*, double*) const override {
+    std::fill(E, E + size_t(n) * (n + 1) / 2, 1.0);  // no features: nothing to differentiate
+  }
 
  private:
   std::vector<ParamSpec> specs_;

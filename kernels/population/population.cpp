@@ -228,6 +228,7 @@ struct Population::Work {
   std::vector<double> D, G, dB, dV, dQ, dF, jinv, map_factors, map_scales;
   std::vector<int> map_rows, map_cols;
   std::vector<Jet> jp, jN, jq, jf, jphi;
+  std::vector<double> eff, eff_da, eff_db;  // analytic Jacobian: E and dE/dphi of every pair
 };
 
 // The near-equal partners of the scheme's diagonals (one shift and one set of weights per diagonal on a geometric
@@ -1126,21 +1127,19 @@ void Population::analytic_jacobian(Work& w, const State<double>& s, std::vector<
     };
     In ev_buf[2 + 2 * kFields];
     int nev = 0;
-    Jet a[kMaxFeatures], b[kMaxFeatures];
+    if (mf > 0) {
+      const size_t pairs = size_t(n) * (n + 1) / 2;
+      w.eff.resize(pairs), w.eff_da.resize(pairs * mf), w.eff_db.resize(pairs * mf);
+      agg_.kernel->efficiency_gradients(phi.data(), n, kp, agg_.count, w.eff.data(), w.eff_da.data(), w.eff_db.data());
+    }
     size_t pr = 0;
     for (int j = 0; j < n; ++j)
       for (int k = j; k < n; ++k, ++pr) {
         const double Kh = w.Kh[pr];
-        double E = 1.0, dEa[kMaxFeatures] = {}, dEb[kMaxFeatures] = {};
-        if (mf > 0) {
-          for (int c = 0; c < mf; ++c) {
-            a[c] = Jet(phi[size_t(j) * mf + c]), a[c].v[c] = 1.0;
-            b[c] = Jet(phi[size_t(k) * mf + c]), b[c].v[mf + c] = 1.0;
-          }
-          const Jet e = agg_.kernel->efficiency(a, b, w.jp.data());
-          E = e.a;
-          for (int c = 0; c < mf; ++c) dEa[c] = e.v[c], dEb[c] = e.v[mf + c];
-        }
+        double E = 1.0;
+        const double* dEa = mf > 0 ? &w.eff_da[pr * mf] : nullptr;
+        const double* dEb = mf > 0 ? &w.eff_db[pr * mf] : nullptr;
+        if (mf > 0) E = w.eff[pr];
         const double beta = Kh * E, rate = beta * N[j] * N[k];
         nev = 0;
         ev_buf[nev++] = {j, beta * N[k]};

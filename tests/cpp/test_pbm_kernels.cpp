@@ -209,6 +209,59 @@ TEST(PbmKernels, AggregationKernelsAreSymmetricFiniteAndNonNegative) {
   }
 }
 
+// efficiency_gradients (the engine's analytic Jacobian: one call per Jacobian, 2 m AD directions per pair) gives
+// every kernel's E as efficiencies() does and dE/dphi as one evaluation per pair with the engine's Jets does, to the
+// bit, and the derivatives are those of E (central differences).
+TEST(PbmKernels, EfficiencyGradientsEqualThePairByPairDerivatives) {
+  const auto g = Grid::from_diameter_pivots({60e-6, 120e-6, 250e-6, 500e-6, 1000e-6});
+  set_table("test_collisions",
+            collision_frequency_table(std::vector<double>(25, 10.0), std::vector<double>(5, 1e3), 0.5, "test"));
+  std::vector<double> X{0.02, 0.05, 0.11, 0.07, 0.2}, T{320.0, 328.0, 335.0, 341.0, 350.0}, LC{0.1, 0.3, 0.1, 0.3, 0.5};
+  ClassState<double> cs;
+  cs.n = 5, cs.volume = g.pivots().data(), cs.diameter = g.diameter_pivots().data();
+  cs.fields[0] = X.data(), cs.fields[1] = X.data(), cs.fields[2] = T.data(), cs.fields[3] = LC.data();
+  cs.fields[4] = LC.data();
+  int with_features = 0;
+  for (const auto& name : registries().aggregation.names()) {
+    auto k = registries().aggregation.create(name);
+    Settings st("test", {{"agg_collisions", "test_collisions"}});
+    k->declare(st, "agg_");
+    std::vector<double> p;
+    for (const auto& s : k->params()) p.push_back(s.value);
+    const int m = k->n_features(), n = 5, pairs = n * (n + 1) / 2;
+    std::vector<double> phi(size_t(n) * std::max(m, 1)), E(pairs), Eg(pairs), dEa(size_t(pairs) * m),
+        dEb(size_t(pairs) * m);
+    k->features(cs, p.data(), phi.data());
+    k->efficiencies(phi.data(), n, p.data(), E.data());
+    k->efficiency_gradients(phi.data(), n, p.data(), static_cast<int>(p.size()), Eg.data(), dEa.data(), dEb.data());
+    with_features += m > 0;
+    std::vector<Jet> pj(p.begin(), p.end());
+    int q = 0;
+    for (int i = 0; i < n; ++i)
+      for (int j = i; j < n; ++j, ++q) {
+        EXPECT_EQ(Eg[q], E[q]) << name << " " << i << " " << j;
+        Jet a[kMaxFeatures], b[kMaxFeatures];
+        for (int c = 0; c < m; ++c) {
+          a[c] = Jet(phi[size_t(i) * m + c]), a[c].v[c] = 1.0;
+          b[c] = Jet(phi[size_t(j) * m + c]), b[c].v[m + c] = 1.0;
+        }
+        const Jet e = m > 0 ? k->efficiency(a, b, pj.data()) : Jet(1.0);
+        for (int c = 0; c < m; ++c) {
+          EXPECT_EQ(dEa[q * m + c], e.v[c]) << name << " " << i << " " << j << " " << c;
+          EXPECT_EQ(dEb[q * m + c], e.v[m + c]) << name << " " << i << " " << j << " " << c;
+          std::vector<double> hi(phi.begin() + size_t(i) * m, phi.begin() + size_t(i) * m + m), lo = hi;
+          const double h = 1e-6 * std::max(1.0, std::abs(hi[c]));
+          hi[c] += h, lo[c] -= h;
+          const double fd = (k->efficiency(hi.data(), &phi[size_t(j) * m], p.data()) -
+                             k->efficiency(lo.data(), &phi[size_t(j) * m], p.data())) /
+                            (2 * h);
+          EXPECT_NEAR(dEa[q * m + c], fd, 1e-6 * std::max(1.0, std::abs(fd))) << name << " " << i << " " << j;
+        }
+      }
+  }
+  EXPECT_GT(with_features, 0);  // glass_transition and dem_collision have features
+}
+
 // The Python prototyping path: a callable returning the n x n matrix. It is state-independent, so it is
 // evaluated once per run, however many residuals the solver takes.
 TEST(PbmKernels, CallableKernelReproducesTheCompiledOneAndIsEvaluatedOncePerRun) {
