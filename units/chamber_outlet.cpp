@@ -20,6 +20,8 @@ namespace {
 
 struct Work : Workspace {
   Classifier::Cache cls;
+  std::vector<double> hd;  // the hold-up gathered where its fields are not consecutive (Ctx::port_array)
+  std::vector<Jet> hj;
 };
 
 class ChamberOutlet : public UnitBase<ChamberOutlet> {
@@ -55,25 +57,14 @@ class ChamberOutlet : public UnitBase<ChamberOutlet> {
     const int n = spec_.classes;
     const T* frac = spec_.classifier ? spec_.classifier->fractions(c.shared, c.template ws<Work>().cls) : nullptr;
     const T& r = c.port(in_, holdup_fields::rate(n));
-    if constexpr (std::is_same_v<T, double>) {
-      // the hold-up as arrays: the same products class by class, in vector loops
-      const double* M = c.port_block(in_, holdup_fields::mass(0), n);
-      const double* W = spec_.wet ? c.port_block(in_, holdup_fields::water(n, 0), n) : nullptr;
-      if (M && (!spec_.wet || W)) {
-        flows(n, r, frac, M, &c.x(sM_), &c.res(sM_));
-        if (spec_.wet) flows(n, r, frac, W, &c.x(sW_), &c.res(sW_));
-        return Status::kOk;
-      }
-    }
-    for (int i = 0; i < n; ++i) {
-      const T ri = frac ? T(r * frac[i]) : r;
-      c.res(sM_ + i) = c.x(sM_ + i) - ri * c.port(in_, holdup_fields::mass(i));
-      if (spec_.wet) c.res(sW_ + i) = c.x(sW_ + i) - ri * c.port(in_, holdup_fields::water(n, i));
-    }
+    auto& scratch = per_scalar<T>(c.template ws<Work>().hd, c.template ws<Work>().hj);
+    flows(n, r, frac, c.port_array(in_, holdup_fields::mass(0), n, scratch), &c.x(sM_), &c.res(sM_));
+    if (spec_.wet) flows(n, r, frac, c.port_array(in_, holdup_fields::water(n, 0), n, scratch), &c.x(sW_), &c.res(sW_));
     return Status::kOk;
   }
-  // res_i = x_i - r f_i h_i (f_i = 1 without a classifier), as the loop of eval() computes it.
-  static void flows(int n, double r, const double* frac, const double* h, const double* x, double* res) {
+  // res_i = x_i - r f_i h_i (f_i = 1 without a classifier): plain array loops for the flows of one field.
+  template <class T>
+  static void flows(int n, const T& r, const T* frac, const T* h, const T* x, T* res) {
     if (frac) {
       for (int i = 0; i < n; ++i) res[i] = x[i] - r * frac[i] * h[i];
     } else {

@@ -22,7 +22,7 @@ struct Work : Workspace {
   std::vector<Jet> P_jet, scratch;
   template <class T>
   struct Flows {
-    std::vector<T> in_m, in_w, m, w;  // inlet classes read once per evaluation; the outlet sums
+    std::vector<T> in_m, in_w, m, w;  // the inlet gathered where not consecutive (Ctx::port_array); the outlet sums
   };
   Flows<double> fd;
   Flows<Jet> fj;
@@ -67,30 +67,30 @@ class Mill : public UnitBase<Mill> {
   Status eval(const Ctx<T>& c) const {
     const T* P = matrix(c);
     auto& f = per_scalar<T>(c.template ws<Work>().fd, c.template ws<Work>().fj);
-    f.in_m.resize(n_), f.in_w.assign(n_, T(0.0));
     f.m.assign(n_, T(0.0)), f.w.assign(n_, T(0.0));
-    read_field(c, solids::mdot(0), f.in_m.data());
-    if (wet_) read_field(c, solids::water(n_, 0), f.in_w.data());
+    const T* in_m = c.port_array(in_, solids::mdot(0), n_, f.in_m);
+    if (!wet_) f.in_w.assign(n_, T(0.0));
+    const T* in_w = wet_ ? c.port_array(in_, solids::water(n_, 0), n_, f.in_w) : f.in_w.data();
     if constexpr (std::is_same_v<T, double>) {
-      const bool wet = std::any_of(f.in_w.begin(), f.in_w.end(), [](double v) { return v != 0.0; });
+      const bool wet = std::any_of(in_w, in_w + n_, [](double v) { return v != 0.0; });
       if (law_->parent_independent()) {
         // Every coarser parent puts the same share P_i,n-1 on class i: a suffix sum over the parents (O(n))
-        parent_independent_product(P, f.in_m.data(), f.m.data());
-        if (wet) parent_independent_product(P, f.in_w.data(), f.w.data());
+        parent_independent_product(P, in_m, f.m.data());
+        if (wet) parent_independent_product(P, in_w, f.w.data());
       } else {
         // Eigen's blocked triangular product (P is upper triangular: parent class k feeds classes i <= k); a dry
         // feed skips the water column, which would be a second product of zeros
         const Eigen::Map<const Eigen::MatrixXd> Pm(P, n_, n_);
         Eigen::Map<Eigen::VectorXd>(f.m.data(), n_).noalias() =
-            Pm.triangularView<Eigen::Upper>() * Eigen::Map<const Eigen::VectorXd>(f.in_m.data(), n_);
+            Pm.triangularView<Eigen::Upper>() * Eigen::Map<const Eigen::VectorXd>(in_m, n_);
         if (wet)
           Eigen::Map<Eigen::VectorXd>(f.w.data(), n_).noalias() =
-              Pm.triangularView<Eigen::Upper>() * Eigen::Map<const Eigen::VectorXd>(f.in_w.data(), n_);
+              Pm.triangularView<Eigen::Upper>() * Eigen::Map<const Eigen::VectorXd>(in_w, n_);
       }
     } else {
       for (int k = 0; k < n_; ++k) {  // column by column (P is column-major)
         const T* col = P + size_t(k) * n_;
-        for (int i = 0; i <= k; ++i) f.m[i] += col[i] * f.in_m[k], f.w[i] += col[i] * f.in_w[k];
+        for (int i = 0; i <= k; ++i) f.m[i] += col[i] * in_m[k], f.w[i] += col[i] * in_w[k];
       }
     }
     for (int i = 0; i < n_; ++i) c.res(sM_ + i) = c.x(sM_ + i) - f.m[i];
@@ -112,15 +112,6 @@ class Mill : public UnitBase<Mill> {
         if (cw >= 0) sink.add(sW_.i + i, cw, -a);
       }
     }
-  }
-  // The inlet's n classes of one field from `first` on, into `to` (one copy when they sit in consecutive states).
-  template <class T>
-  void read_field(const Ctx<T>& c, int first, T* to) const {
-    if (const T* block = c.port_block(in_, first, n_)) {
-      std::copy(block, block + n_, to);
-      return;
-    }
-    for (int k = 0; k < n_; ++k) to[k] = c.port(in_, first + k);
   }
   template <class T>
   void init(InitCtx<T>& c) const {

@@ -26,7 +26,7 @@ struct ParticleChamber::Work : Workspace {
   Classifier::Cache cls;
   template <class T>
   struct Scratch {
-    std::vector<T> pm, spm, N, floor, dM, dW, dN, F, ones, temp, in_m, in_w;
+    std::vector<T> pm, spm, N, floor, dM, dW, dN, F, ones, temp, in_m, in_w, gather;
     std::vector<int> donor;
     void resize(int n) {
       for (auto* v : {&pm, &spm, &N, &floor, &dM, &dW, &dN, &temp, &in_m, &in_w}) v->assign(n, T(0.0));
@@ -287,32 +287,15 @@ T ParticleChamber::spray_solids(const Ctx<T>& c) const {
 }
 
 template <class T>
-void ParticleChamber::inlet_flows(const Ctx<T>& c, T* in_m, T* in_w) const {
-  if constexpr (std::is_same_v<T, double>) {
-    // inlets whose flows are arrays, in vector loops: per class the same sums in the same order as below
-    bool blocks = true;
-    for (PortId p : inlets_)
-      blocks = blocks && c.port_block(p, solids::mdot(0), n_) && (!wet_ || c.port_block(p, solids::water(n_, 0), n_));
-    if (blocks) {
-      std::fill(in_m, in_m + n_, 0.0);
-      std::fill(in_w, in_w + n_, 0.0);
-      for (PortId p : inlets_) {
-        const double* m = c.port_block(p, solids::mdot(0), n_);
-        for (int i = 0; i < n_; ++i) in_m[i] += m[i];
-        if (!wet_) continue;
-        const double* w = c.port_block(p, solids::water(n_, 0), n_);
-        for (int i = 0; i < n_; ++i) in_w[i] += w[i];
-      }
-      return;
-    }
-  }
-  for (int i = 0; i < n_; ++i) {
-    T m(0.0), w(0.0);
-    for (PortId p : inlets_) {
-      m += c.port(p, solids::mdot(i));
-      if (wet_) w += c.port(p, solids::water(n_, i));
-    }
-    in_m[i] = m, in_w[i] = w;
+void ParticleChamber::inlet_flows(const Ctx<T>& c, T* in_m, T* in_w, std::vector<T>& gather) const {
+  std::fill(in_m, in_m + n_, T(0.0));
+  std::fill(in_w, in_w + n_, T(0.0));
+  for (PortId p : inlets_) {  // inlet by inlet over the classes: plain array loops
+    const T* m = c.port_array(p, solids::mdot(0), n_, gather);
+    for (int i = 0; i < n_; ++i) in_m[i] += m[i];
+    if (!wet_) continue;
+    const T* w = c.port_array(p, solids::water(n_, 0), n_, gather);
+    for (int i = 0; i < n_; ++i) in_w[i] += w[i];
   }
 }
 
@@ -410,7 +393,7 @@ Status ParticleChamber::eval(const Ctx<T>& c) const {
   }
   const T* frac = discharge_fractions(c);
   // What the inlets bring per class, read once: the controller sums it and every class row uses it.
-  inlet_flows(c, sc.in_m.data(), sc.in_w.data());
+  inlet_flows(c, sc.in_m.data(), sc.in_w.data(), sc.gather);
   if (discharge_ != Discharge::kNone) {
     if (controlled_) {
       const T mass = c.reduce(r_mass_, n_, [&](int i) { return M[i]; });

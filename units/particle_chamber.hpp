@@ -88,7 +88,7 @@ class ParticleChamber : public UnitBase<ParticleChamber> {
   void growth_rates(const Ctx<T>& c, const T* N, const T* W, const T& amount, T* dM, T* dW) const;
   // What the inlets bring per class (dry solids, water), summed over the inlets in their order.
   template <class T>
-  void inlet_flows(const Ctx<T>& c, T* in_m, T* in_w) const;
+  void inlet_flows(const Ctx<T>& c, T* in_m, T* in_w, std::vector<T>& gather) const;
   template <class T>
   kernels::Population::State<T> population_state(const Ctx<T>& c, const T* N, const T* floor, T* temp) const;
 

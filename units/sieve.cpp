@@ -16,6 +16,8 @@ namespace {
 
 struct Work : Workspace {
   Classifier::Cache upper, lower;
+  std::vector<double> in_d;  // the feed gathered where its fields are not consecutive (Ctx::port_array)
+  std::vector<Jet> in_j;
 };
 
 class Sieve : public UnitBase<Sieve> {
@@ -70,44 +72,24 @@ class Sieve : public UnitBase<Sieve> {
     Work& w = c.template ws<Work>();
     const T* tu = upper_.fractions(c.p, w.upper);
     const T* tl = lower_.fractions(c.p, w.lower);
-    if constexpr (std::is_same_v<T, double>) {
-      // the inlet's flows as arrays: the same operations as below, class by class in vector loops
-      const double* in_m = c.port_block(in_, solids::mdot(0), n_);
-      const double* in_w = wet_ ? c.port_block(in_, solids::water(n_, 0), n_) : nullptr;
-      if (in_m && (!wet_ || in_w)) {
-        split(c, tu, tl, in_m, sM_);
-        if (wet_) split(c, tu, tl, in_w, sW_);
-        return Status::kOk;
-      }
-    }
-    for (int i = 0; i < n_; ++i) {
-      for (int f = 0; f < (wet_ ? 2 : 1); ++f) {
-        const T& in = c.port(in_, f == 0 ? solids::mdot(i) : solids::water(n_, i));
-        const T over = tu[i] * in;
-        const T prod = tl[i] * (in - over);
-        const StateId* s = f == 0 ? sM_ : sW_;
-        c.res(s[0] + i) = c.x(s[0] + i) - over;
-        c.res(s[1] + i) = c.x(s[1] + i) - prod;
-        c.res(s[2] + i) = c.x(s[2] + i) - (in - over - prod);
-      }
-    }
+    auto& scratch = per_scalar<T>(w.in_d, w.in_j);
+    split(c, tu, tl, c.port_array(in_, solids::mdot(0), n_, scratch), sM_);
+    if (wet_) split(c, tu, tl, c.port_array(in_, solids::water(n_, 0), n_, scratch), sW_);
     return Status::kOk;
   }
-  // One field's three outlets from the inlet array `in`, outlet o's states from s[o].
-  static void split_into(int n, const double* tu, const double* tl, const double* in, const double* const x[3],
-                         double* const r[3]) {
-    for (int i = 0; i < n; ++i) {
-      const double over = tu[i] * in[i];
-      const double prod = tl[i] * (in[i] - over);
-      r[0][i] = x[0][i] - over;
-      r[1][i] = x[1][i] - prod;
-      r[2][i] = x[2][i] - (in[i] - over - prod);
+  // One field's three outlets (states s[0..2]) from the feed's array `in`: over = t_u in, product = t_l (in - over),
+  // undersize the rest.
+  template <class T>
+  void split(const Ctx<T>& c, const T* tu, const T* tl, const T* in, const StateId s[3]) const {
+    const T *x0 = &c.x(s[0]), *x1 = &c.x(s[1]), *x2 = &c.x(s[2]);
+    T *r0 = &c.res(s[0]), *r1 = &c.res(s[1]), *r2 = &c.res(s[2]);
+    for (int i = 0; i < n_; ++i) {
+      const T over = tu[i] * in[i];
+      const T prod = tl[i] * (in[i] - over);
+      r0[i] = x0[i] - over;
+      r1[i] = x1[i] - prod;
+      r2[i] = x2[i] - (in[i] - over - prod);
     }
-  }
-  void split(const Ctx<double>& c, const double* tu, const double* tl, const double* in, const StateId s[3]) const {
-    const double* x[3] = {&c.x(s[0]), &c.x(s[1]), &c.x(s[2])};
-    double* r[3] = {&c.res(s[0]), &c.res(s[1]), &c.res(s[2])};
-    split_into(n_, tu, tl, in, x, r);
   }
   template <class T>
   void init(InitCtx<T>& c) const {

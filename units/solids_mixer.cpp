@@ -19,10 +19,10 @@ constexpr double kCapacityFloor = 1e-12;  // W/K
 struct Work : Workspace {
   template <class T>
   struct Flows {
-    std::vector<T> cap, h;         // per class: capacity and enthalpy flows summed over the inlets
-    std::vector<T> m;              // per class: the dry flow summed over the inlets (vector_flows)
-    std::vector<const T*> blocks;  // per inlet: its dry flows as one array (vector_flows)
-    std::vector<T> dt;             // per inlet: T_j - T0
+    std::vector<T> m, w;    // per class: the flows summed over the inlets
+    std::vector<T> cap, h;  // per class: capacity and enthalpy flows summed over the inlets
+    std::vector<T> dt;      // per inlet: T_j - T0
+    std::vector<T> gm, gw;  // an inlet's flows gathered where not consecutive (Ctx::port_array)
   };
   Flows<double> fd;
   Flows<Jet> fj;
@@ -70,13 +70,12 @@ class SolidsMixer : public UnitBase<SolidsMixer> {
   template <class T>
   Status eval(const Ctx<T>& c) const {
     auto& f = per_scalar<T>(c.template ws<Work>().fd, c.template ws<Work>().fj);
-    f.cap.resize(n_), f.h.resize(n_);
     const T cp_s = c.sh(pp_.cp_s);
     const T& cp_l = c.par(p_cpl_);
     // one pass over the inlets' classes: flows, capacity flows C_ji and enthalpy flows C_ji (T_j - T0)
     f.dt.resize(in_.size());
     for (size_t j = 0; j < in_.size(); ++j) f.dt[j] = c.port(in_[j], solids::T(n_)) - props::kT0;
-    if (!vector_flows(c, f, cp_s)) generic_flows(c, f, cp_s, cp_l);
+    flows(c, f, cp_s, cp_l);
     const T cap = c.reduce(r_capacity_, n_, [&](int i) { return f.cap[i]; });
     const T h = c.reduce(r_enthalpy_, n_, [&](int i) { return f.h[i]; });
     const T t_first = c.port(in_[0], solids::T(n_)) - props::kT0;
@@ -100,58 +99,33 @@ class SolidsMixer : public UnitBase<SolidsMixer> {
   }
 
  private:
-  // Per class: the flows summed over the inlets, their capacity and enthalpy flows (into f.cap, f.h), residuals.
+  // Per class: the flows summed over the inlets in their order, capacity flows C = m cp_s + w cp_l and enthalpy
+  // flows C (T_j - T0) (into f.cap, f.h), and the residuals; inlet by inlet over the classes, as arrays.
   template <class T, class F>
-  void generic_flows(const Ctx<T>& c, F& f, const T& cp_s, const T& cp_l) const {
-    for (int i = 0; i < n_; ++i) {
-      T m(0.0), w(0.0), cap(0.0), h(0.0);
-      for (size_t j = 0; j < in_.size(); ++j) {
-        const T& mp = c.port(in_[j], solids::mdot(i));
-        if (!wet_) {
-          const T cp = mp * cp_s;
-          m += mp, cap += cp, h += cp * f.dt[j];
-          continue;
-        }
-        const T& wp = c.port(in_[j], solids::water(n_, i));
-        const T cp = mp * cp_s + wp * cp_l;
-        m += mp, w += wp, cap += cp, h += cp * f.dt[j];
-      }
-      c.res(sM_ + i) = c.x(sM_ + i) - m;
-      if (wet_) c.res(sW_ + i) = c.x(sW_ + i) - w;
-      f.cap[i] = cap, f.h[i] = h;
-    }
-  }
-  // The same for dry doubles whose inlet flows are arrays (Ctx::port_block), inlet by inlet over the classes in vector
-  // loops: per class the same operations in the same order as generic_flows, so the same bits.
-  template <class T, class F>
-  bool vector_flows(const Ctx<T>& c, F& f, const T& cp_s) const {
-    if constexpr (!std::is_same_v<T, double>) {
-      return false;
-    } else {
-      if (wet_) return false;
-      f.blocks.resize(in_.size());
-      for (size_t j = 0; j < in_.size(); ++j)
-        if (!(f.blocks[j] = c.port_block(in_[j], solids::mdot(0), n_))) return false;
-      f.m.assign(n_, 0.0);
-      f.cap.assign(n_, 0.0), f.h.assign(n_, 0.0);
-      double *m = f.m.data(), *cap = f.cap.data(), *h = f.h.data();
-      for (size_t j = 0; j < in_.size(); ++j) {
-        const double* mp = f.blocks[j];
-        const double dt = f.dt[j];
+  void flows(const Ctx<T>& c, F& f, const T& cp_s, const T& cp_l) const {
+    f.m.assign(n_, T(0.0)), f.w.assign(n_, T(0.0)), f.cap.assign(n_, T(0.0)), f.h.assign(n_, T(0.0));
+    T *m = f.m.data(), *w = f.w.data(), *cap = f.cap.data(), *h = f.h.data();
+    for (size_t j = 0; j < in_.size(); ++j) {
+      const T* mp = c.port_array(in_[j], solids::mdot(0), n_, f.gm);
+      const T& dt = f.dt[j];
+      if (!wet_) {
         for (int i = 0; i < n_; ++i) {
-          const double cp = mp[i] * cp_s;
+          const T cp = mp[i] * cp_s;
           m[i] += mp[i], cap[i] += cp, h[i] += cp * dt;
         }
+        continue;
       }
-      double* r = &c.res(sM_);
-      const double* x = &c.x(sM_);
-      for (int i = 0; i < n_; ++i) r[i] = x[i] - m[i];
-      return true;
+      const T* wp = c.port_array(in_[j], solids::water(n_, 0), n_, f.gw);
+      for (int i = 0; i < n_; ++i) {
+        const T cp = mp[i] * cp_s + wp[i] * cp_l;
+        m[i] += mp[i], w[i] += wp[i], cap[i] += cp, h[i] += cp * dt;
+      }
     }
+    for (int i = 0; i < n_; ++i) c.res(sM_ + i) = c.x(sM_ + i) - m[i];
+    if (wet_)
+      for (int i = 0; i < n_; ++i) c.res(sW_ + i) = c.x(sW_ + i) - w[i];
   }
 
- public:
- private:
   int n_ = 0;
   bool wet_ = true;  // the particle system carries water
   ParticleParams pp_;

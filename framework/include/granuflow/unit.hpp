@@ -275,6 +275,14 @@ struct Ctx {
     if (!port_runs || (*port_runs)[p.i][first] < count) return nullptr;
     return y + (*port_index)[p.i][first];
   }
+  // The same fields as an array always: port_block where they are consecutive, else gathered into `scratch` (an
+  // unconnected optional field reads zero), so that a unit writes its class loops once.
+  const T* port_array(PortId p, int first, int count, std::vector<T>& scratch) const {
+    if (const T* block = port_block(p, first, count)) return block;
+    scratch.resize(count);
+    for (int k = 0; k < count; ++k) scratch[k] = port(p, first + k);
+    return scratch.data();
+  }
   bool connected(PortId p) const {
     for (int i : (*port_index)[p.i])
       if (i < 0) return false;
