@@ -81,6 +81,7 @@ class Pbm2D : public UnitBase<Pbm2D> {
 
   void declare(UnitSpec& s, Settings& st) override {
     const ParticleSystem& ps = particle_system(s, st);
+    require_water(ps, st, "the 2-D population holds liquid on the particles");
     pp_ = ps.params();
     const auto solid = ps.grid();
     const long nl = st.get_int("liquid_classes", 20, 2, 4000, "liquid classes (pivots l_j = j dl from 0)");

@@ -208,6 +208,13 @@ def test_a_dry_particle_system_refuses_water():
     wet_gran = CLASSIFIED.replace("d_max: 4.0e-3}", "d_max: 4.0e-3, water: false}")
     with pytest.raises(gf.ConfigError, match=r"gran.*drying: first_order.*particle system is dry"):
         gf.load_text(wet_gran, "wet_gran")
+    # every unit that holds water on its particles says so: the paper-001 bed and spray zone, the 2-D population
+    for scene, unit in (("stoeckl_gf25_batch.yaml", "spray_zone|bed"), ("sen_2d_dem_kernel.yaml", "2-D population")):
+        text = open(os.path.join(ROOT, "flowsheets", scene)).read()
+        dry_text = text.replace("particles:\n  settings: {", "particles:\n  settings: {water: false, ")
+        assert dry_text != text, scene
+        with pytest.raises(gf.ConfigError, match=rf"({unit}).*particle system is dry"):
+            gf.load_text(dry_text, "dry")
 
 
 def test_the_lognormal_mill_applies_its_breakage_matrix():
