@@ -35,9 +35,10 @@ struct Work : Workspace {
   std::vector<double> pm, spm;  // particle mass and surface per mass of each class at the run's parameters
   template <class T>
   struct Scratch {
-    std::vector<T> pm, spm, N, floor, dN, dW, dry, q, fwet, xwet, temp;
+    std::vector<T> pm, spm, N, floor, dN, dW, dry, q, fwet, xwet, temp, nu, area, flux;
     void resize(int n) {
-      for (auto* v : {&pm, &spm, &N, &floor, &dN, &dW, &dry, &q, &fwet, &xwet, &temp}) v->assign(n, T(0.0));
+      for (auto* v : {&pm, &spm, &N, &floor, &dN, &dW, &dry, &q, &fwet, &xwet, &temp, &nu, &area, &flux})
+        v->assign(n, T(0.0));
     }
   };
   Scratch<double> sd;
@@ -227,9 +228,15 @@ class FluidBed : public UnitBase<FluidBed> {
     const GasSide<T> g = gas_side(c, t_s, tr::bed_area_ratio(surface, c.par(p_abed_)));
     const TransferParams<T> tp = transfer_params(c);
     const double* d = grid_->diameter_pivots().data();
-    T *dry = sc.dry.data(), *q = sc.q.data();
-#pragma omp simd  // in doubles a vector loop (libmvec's log1p, kernels/simd_math.hpp)
-    for (int i = 0; i < n_; ++i) class_transfer(tp, d[i], M[i], W[i], pm[i], g, &dry[i], &q[i]);
+    T *dry = sc.dry.data(), *q = sc.q.data(), *nu = sc.nu.data(), *area = sc.area.data(), *flux = sc.flux.data();
+    // In doubles vector loops (libmvec's log1p, kernels/simd_math.hpp). The drying rate, Eqs. (70), (79), is formed
+    // in a loop of its own: beside the clamp of the drying curve, GCC's partial-redundancy elimination moves the
+    // product into the clamp's three cases, which if-conversion cannot flatten, and the class loop stayed scalar.
+    const int n = n_;  // a local bound: stores through the arrays could change the member n_
+#pragma omp simd
+    for (int i = 0; i < n; ++i) class_transfer(tp, d[i], M[i], W[i], pm[i], g, &nu[i], &area[i], &flux[i], &q[i]);
+#pragma omp simd
+    for (int i = 0; i < n; ++i) dry[i] = p1::drying_rate(nu[i], area[i], flux[i]);
     const T m_vap = c.reduce(r_drying_, n_, [&](int i) { return sc.dry[i]; });
     const T q_sum = c.reduce(r_heat_, n_, [&](int i) { return sc.q[i]; });
     const T dep = c.reduce(r_deposit_, n_, [&](int i) { return deposit(c, i, wet); });
@@ -450,10 +457,11 @@ class FluidBed : public UnitBase<FluidBed> {
   TransferParams<T> transfer_params(const Ctx<T>& c) const {
     return {c.par(p_sh_), c.par(p_dv_), c.par(p_xcr_), c.par(p_lambda_)};
   }
-  // Drying rate (Eqs. (70)-(80)) and gas-to-solid heat flow (Eqs. (85)-(89)) of a class of diameter d_class.
+  // The parts of the drying rate (Eqs. (70)-(80): drying-curve factor nu, class surface, surface flux) and the
+  // gas-to-solid heat flow (Eqs. (85)-(89)) of a class of diameter d_class.
   template <class T>
   static void class_transfer(const TransferParams<T>& tp, double d_class, const T& m, const T& w,
-                             const T& particle_mass, const GasSide<T>& g, T* dry, T* q) {
+                             const T& particle_mass, const GasSide<T>& g, T* nu, T* area_out, T* flux, T* q) {
     const T di(d_class);
     const T area = kernels::class_surface(T(m / particle_mass), di);  // N_i pi d_i^2 (docs/paper001_decisions.md)
     const T re0 = tr::particle_reynolds_number(g.u0, di, g.nu);       // Eq. (76)
@@ -464,7 +472,8 @@ class FluidBed : public UnitBase<FluidBed> {
     const T j = p1::drying_mass_flux(g.rho_da, tr::mass_transfer_coefficient(shb, tp.dv, di), g.y_sat,
                                      g.y);                                              // Eqs. (72), (73)
     const auto eta = p1::normalized_moisture(T(w / (m + kMassFloor)), g.x_eq, tp.xcr);  // Eq. (80), regularized
-    *dry = p1::drying_rate(p1::linear_drying_curve(eta.value), area, j);                // Eqs. (70), (79)
+    *nu = p1::linear_drying_curve(eta.value);                                           // Eq. (79)
+    *area_out = area, *flux = j;
     const T nub = tr::bulk_nusselt(tr::ranz_marshall_roots(sqrt_re, g.cbrt_pr), re0, g.pr, g.ratio);  // (87), (88)
     *q = tr::heat_transfer_coefficient(nub, tp.lambda, di) * area * (g.t_g - g.t_s);                  // Eqs. (85), (86)
   }

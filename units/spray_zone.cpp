@@ -201,23 +201,32 @@ class SprayZone : public UnitBase<SprayZone> {
   }
   // Weight of a class (diameter d, pivot volume v) in the liquid split of Eq. (44): N_i tau_i d_i^2 (default) or
   // tau_i d_i^2 (literal).
-  template <class T>
+  template <p1::LiquidSplit S, class T>
   static T split_weight(const OutputParams<T>& o, double d, double v, const T& mass, const T& tau) {
     const T w = tau * d * d;
-    return o.split == p1::LiquidSplit::kClassSurface ? T(w * mass / (o.rho_env * v)) : w;
+    if constexpr (S == p1::LiquidSplit::kClassSurface)
+      return T(w * mass / (o.rho_env * v));
+    else
+      return w;
+  }
+  template <class T>
+  static T split_weight(const OutputParams<T>& o, double d, double v, const T& mass, const T& tau) {
+    return o.split == p1::LiquidSplit::kClassSurface ? split_weight<p1::LiquidSplit::kClassSurface>(o, d, v, mass, tau)
+                                                     : split_weight<p1::LiquidSplit::kLiteral>(o, d, v, mass, tau);
   }
 
   // Liquid deposited on a class, its wetted surface fraction and wet-spot moisture, given the sum of the split
-  // weights; returns whether Eq. (57)'s cap was active.
-  template <class T>
+  // weights; returns whether Eq. (57)'s cap was active. The split is a template argument: chosen inside the class
+  // loop, its two cases would keep the loop scalar.
+  template <p1::LiquidSplit S, class T>
   static bool class_outputs(const OutputParams<T>& o, double d_class, double v, const T& mass, const T& water,
                             const T& m_liquid, const T& weight_sum, const T& tau, const T& ws, const T& t_cross,
                             T* m_dep, T* fwet, T* xwet) {
     const T d(d_class);
-    *m_dep = split_weight(o, d_class, v, mass, tau) * m_liquid / weight_sum;  // Eq. (44)
+    *m_dep = split_weight<S>(o, d_class, v, mass, tau) * m_liquid / weight_sum;  // Eq. (44)
     // Eqs. (43), (45), (46): X_LS = m_dep / (w_s M / t). With the default split, m_dep is proportional to
     // N_i = M_i / m_particle, so the ratio stays finite for an empty class.
-    const T x_ls = o.split == p1::LiquidSplit::kClassSurface
+    const T x_ls = S == p1::LiquidSplit::kClassSurface
                        ? T(m_liquid * tau * d * d / weight_sum * t_cross / (ws * (o.rho_env * v)))
                        : T(*m_dep * t_cross / (ws * (mass > T(1e-15) ? mass : T(1e-15))));
     // Eq. (42) is linear in X_LS: phi = kappa X_LS
@@ -244,8 +253,10 @@ class SprayZone : public UnitBase<SprayZone> {
     // Parameters and gas properties in locals, the results in arrays of their own: with doubles a vector loop.
     const double* d = grid_->diameter_pivots().data();
     T *tau = sc.tau.data(), *ws = sc.ws.data(), *t_cross = sc.t_cross.data();
+    const int n = n_;  // a local bound: stores through the arrays could change the member n_
     int floored = 0;
-    for (int i = 0; i < n_; ++i) {
+#pragma omp simd reduction(+ : floored)
+    for (int i = 0; i < n; ++i) {
       const Work::Flow<T> f = class_flow(q, d[i], u0, g);
       tau[i] = f.tau, ws[i] = f.ws, t_cross[i] = f.t_cross;
       floored += f.ws_floored;
@@ -258,12 +269,19 @@ class SprayZone : public UnitBase<SprayZone> {
     const T sum = c.reduce(r_weights_, n_, [&](int i) { return split_weight(o, d[i], v[i], mass[i], tau[i]); });
     const T m_liquid = c.port(liquid_, liquid::kMdot);
     T *m_dep = sc.m_dep.data(), *fwet = sc.fwet.data(), *xwet = sc.xwet.data();
-    int capped = 0;
+    auto outputs = [&](auto split) {
+      constexpr p1::LiquidSplit S = decltype(split)::value;
+      const int n = n_;
+      int capped = 0;
 #pragma omp simd reduction(+ : capped)  // in doubles a vector loop (libmvec's expm1, kernels/simd_math.hpp)
-    for (int i = 0; i < n_; ++i)
-      capped += class_outputs(o, d[i], v[i], mass[i], water[i], m_liquid, sum, tau[i], ws[i], t_cross[i], &m_dep[i],
-                              &fwet[i], &xwet[i]);
-    *vol_capped += capped;
+      for (int i = 0; i < n; ++i)
+        capped += class_outputs<S>(o, d[i], v[i], mass[i], water[i], m_liquid, sum, tau[i], ws[i], t_cross[i],
+                                   &m_dep[i], &fwet[i], &xwet[i]);
+      return capped;
+    };
+    using Split = p1::LiquidSplit;
+    *vol_capped += o.split == Split::kClassSurface ? outputs(std::integral_constant<Split, Split::kClassSurface>{})
+                                                   : outputs(std::integral_constant<Split, Split::kLiteral>{});
   }
 
   int n_ = def::kSizeClasses;
