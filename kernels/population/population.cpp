@@ -65,10 +65,12 @@ double row_rates(const double* kh, const double* e, double Nj, const double* N, 
   }
   return death;
 }
-// Row j of the pair triangle for fixed pivot in doubles, in one pass per quantity: the event rates rt[k] =
-// h K_jk (E_jk) N_j N_k, the deaths of both partners, and the births of the run [run_first, run_last] on k and k + 1
-// (those on k + 1 into `up`, rows 1 + p for property p, n + 1 wide). The caller places the pairs off the run.
-template <bool HasE>
+// Row j of the pair triangle for fixed pivot in doubles: the event rates rt[k] = h K_jk (E_jk) N_j N_k, the deaths
+// of both partners, and the births of the run [run_first, run_last] on k and k + 1 (those on k + 1 into `up`, rows
+// 1 + p for property p, n + 1 wide). The caller places the pairs off the run. With one carried property (OneProperty:
+// the fluid bed's water) it moves in the same pass as the numbers, one read of each rate instead of two; more
+// properties follow in a pass each.
+template <bool HasE, bool OneProperty>
 void fixed_pivot_row(const FixedPivotAggregation& fp, size_t p0, int j, int n, int P, const double* kh, const double* e,
                      const double* N, const double* pi, double* rt, double* dN, double* dq, double* up) {
   const double Nj = N[j];
@@ -80,14 +82,25 @@ void fixed_pivot_row(const FixedPivotAggregation& fp, size_t p0, int j, int n, i
     else
       return kh[k] * Nj * N[k];
   };
-  double death = 0.0;
-#pragma omp simd reduction(+ : death)
-  for (int k = j; k < r0; ++k) {
-    rt[k] = rate(k);
-    death += rt[k];
-    dN[k] -= rt[k];
-  }
+  const double* q = pi;  // the one property (OneProperty), per particle
+  double* dq0 = dq;
+  double* up0 = up + (n + 1);
+  const double qj = OneProperty ? q[j] : 0.0;
   const double *wl = fp.w_lo() + (p0 - j), *wh = fp.w_hi() + (p0 - j);
+  const double *fl = fp.f_lo() + (p0 - j), *fh = fp.f_hi() + (p0 - j);
+  double death = 0.0;
+  // partners off the run: deaths only (their births are placed by the caller)
+  auto off_run = [&](int first, int last) {
+#pragma omp simd reduction(+ : death)
+    for (int k = first; k < last; ++k) {
+      const double r = rate(k);
+      rt[k] = r;
+      death += r;
+      dN[k] -= r;
+      if constexpr (OneProperty) dq0[k] -= r * q[k];
+    }
+  };
+  off_run(j, r0);
 #pragma omp simd reduction(+ : death)
   for (int k = r0; k < r1; ++k) {
     const double r = rate(k);
@@ -95,15 +108,18 @@ void fixed_pivot_row(const FixedPivotAggregation& fp, size_t p0, int j, int n, i
     death += r;
     dN[k] += wl[k] * r - r;
     up[k + 1] += wh[k] * r;
+    if constexpr (OneProperty) {
+      const double carried = r * (qj + q[k]);
+      dq0[k] += fl[k] * carried - r * q[k];
+      up0[k + 1] += fh[k] * carried;
+    }
   }
-#pragma omp simd reduction(+ : death)
-  for (int k = r1; k < n; ++k) {
-    rt[k] = rate(k);
-    death += rt[k];
-    dN[k] -= rt[k];
-  }
+  off_run(r1, n);
   dN[j] -= death;
-  const double *fl = fp.f_lo() + (p0 - j), *fh = fp.f_hi() + (p0 - j);
+  if constexpr (OneProperty) {
+    dq0[j] -= death * qj;
+    return;
+  }
   for (int p = 0; p < P; ++p) {
     const double* pp = pi + size_t(p) * n;
     double* dqp = dq + size_t(p) * n;
@@ -801,10 +817,9 @@ void Population::rates_t(Work& w, const State<T>& s, const Rates<T>& r, bool fol
         if constexpr (std::is_same_v<T, double>) {
           if (fp) {
             const double* e = E ? E + (p0 - j) : nullptr;
-            if (e)
-              fixed_pivot_row<true>(*fp, p0, j, n, P, kh, e, N, pi, rt, dN, dq, sc.up.data());
-            else
-              fixed_pivot_row<false>(*fp, p0, j, n, P, kh, e, N, pi, rt, dN, dq, sc.up.data());
+            auto row = e ? (P == 1 ? fixed_pivot_row<true, true> : fixed_pivot_row<true, false>)
+                         : (P == 1 ? fixed_pivot_row<false, true> : fixed_pivot_row<false, false>);
+            row(*fp, p0, j, n, P, kh, e, N, pi, rt, dN, dq, sc.up.data());
             fused = true;
           }
         }
