@@ -20,6 +20,7 @@
 #pragma once
 #include <algorithm>
 #include <memory>
+#include <type_traits>
 #include <vector>
 
 #include "kernel_base.hpp"
@@ -141,11 +142,18 @@ class PairKernel : public AggregationKernel {
     static_assert(m <= kMaxFeatures, "an aggregation kernel has at most kMaxFeatures features per class");
     return m;
   }
+  // A class's features depend on that class alone: in doubles the loop is a vector loop where the kernel's
+  // closures allow.
   template <class T>
   void feat(const ClassState<T>& s, const T* p, T* phi) const {
     constexpr int m = features_of<Derived>();
-    if constexpr (m > 0)
-      for (int i = 0; i < s.n; ++i) self().features(s, i, p, phi + size_t(i) * m);
+    const int n = s.n;
+    if constexpr (m > 0 && std::is_same_v<T, double>) {
+#pragma omp simd
+      for (int i = 0; i < n; ++i) self().features(s, i, p, phi + size_t(i) * m);
+    } else if constexpr (m > 0) {
+      for (int i = 0; i < n; ++i) self().features(s, i, p, phi + size_t(i) * m);
+    }
   }
   template <class T>
   void all(const T* phi, int n, const T* p, T* E) const {

@@ -1,0 +1,20 @@
+# ctest units.closures_call_vector_libm (tests/CMakeLists.txt): the objects whose class loops call glibc's vector
+# functions reference them. cmake -DNM=nm -DUNITS=libgranuflow_units.a -DKERNELS=libgranuflow_kernels.a -P this
+execute_process(COMMAND ${NM} -A ${UNITS} ${KERNELS} OUTPUT_VARIABLE symbols RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "${NM} failed on ${UNITS} ${KERNELS}")
+endif()
+set(missing "")
+# object, vector function: the bed's drying and heat transfer, the spray zone's wetting, the sticky probability
+foreach(pair "fluid_bed.cpp.o;log1p" "spray_zone.cpp.o;expm1" "glass_transition.cpp.o;exp")
+  list(GET pair 0 object)
+  list(GET pair 1 function)
+  string(REGEX MATCH "${object}:[^\n]* U _ZGV[a-zA-Z]+[0-9]+v_${function}\n" found "${symbols}\n")
+  if(NOT found)
+    string(APPEND missing " ${object} (${function})")
+  endif()
+endforeach()
+if(missing)
+  message(FATAL_ERROR "class loops left scalar, no vector libm call in:${missing}")
+endif()
+message(STATUS "vector libm calls present")
