@@ -32,6 +32,15 @@ void FixedPivotAggregation::setup(const Grid& g) {
     while (k >= j && targets_[row + (k - j)].lo == k && targets_[row + (k - j)].hi == k + 1) --k;
     if (k < n - 2) run_first_[j] = k + 1, run_last_[j] = n - 2;
   }
+  // Off the runs the weight arrays hold 0: a row's rates, deaths and run births are then one loop over all partners,
+  // the births of the pairs off the run placed through target().
+  row = 0;
+  for (int j = 0; j < n; row += n - j, ++j)
+    for (int k = j; k < n; ++k)
+      if (k < run_first_[j] || k > run_last_[j]) {
+        const size_t pr = row + (k - j);
+        w_lo_[pr] = w_hi_[pr] = f_lo_[pr] = f_hi_[pr] = 0.0;
+      }
   // Diagonals below the runs: shift and weights of the first pair, kept while every pair along it agrees.
   diagonals_.clear();
   auto pair = [n](int j, int k) { return pair_index(j, k, n); };

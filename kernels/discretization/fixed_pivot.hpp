@@ -23,7 +23,8 @@ class FixedPivotAggregation : public AggregationScheme {
   const Target& target(size_t pair) const { return targets_[pair]; }
   double volume(size_t pair) const { return vsum_[pair]; }
   // For the engine's vectorized pair loop: the partners k of class j in [run_first(j), run_last(j)] (possibly empty)
-  // place their aggregates on k and k + 1, as most pairs do on any grid; the weights as arrays over the pairs.
+  // place their aggregates on k and k + 1, as most pairs do on any grid; the weights as arrays over the pairs, 0 for
+  // the pairs off the runs (whose aggregates go elsewhere: target()).
   int run_first(int j) const { return run_first_[j]; }
   int run_last(int j) const { return run_last_[j]; }
   const double* w_lo() const { return w_lo_.data(); }

@@ -67,15 +67,13 @@ double row_rates(const double* kh, const double* e, double Nj, const double* N, 
 }
 // Row j of the pair triangle for fixed pivot in doubles: the event rates rt[k] = h K_jk (E_jk) N_j N_k, the deaths
 // of both partners, and the births of the run [run_first, run_last] on k and k + 1 (those on k + 1 into `up`, rows
-// 1 + p for property p, n + 1 wide). The caller places the pairs off the run. With one carried property (OneProperty:
-// the fluid bed's water) it moves in the same pass as the numbers, one read of each rate instead of two; more
-// properties follow in a pass each.
+// 1 + p for property p, n + 1 wide), in one loop over all partners: off the run the scheme's weights are 0 and the
+// caller places those births. With one carried property (OneProperty: the fluid bed's water) it moves in the same
+// pass as the numbers; more properties follow in a pass each.
 template <bool HasE, bool OneProperty>
 void fixed_pivot_row(const FixedPivotAggregation& fp, size_t p0, int j, int n, int P, const double* kh, const double* e,
                      const double* N, const double* pi, double* rt, double* dN, double* dq, double* up) {
   const double Nj = N[j];
-  const int a = fp.run_first(j), b = fp.run_last(j);
-  const int r0 = a <= b ? a : n, r1 = a <= b ? b + 1 : n;  // the run is [r0, r1)
   auto rate = [kh, e, Nj, N](int k) {  // by value: loads through captured references would not vectorize
     if constexpr (HasE)
       return kh[k] * e[k] * Nj * N[k];
@@ -89,20 +87,8 @@ void fixed_pivot_row(const FixedPivotAggregation& fp, size_t p0, int j, int n, i
   const double *wl = fp.w_lo() + (p0 - j), *wh = fp.w_hi() + (p0 - j);
   const double *fl = fp.f_lo() + (p0 - j), *fh = fp.f_hi() + (p0 - j);
   double death = 0.0;
-  // partners off the run: deaths only (their births are placed by the caller)
-  auto off_run = [&](int first, int last) {
 #pragma omp simd reduction(+ : death)
-    for (int k = first; k < last; ++k) {
-      const double r = rate(k);
-      rt[k] = r;
-      death += r;
-      dN[k] -= r;
-      if constexpr (OneProperty) dq0[k] -= r * q[k];
-    }
-  };
-  off_run(j, r0);
-#pragma omp simd reduction(+ : death)
-  for (int k = r0; k < r1; ++k) {
+  for (int k = j; k < n; ++k) {
     const double r = rate(k);
     rt[k] = r;
     death += r;
@@ -114,7 +100,6 @@ void fixed_pivot_row(const FixedPivotAggregation& fp, size_t p0, int j, int n, i
       up0[k + 1] += fh[k] * carried;
     }
   }
-  off_run(r1, n);
   dN[j] -= death;
   if constexpr (OneProperty) {
     dq0[j] -= death * qj;
@@ -126,15 +111,11 @@ void fixed_pivot_row(const FixedPivotAggregation& fp, size_t p0, int j, int n, i
     double* upq = up + size_t(1 + p) * (n + 1);
     const double pj = pp[j];
 #pragma omp simd
-    for (int k = j; k < r0; ++k) dqp[k] -= rt[k] * pp[k];
-#pragma omp simd
-    for (int k = r0; k < r1; ++k) {
+    for (int k = j; k < n; ++k) {
       const double carried = rt[k] * (pj + pp[k]);
       dqp[k] += fl[k] * carried - rt[k] * pp[k];
       upq[k + 1] += fh[k] * carried;
     }
-#pragma omp simd
-    for (int k = r1; k < n; ++k) dqp[k] -= rt[k] * pp[k];
     dqp[j] -= death * pj;
   }
 }
