@@ -222,7 +222,7 @@ struct Population::Work {
     return per_scalar<T>(sd, sj);
   }
   // Jacobian work
-  std::vector<double> D, G, dB, dV, dQ, dF, jinv, map_factors, map_scales;
+  std::vector<double> D, Dt, G, dB, dV, dQ, dF, jinv, map_factors, map_scales;
   std::vector<int> map_rows, map_cols;
   std::vector<Jet> jp, jN, jq, jf, jphi;
   std::vector<double> eff, eff_da, eff_db;  // analytic Jacobian: E and dE/dphi of every pair
@@ -1048,12 +1048,23 @@ void Population::jacobian(Work& w, const State<double>& s, const Map& m, Jacobia
     const std::vector<int>& fc = m.field_col[field_index_[fi]];
     for (int i = 0; i < n && !fc.empty(); ++i) cols[n * (1 + P) + static_cast<int>(fi) * n + i] = fc[i];
   }
-  for (int r = 0; r < R; ++r) {
-    if (rows[r] < 0) continue;
-    const double* d = &w.D[size_t(r) * C];
-    const double f = factors[r];
-    for (int c = 0; c < C; ++c)
-      if (d[c] != 0.0 && cols[c] >= 0) sink.add(rows[r], cols[c], f * d[c] * scales[c]);
+  // Column by column from the transposed D, so that a dense sink's column (the unit's rows, mostly consecutive) is
+  // written in order: row by row, every entry was a store a column apart. Each sink entry receives its terms in the
+  // same order as row by row (several engine columns can map to one sink column: the temperature field).
+  w.Dt.resize(size_t(R) * C);
+  Eigen::Map<Eigen::MatrixXd>(w.Dt.data(), R, C) =
+      Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(w.D.data(), R, C);
+  for (int c = 0; c < C; ++c) {
+    if (cols[c] < 0) continue;
+    const double* d = &w.Dt[size_t(c) * R];
+    const double sc = scales[c];
+    if (double* col = sink.dense_column(cols[c])) {
+      for (int r = 0; r < R; ++r)
+        if (d[r] != 0.0 && rows[r] >= 0) col[rows[r]] += factors[r] * d[r] * sc;
+    } else {
+      for (int r = 0; r < R; ++r)
+        if (d[r] != 0.0 && rows[r] >= 0) sink.add(rows[r], cols[c], factors[r] * d[r] * sc);
+    }
   }
 }
 

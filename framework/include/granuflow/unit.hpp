@@ -354,6 +354,9 @@ class JacobianSink {
         for (int k = 0; k < n_cols; ++k)
           if (w[k] != 0.0) add(r, cols[k], u[r] * w[k]);
   }
+  // The unit's rows of global column `col` in dense storage (add(r, col, v) adds v to element r), or nullptr when
+  // the sink is not dense: for units that add whole columns at a time.
+  double* dense_column(int global_col) const { return dense_ ? dense_ + size_t(global_col) * ld_ : nullptr; }
 
  protected:
   JacobianSink() = default;
