@@ -37,10 +37,13 @@ void find_groups(const Eigen::Map<const Eigen::MatrixXd>& m, Content& c) {
   int count = n;  // components so far: a coupled matrix stops the scan as soon as it is one
   for (int j = 0; j < n && count > 1; ++j) {
     const double* col = m.data() + size_t(j) * n;
+    // The root of j's component, kept through the unions below: a loose state (no coupling at all) keeps count
+    // above 1, and the scan then reads every entry.
+    int b = root(c.parent, j);
     for (int i = 0; i < n; ++i)
       if (col[i] != 0.0 && i != j) {
-        const int a = root(c.parent, i), b = root(c.parent, j);
-        if (a != b) c.parent[std::max(a, b)] = std::min(a, b), --count;
+        const int a = root(c.parent, i);
+        if (a != b) c.parent[std::max(a, b)] = std::min(a, b), b = std::min(a, b), --count;
       }
   }
   c.groups.clear();
