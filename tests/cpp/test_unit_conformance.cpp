@@ -1,7 +1,8 @@
 // Every registered unit type against the contract of unit.hpp, in scenes that exercise it (a new unit type without a
 // conformance scene fails the first test):
 //   * its Jacobian as assembled (analytic parts, class-coloured AD, reductions) equals plain forward AD of the whole
-//     residual to round-off, and central finite differences, at a state inside a run;
+//     residual to round-off, and central finite differences, at a state inside a run, and its sparse form (what KLU
+//     factors) holds the dense form's entries;
 //   * the balances it takes part in close to the solver tolerance;
 //   * every declared output exists and is finite at every output time;
 //   * one flowsheet simulated from several threads at once gives the serial answer bit for bit (per-run workspaces).
@@ -159,6 +160,25 @@ TEST(UnitConformance, EveryRegisteredUnitTypeIsExercised) {
   for (const auto& type : units::builtin().names()) EXPECT_TRUE(covered.count(type)) << type << " has no scene here";
 }
 
+// The sparse Jacobian (values in the pattern's order, what KLU factors) holds the dense one's entries: units with
+// an analytic Jacobian write a dense sink column by column and other sinks entry by entry (the population engine).
+void expect_sparse_jacobian_holds_the_dense_one(DaeSystem& full, double t, std::vector<double>& y,
+                                                std::vector<double>& yp, double cj) {
+  const int m = full.size();
+  std::vector<double> dense(size_t(m) * m), values(full.pattern().nnz());
+  full.jacobian(t, y.data(), yp.data(), cj, dense.data(), nullptr);
+  full.jacobian(t, y.data(), yp.data(), cj, nullptr, values.data());
+  const SparsityPattern& pat = full.pattern();
+  std::vector<double> from_sparse(size_t(m) * m, 0.0);
+  for (int c = 0; c < m; ++c)
+    for (int k = pat.col_ptr[c]; k < pat.col_ptr[c + 1]; ++k) from_sparse[size_t(c) * m + pat.row_idx[k]] = values[k];
+  int mismatches = 0;
+  for (size_t k = 0; k < dense.size(); ++k)
+    if (std::abs(dense[k] - from_sparse[k]) > 1e-12 * std::max(1.0, std::abs(dense[k])) && ++mismatches <= 5)
+      ADD_FAILURE() << "entry (" << k % m << ", " << k / m << "): dense " << dense[k] << ", sparse " << from_sparse[k];
+  EXPECT_EQ(mismatches, 0);
+}
+
 TEST(UnitConformance, JacobianEqualsPlainAdAndFiniteDifferences) {
   for (auto& [name, s] : scenes()) {
     SCOPED_TRACE(name);
@@ -171,35 +191,7 @@ TEST(UnitConformance, JacobianEqualsPlainAdAndFiniteDifferences) {
     DaeSystem full(*s.flowsheet, false);  // every state, explicit ones included
     testing::expect_jacobian_matches_reference(full, t1, y, yp, 3.3, 1e-12);
     testing::expect_jacobian_matches_fd(full, t1, y, yp, 3.3, 2e-6);
-  }
-}
-
-// The sparse Jacobian (values in the pattern's order, what KLU factors) holds the dense one's entries: units with
-// an analytic Jacobian write a dense sink column by column and other sinks entry by entry (the population engine).
-TEST(UnitConformance, SparseJacobianEqualsTheDenseOne) {
-  for (auto& [name, s] : scenes()) {
-    SCOPED_TRACE(name);
-    SimOptions o = s.options;
-    const double t1 = 0.3 * o.t_end;
-    o.t_out = {0, t1};
-    const SimResult r = simulate(*s.flowsheet, o);
-    const int n = r.n_states();
-    std::vector<double> y(r.y.begin() + n, r.y.begin() + 2 * n), yp(r.yp.begin() + n, r.yp.begin() + 2 * n);
-    DaeSystem full(*s.flowsheet, false);
-    const int m = full.size();
-    std::vector<double> dense(size_t(m) * m), values(full.pattern().nnz());
-    full.jacobian(t1, y.data(), yp.data(), 3.3, dense.data(), nullptr);
-    full.jacobian(t1, y.data(), yp.data(), 3.3, nullptr, values.data());
-    const SparsityPattern& pat = full.pattern();
-    std::vector<double> from_sparse(size_t(m) * m, 0.0);
-    for (int c = 0; c < m; ++c)
-      for (int k = pat.col_ptr[c]; k < pat.col_ptr[c + 1]; ++k) from_sparse[size_t(c) * m + pat.row_idx[k]] = values[k];
-    int mismatches = 0;
-    for (size_t k = 0; k < dense.size(); ++k)
-      if (std::abs(dense[k] - from_sparse[k]) > 1e-12 * std::max(1.0, std::abs(dense[k])) && ++mismatches <= 5)
-        ADD_FAILURE() << "entry (" << k % m << ", " << k / m << "): dense " << dense[k] << ", sparse "
-                      << from_sparse[k];
-    EXPECT_EQ(mismatches, 0);
+    expect_sparse_jacobian_holds_the_dense_one(full, t1, y, yp, 3.3);
   }
 }
 
