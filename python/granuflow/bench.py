@@ -122,15 +122,30 @@ def scipy_scene_script() -> str:
                         "pass scipy=False to time granuflow only")
 
 
+def load_script(path: str, name: str):
+    """A benchmark script of tests/bench imported as a module (its functions called in this process)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
 def bench_scene(repeats: int, classes=(10, 20, 40), scipy: bool = True, scipy_repeats: int = 3,
                 progress: bool = False) -> list[dict]:
-    """Wall time of the 60-min headline scene (median of ``repeats``), solver statistics and results, per class
-    count with and without breakage; with ``scipy``, the SciPy implementation on the same variant right after
-    it (median of ``scipy_repeats``), its results and the speed ratio measured in this run."""
+    """Wall time of the 60-min headline scene (median of at least ``repeats`` runs), solver statistics and results,
+    per class count with and without breakage; with ``scipy``, the SciPy implementation of the same variant (median
+    of ``scipy_repeats`` solves), its results and the speed ratio. The two are measured in alternating rounds
+    (granuflow's runs of a round, then one SciPy solve), so that both medians come from the same stretch of time on a
+    shared machine, whose speed drifts by tens of percent over seconds; ``speedup_rounds`` holds each round's ratio
+    (its SciPy solve over the median of its granuflow runs)."""
     from .flowsheet import load_text
 
     scene = os.path.join(repo_root(), "flowsheets", "stoeckl_gf25_batch.yaml")
-    script = scipy_scene_script() if scipy else None
+    sp = load_script(scipy_scene_script(), "scipy_gf25_batch") if scipy else None
+    rounds = max(1, int(scipy_repeats)) if sp else 1
+    per_round = max(1, math.ceil(repeats / rounds))
     records = []
     for n in classes:
         for breakage in (True, False):
@@ -138,48 +153,65 @@ def bench_scene(repeats: int, classes=(10, 20, 40), scipy: bool = True, scipy_re
                 print(f"scene: {n} classes, breakage {'on' if breakage else 'off'}", file=sys.stderr, flush=True)
             fs = load_text(scene_variant_text(scene, n, breakage), f"stoeckl_gf25_batch_{n}")
             res = fs.simulate()  # warm-up: first-touch allocations
-            walls = []
-            for _ in range(repeats):
-                t0 = time.perf_counter()
-                res = fs.simulate(warn=False)
-                walls.append(time.perf_counter() - t0)
+            timed = sp.Timed(n, breakage) if sp else None  # built and warmed up outside the rounds
+            walls, ratios = [], []
+            for _ in range(rounds):
+                mine = []
+                for _ in range(per_round):
+                    t0 = time.perf_counter()
+                    res = fs.simulate(warn=False)
+                    mine.append(time.perf_counter() - t0)
+                walls += mine
+                if timed:
+                    ratios.append(timed.solve() / statistics.median(mine))
             summary = res.summary
             wall = statistics.median(walls)
             ref = ISSUE_REFERENCE_S.get(n) if breakage else None
             rec = {
                 "bench": "scene", "classes": n, "breakage": breakage, "unknowns": res.stats["states"],
                 "inlined_states": res.stats["explicit_states"], "wall_ms_median": wall * 1e3,
-                "wall_ms_min": min(walls) * 1e3, "repeats": repeats,
+                "wall_ms_min": min(walls) * 1e3, "repeats": len(walls),
                 **{k: res.stats[k] for k in ("steps", "residuals", "jacobians", "error_test_failures",
                                              "nonlinear_failures")},
                 **{k: summary[k] for k in ("d10_um", "d50_um", "d90_um", "bed_moisture", "T_gas_out_K")},
                 "issue_reference_ms": ref * 1e3 if ref else None,
                 "speedup_vs_issue_reference": ref / wall if ref else None,
                 "command": "granuflow bench scene", **meta()}
-            if script:
-                flags = ["--classes", str(n), "--repeats", str(int(scipy_repeats))] + \
-                                          ([] if breakage else ["--no-breakage"])
-                sp = json_lines([sys.executable, script, "--json", *flags], "scipy_gf25_batch.py")[0]
-                rec.update({"scipy_ms_median": sp["wall_s_median"] * 1e3, "scipy_nfev": sp.get("nfev"),
-                            "scipy_njev": sp.get("njev"), "speedup_vs_scipy": sp["wall_s_median"] / wall,
-                            **{f"scipy_{k}": sp[k] for k in ("d10_um", "d50_um", "d90_um", "bed_moisture",
-                                                             "T_gas_out_K")}})
+            if timed:
+                sp_rec = timed.record()
+                rec.update({"scipy_ms_median": sp_rec["wall_s_median"] * 1e3, "scipy_repeats": sp_rec["repeats"],
+                            "scipy_nfev": sp_rec.get("nfev"), "scipy_njev": sp_rec.get("njev"),
+                            "speedup_vs_scipy": sp_rec["wall_s_median"] / wall, "speedup_rounds": ratios,
+                            **{f"scipy_{k}": sp_rec[k] for k in ("d10_um", "d50_um", "d90_um", "bed_moisture",
+                                                                 "T_gas_out_K")}})
             records.append(rec)
     return records
+
+
+def rounds_range(ratios) -> str:
+    """The spread of the per-round speed ratios, "x21.0-27.4" (one round: its ratio)."""
+    if not ratios:
+        return ""
+    lo, hi = min(ratios), max(ratios)
+    return f"x{lo:.1f}" if len(ratios) == 1 else f"x{lo:.1f}-{hi:.1f}"
 
 
 def scene_summary(records) -> list[str]:
     r0 = records[0]
     same_run = "scipy_ms_median" in r0
-    lines = [f"Headline scene, 60 min, rtol/atol of the scene file: median of {r0['repeats']} runs "
-             f"({r0['cores']} cores, commit {r0['commit']}); times are for information only.",
+    head = (f"Headline scene, 60 min, rtol/atol of the scene file: median of {r0['repeats']} runs "
+            f"({r0['cores']} cores, commit {r0['commit']}); times are for information only.")
+    if same_run:
+        head += (f" SciPy: median of {r0['scipy_repeats']} solves, each after a round of granuflow's runs; speedup is"
+                 " the ratio of the medians, rounds the range of each round's ratio.")
+    lines = [head,
              "  classes breakage  unknowns+inlined  wall ms  steps residuals Jacobians   d50 um  moisture"
-             + ("   SciPy ms  SciPy d50  speedup" if same_run else "") + "  vs issue reference"]
+             + ("   SciPy ms  SciPy d50  speedup       rounds" if same_run else "") + "  vs issue reference"]
     for r in records:
         ref = (f"x{r['speedup_vs_issue_reference']:.1f} ({r['issue_reference_ms']:.0f} ms)"
                if r["speedup_vs_issue_reference"] else "")
         sp = (f" {r['scipy_ms_median']:10.1f} {r['scipy_d50_um']:10.1f} {'x%.1f' % r['speedup_vs_scipy']:>8s}"
-              if same_run else "")
+              f" {rounds_range(r['speedup_rounds']):>12s}" if same_run else "")
         lines.append(f"  {r['classes']:7d} {'on' if r['breakage'] else 'off':8s} {r['unknowns']:8d}"
                      f" + {r['inlined_states']:<6d} {r['wall_ms_median']:8.2f} {r['steps']:6d}"
                      f" {r['residuals']:9d} {r['jacobians']:9d}"

@@ -405,23 +405,46 @@ def simulate(classes: int = 10, breakage: bool = True):
     return (model, *solve(model, np.linspace(0.0, T_END, 121)))
 
 
-def run(classes: int = 10, breakage: bool = True, repeats: int = 1) -> dict:
-    """The --json record: median wall time of the solve_ivp calls (model set-up excluded, as granuflow's
-    configure), solver statistics and the 60-min summary."""
-    model = Model(classes, breakage)
-    t_eval = np.linspace(0.0, T_END, 121)
-    steps = solve(model, None)[2]["steps"]  # warm-up; also counts steps (t_eval does not change the stepping)
-    walls = []
-    for _ in range(max(1, repeats)):
+class Timed:
+    """One variant ready to time: the model built and warmed up (one solve, which also counts the steps), so that
+    a caller can interleave its solves with other work (`granuflow bench scene` alternates them with granuflow's
+    runs, so that both see the same state of a shared machine)."""
+
+    def __init__(self, classes: int = 10, breakage: bool = True):
+        self.classes, self.breakage = classes, breakage
+        self.model = Model(classes, breakage)
+        self.t_eval = np.linspace(0.0, T_END, 121)
+        self.steps = solve(self.model, None)[2]["steps"]  # t_eval does not change the stepping
+        self.walls: list[float] = []
+        self.last = None
+
+    def solve(self) -> float:
+        """One timed solve on the output times (model set-up excluded, as granuflow's configure); its wall time."""
         w0 = time.perf_counter()
-        _, y, stats, status = solve(model, t_eval)
-        walls.append(time.perf_counter() - w0)
-    rec = {"code": "scipy", "classes": classes, "breakage": breakage, "wall_s_median": statistics.median(walls),
-           "wall_s_min": min(walls), "repeats": len(walls), "nfev": stats["nfev"], "njev": stats["njev"],
-           "nlu": stats["nlu"], "steps": steps, "rhs_calls": stats["rhs_calls"]}
-    rec.update(model.summary(y[:, -1]))
-    rec["status"] = status
-    return rec
+        _, y, stats, status = solve(self.model, self.t_eval)
+        wall = time.perf_counter() - w0
+        self.walls.append(wall)
+        self.last = (y, stats, status)
+        return wall
+
+    def record(self) -> dict:
+        """The --json record: median wall time of the solves so far, solver statistics and the 60-min summary."""
+        y, stats, status = self.last
+        rec = {"code": "scipy", "classes": self.classes, "breakage": self.breakage,
+               "wall_s_median": statistics.median(self.walls), "wall_s_min": min(self.walls),
+               "repeats": len(self.walls), "nfev": stats["nfev"], "njev": stats["njev"], "nlu": stats["nlu"],
+               "steps": self.steps, "rhs_calls": stats["rhs_calls"]}
+        rec.update(self.model.summary(y[:, -1]))
+        rec["status"] = status
+        return rec
+
+
+def run(classes: int = 10, breakage: bool = True, repeats: int = 1) -> dict:
+    """The --json record of ``repeats`` solves in a row (see Timed)."""
+    timed = Timed(classes, breakage)
+    for _ in range(max(1, repeats)):
+        timed.solve()
+    return timed.record()
 
 
 def main():

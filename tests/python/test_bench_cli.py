@@ -128,6 +128,8 @@ def test_bench_scene_reports_each_variant_with_the_scene_physics():
         assert (r["speedup_vs_issue_reference"] is not None) == (r["breakage"] and n in (10, 40))
         # the SciPy implementation of the same equations (tests/bench/scipy_gf25_batch.py), run on the same variant
         assert r["scipy_ms_median"] > 0 and r["speedup_vs_scipy"] > 0
+        # measured in alternating rounds: one SciPy solve after each round of granuflow's runs
+        assert r["scipy_repeats"] == len(r["speedup_rounds"]) == 1 and r["speedup_rounds"][0] > 0
         for k in ("d10_um", "d50_um", "d90_um", "bed_moisture", "T_gas_out_K"):
             assert r[k] == pytest.approx(r["scipy_" + k], rel=5e-3), (k, r)
     by = {(r["classes"], r["breakage"]): r for r in recs}

@@ -19,7 +19,7 @@ def cmd_bench(args) -> int:
     elif args.what == "scene":
         records = bench.bench_scene(args.repeats, classes=(10,) if args.quick else (10, 20, 40),
                                     scipy=not args.no_scipy,
-                                    scipy_repeats=1 if args.quick else max(1, min(3, args.repeats)), progress=progress)
+                                    scipy_repeats=1 if args.quick else max(1, min(5, args.repeats)), progress=progress)
         summary = bench.scene_summary
     elif args.what == "pbm2d":
         from .. import bench_2d
