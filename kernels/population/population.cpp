@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <type_traits>
-#if defined(__SSE__) || defined(__x86_64__)
+#if defined(__AVX512F__)
+#include <immintrin.h>
+#elif defined(__SSE__) || defined(__x86_64__)
 #include <xmmintrin.h>
 #endif
 
@@ -69,23 +71,52 @@ double row_rates(const double* kh, const double* e, double Nj, const double* N, 
 // of both partners, and the births of the run [run_first, run_last] on k and k + 1 (those on k + 1 into `up`, rows
 // 1 + p for property p, n + 1 wide), in one loop over all partners: off the run the scheme's weights are 0 and the
 // caller places those births. With one carried property (OneProperty: the fluid bed's water) it moves in the same
-// pass as the numbers; more properties follow in a pass each.
+// pass as the numbers; more properties follow in a pass each. Returns the deaths of class j.
 template <bool HasE, bool OneProperty>
-void fixed_pivot_row(const FixedPivotAggregation& fp, size_t p0, int j, int n, int P, const double* kh, const double* e,
-                     const double* N, const double* pi, double* rt, double* dN, double* dq, double* up) {
+double fixed_pivot_partners(const FixedPivotAggregation& fp, size_t p0, int j, int n, const double* kh, const double* e,
+                            const double* N, const double* q, double* rt, double* dN, double* dq0, double* up,
+                            double* up0) {
   const double Nj = N[j];
+  const double qj = OneProperty ? q[j] : 0.0;
+  const double *wl = fp.w_lo() + (p0 - j), *wh = fp.w_hi() + (p0 - j);
+  const double *fl = fp.f_lo() + (p0 - j), *fh = fp.f_hi() + (p0 - j);
+#if defined(__AVX512F__)
+  // A row is n - j partners long, 20 on average at 40 classes: a vector loop's scalar remainder (up to 7 partners)
+  // cost as much as its vector part. Here the last 8-wide step is masked instead; each partner's arithmetic is the
+  // scalar code's, operation for operation (no fused multiply-adds), only the deaths are summed lane by lane.
+  const __m512d vNj = _mm512_set1_pd(Nj), vqj = _mm512_set1_pd(qj);
+  __m512d death = _mm512_setzero_pd();
+  for (int k = j; k < n; k += 8) {
+    const __mmask8 m = n - k >= 8 ? __mmask8(0xff) : __mmask8((1u << (n - k)) - 1u);
+    __m512d r = _mm512_maskz_loadu_pd(m, kh + k);
+    if constexpr (HasE) r = _mm512_mul_pd(r, _mm512_maskz_loadu_pd(m, e + k));
+    r = _mm512_mul_pd(_mm512_mul_pd(r, vNj), _mm512_maskz_loadu_pd(m, N + k));
+    _mm512_mask_storeu_pd(rt + k, m, r);
+    death = _mm512_add_pd(death, r);
+    const __m512d born_lo = _mm512_sub_pd(_mm512_mul_pd(_mm512_maskz_loadu_pd(m, wl + k), r), r);
+    _mm512_mask_storeu_pd(dN + k, m, _mm512_add_pd(_mm512_maskz_loadu_pd(m, dN + k), born_lo));
+    const __m512d born_hi = _mm512_mul_pd(_mm512_maskz_loadu_pd(m, wh + k), r);
+    _mm512_mask_storeu_pd(up + k + 1, m, _mm512_add_pd(_mm512_maskz_loadu_pd(m, up + k + 1), born_hi));
+    if constexpr (OneProperty) {
+      const __m512d qk = _mm512_maskz_loadu_pd(m, q + k);
+      const __m512d carried = _mm512_mul_pd(r, _mm512_add_pd(vqj, qk));
+      const __m512d moved =
+          _mm512_sub_pd(_mm512_mul_pd(_mm512_maskz_loadu_pd(m, fl + k), carried), _mm512_mul_pd(r, qk));
+      _mm512_mask_storeu_pd(dq0 + k, m, _mm512_add_pd(_mm512_maskz_loadu_pd(m, dq0 + k), moved));
+      const __m512d moved_hi = _mm512_mul_pd(_mm512_maskz_loadu_pd(m, fh + k), carried);
+      _mm512_mask_storeu_pd(up0 + k + 1, m, _mm512_add_pd(_mm512_maskz_loadu_pd(m, up0 + k + 1), moved_hi));
+    }
+  }
+  alignas(64) double d[8];  // the lanes summed as a tree (GCC 12's _mm512_reduce_add_pd warns on its own header)
+  _mm512_store_pd(d, death);
+  return ((d[0] + d[4]) + (d[2] + d[6])) + ((d[1] + d[5]) + (d[3] + d[7]));
+#else
   auto rate = [kh, e, Nj, N](int k) {  // by value: loads through captured references would not vectorize
     if constexpr (HasE)
       return kh[k] * e[k] * Nj * N[k];
     else
       return kh[k] * Nj * N[k];
   };
-  const double* q = pi;  // the one property (OneProperty), per particle
-  double* dq0 = dq;
-  double* up0 = up + (n + 1);
-  const double qj = OneProperty ? q[j] : 0.0;
-  const double *wl = fp.w_lo() + (p0 - j), *wh = fp.w_hi() + (p0 - j);
-  const double *fl = fp.f_lo() + (p0 - j), *fh = fp.f_hi() + (p0 - j);
   double death = 0.0;
 #pragma omp simd reduction(+ : death)
   for (int k = j; k < n; ++k) {
@@ -100,11 +131,21 @@ void fixed_pivot_row(const FixedPivotAggregation& fp, size_t p0, int j, int n, i
       up0[k + 1] += fh[k] * carried;
     }
   }
+  return death;
+#endif
+}
+
+template <bool HasE, bool OneProperty>
+void fixed_pivot_row(const FixedPivotAggregation& fp, size_t p0, int j, int n, int P, const double* kh, const double* e,
+                     const double* N, const double* pi, double* rt, double* dN, double* dq, double* up) {
+  const double death =
+      fixed_pivot_partners<HasE, OneProperty>(fp, p0, j, n, kh, e, N, pi, rt, dN, dq, up, up + (n + 1));
   dN[j] -= death;
   if constexpr (OneProperty) {
-    dq0[j] -= death * qj;
+    dq[j] -= death * pi[j];
     return;
   }
+  const double *fl = fp.f_lo() + (p0 - j), *fh = fp.f_hi() + (p0 - j);
   for (int p = 0; p < P; ++p) {
     const double* pp = pi + size_t(p) * n;
     double* dqp = dq + size_t(p) * n;
