@@ -161,18 +161,23 @@ void fixed_pivot_row(const FixedPivotAggregation& fp, size_t p0, int j, int n, i
   }
 }
 
-// sum_{k = first}^{n - 1} b_k x_k: a row of the breakage tables against the classes. In doubles a SIMD reduction
-// (the sum reassociated), where the scalar loop waits on each addition.
-inline double upper_dot(const double* b, const double* x, int first, int n) {
-  double acc = 0.0;
-#pragma omp simd reduction(+ : acc)
-  for (int k = first; k < n; ++k) acc += b[k] * x[k];
-  return acc;
-}
+// sum_{k = first}^{n - 1} b_k x_k: a row of the breakage tables against the classes.
 inline Jet upper_dot(const Jet* b, const Jet* x, int first, int n) {
   Jet acc(0.0);
   for (int k = first; k < n; ++k) acc += b[k] * x[k];
   return acc;
+}
+
+// acc = B x for a breakage table B (rows x n, row-major): class rows r < n hold parents k >= r only (fragments land at
+// or below the parent's pivot), the outside rows every parent. In doubles one matrix-vector product over whole rows
+// (Eigen's vector kernel; the zeros left of the diagonal cost less than a horizontal sum at the end of every row).
+inline void table_times(const double* B, int rows, int n, const double* x, double* acc) {
+  using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  Eigen::Map<Eigen::VectorXd>(acc, rows).noalias() =
+      Eigen::Map<const RowMajor>(B, rows, n) * Eigen::Map<const Eigen::VectorXd>(x, n);
+}
+inline void table_times(const Jet* B, int rows, int n, const Jet* x, Jet* acc) {
+  for (int row = 0; row < rows; ++row) acc[row] = upper_dot(B + size_t(row) * n, x, row < n ? row : 0, n);
 }
 
 Jet row_rates(const Jet* kh, const Jet* e, const Jet& Nj, const Jet* N, int j, int n, Jet* rt) {
@@ -253,7 +258,7 @@ struct Population::Work {
   std::vector<Jet> BN_jet, BQ_jet;
   template <class T>
   struct Scratch {
-    std::vector<T> K, Kh, S, A, BN, BQ, phi, E, pi, B, V, Q, shape, amount, F, rows, dq, rate, up, mv, split, diag;
+    std::vector<T> K, Kh, S, A, BN, BQ, phi, E, pi, B, V, Q, shape, amount, F, rows, dq, rate, up, mv, split, diag, brk;
     std::vector<int> donor;
   };
   Scratch<double> sd;
@@ -968,23 +973,15 @@ void Population::rates_t(Work& w, const State<T>& s, const Rates<T>& r, bool fol
     } else {
       BN = w.BN_jet.data(), BQ = w.BQ_jet.data();
     }
-    for (int row = 0; row < n + kOutsideRows; ++row) {
-      // Fragments land at or below the parent's pivot: class row r only sees parents k >= r.
-      const T acc = upper_dot(BN + size_t(row) * n, N, row < n ? row : 0, n);
-      if (row < n)
-        dN[row] += acc;
-      else
-        out[row - n] += acc;  // kNumberAbove, kVolumeAbove, kVolumeBelow line up with kOut*
-    }
+    sc.brk.resize(n + kOutsideRows);
+    T* acc = sc.brk.data();  // class rows, then kNumberAbove, kVolumeAbove, kVolumeBelow (lined up with kOut*)
+    table_times(BN, n + kOutsideRows, n, N, acc);
+    for (int row = 0; row < n; ++row) dN[row] += acc[row];
+    for (int k = 0; k < kOutsideRows; ++k) out[k] += acc[n + k];
     for (int p = 0; p < P; ++p) {
-      const T* q = s.q[p];
-      for (int row = 0; row <= n; ++row) {
-        const T acc = upper_dot(BQ + size_t(row) * n, q, row < n ? row : 0, n);
-        if (row < n)
-          dq[size_t(p) * n + row] += acc;
-        else
-          out[out_property_below(p)] += acc;
-      }
+      table_times(BQ, n + 1, n, s.q[p], acc);  // row n: the property below the grid
+      for (int row = 0; row < n; ++row) dq[size_t(p) * n + row] += acc[row];
+      out[out_property_below(p)] += acc[n];
     }
   }
 
