@@ -310,31 +310,28 @@ TEST(PbmAggregation, FusedFixedPivotRowsGiveThePairLoopsRates) {
           for (int k = 0; k < P; ++k) q[k][i] = N[i] * (0.01 + u(rng));
           fw[i] = u(rng), xs[i] = 0.3 * u(rng), T[i] = 300.0 + 40.0 * u(rng);
         }
-        std::vector<double> fast(size_t(n) * (1 + P) + no, 0.0);
-        Population::State<double> s;
-        Population::Rates<double> r;
-        s.N = N.data(), s.floor = floor.data(), s.p = p.data(), r.dN = fast.data(),
-        r.outside = fast.data() + n * (1 + P);
-        s.fields[int(kernels::Field::kWettedFraction)] = fw.data();
-        s.fields[int(kernels::Field::kSpotMoisture)] = xs.data();
-        s.fields[int(kernels::Field::kTemperature)] = T.data();
-        for (int k = 0; k < P; ++k) s.q[k] = q[k].data(), r.dq[k] = fast.data() + n * (1 + k);
-        pop.rates(*w, s, r);
-
-        auto jets = [](const std::vector<double>& v) { return std::vector<Jet>(v.begin(), v.end()); };
-        auto NJ = jets(N), pJ = jets(p), fwJ = jets(fw), xsJ = jets(xs), TJ = jets(T), floorJ = jets(floor);
-        std::vector<std::vector<Jet>> qJ;
-        for (int k = 0; k < P; ++k) qJ.push_back(jets(q[k]));
-        std::vector<Jet> loop(fast.size(), Jet(0.0));
-        Population::State<Jet> sj;
-        Population::Rates<Jet> rj;
-        sj.N = NJ.data(), sj.floor = floorJ.data(), sj.p = pJ.data(), rj.dN = loop.data(),
-        rj.outside = loop.data() + n * (1 + P);
-        sj.fields[int(kernels::Field::kWettedFraction)] = fwJ.data();
-        sj.fields[int(kernels::Field::kSpotMoisture)] = xsJ.data();
-        sj.fields[int(kernels::Field::kTemperature)] = TJ.data();
-        for (int k = 0; k < P; ++k) sj.q[k] = qJ[k].data(), rj.dq[k] = loop.data() + n * (1 + k);
-        pop.rates(*w, sj, rj);
+        // The rates in scalar type Scalar (double: the fused rows; Jet: every pair placed on its own), value parts.
+        auto rates = [&](auto zero) {
+          using Scalar = decltype(zero);
+          auto in = [](const std::vector<double>& v) { return std::vector<Scalar>(v.begin(), v.end()); };
+          auto NT = in(N), pT = in(p), fwT = in(fw), xsT = in(xs), TT = in(T), floorT = in(floor);
+          std::vector<std::vector<Scalar>> qT;
+          for (int k = 0; k < P; ++k) qT.push_back(in(q[k]));
+          std::vector<Scalar> out(size_t(n) * (1 + P) + no, zero);
+          Population::State<Scalar> s;
+          Population::Rates<Scalar> r;
+          s.N = NT.data(), s.floor = floorT.data(), s.p = pT.data(), r.dN = out.data();
+          r.outside = out.data() + n * (1 + P);
+          s.fields[int(kernels::Field::kWettedFraction)] = fwT.data();
+          s.fields[int(kernels::Field::kSpotMoisture)] = xsT.data();
+          s.fields[int(kernels::Field::kTemperature)] = TT.data();
+          for (int k = 0; k < P; ++k) s.q[k] = qT[k].data(), r.dq[k] = out.data() + n * (1 + k);
+          pop.rates(*w, s, r);
+          std::vector<double> values;
+          for (const Scalar& v : out) values.push_back(value_of(v));
+          return values;
+        };
+        const std::vector<double> fast = rates(0.0), loop = rates(Jet(0.0));
 
         // every rate is a sum of events of at most sum_jk K_jk N_j N_k (efficiencies <= 1) times a carried
         // property of order one: the scale of its round-off
@@ -348,7 +345,7 @@ TEST(PbmAggregation, FusedFixedPivotRowsGiveThePairLoopsRates) {
           for (int j = 0; j < n; ++j) events += K[size_t(i) * n + j] * N[i] * N[j];
         ASSERT_GT(events, 1e-3) << "n=" << n;
         for (size_t i = 0; i < fast.size(); ++i)
-          EXPECT_NEAR(fast[i], loop[i].a, 1e-14 * events * (i < size_t(n) || i >= size_t(n) * (1 + P) ? 1.0 : 2.0))
+          EXPECT_NEAR(fast[i], loop[i], 1e-14 * events * (i < size_t(n) || i >= size_t(n) * (1 + P) ? 1.0 : 2.0))
               << "n=" << n << " P=" << P << " " << outside << " row " << i;
       }
   }
