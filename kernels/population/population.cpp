@@ -268,7 +268,7 @@ struct Population::Work {
     return per_scalar<T>(sd, sj);
   }
   // Jacobian work
-  std::vector<double> D, Dt, G, dB, dV, dQ, dF, jinv, map_factors, map_scales;
+  std::vector<double> D, G, dB, dV, dQ, dF, jinv, map_factors, map_scales;
   std::vector<int> map_rows, map_cols;
   std::vector<Jet> jp, jN, jq, jf, jphi;
   std::vector<double> eff, eff_da, eff_db;  // analytic Jacobian: E and dE/dphi of every pair
@@ -1044,14 +1044,14 @@ void Population::fold_rows(double* D, int cols) const {
   if (outside_ != Outside::kFold) return;
   const int n = n_, P = properties();
   const auto& x = grid_->pivots();
-  const size_t out0 = size_t(n) * (1 + P);
-  auto row = [&](size_t r) { return D + r * cols; };
+  const size_t out0 = size_t(n) * (1 + P), R = jacobian_rows();
   for (int c = 0; c < cols; ++c) {
-    row(0)[c] += row(out0 + kOutVolumeBelow)[c] / x[0];
-    row(n - 1)[c] += row(out0 + kOutVolumeAbove)[c] / x[n - 1];
+    double* col = D + size_t(c) * R;
+    col[0] += col[out0 + kOutVolumeBelow] / x[0];
+    col[n - 1] += col[out0 + kOutVolumeAbove] / x[n - 1];
     for (int p = 0; p < P; ++p) {
-      row(size_t(n) * (1 + p))[c] += row(out0 + out_property_below(p))[c];
-      row(size_t(n) * (1 + p) + n - 1)[c] += row(out0 + out_property_above(p))[c];
+      col[size_t(n) * (1 + p)] += col[out0 + out_property_below(p)];
+      col[size_t(n) * (1 + p) + n - 1] += col[out0 + out_property_above(p)];
     }
   }
 }
@@ -1059,8 +1059,7 @@ void Population::fold_rows(double* D, int cols) const {
 void Population::jacobian(Work& w, const State<double>& s, const Map& m, JacobianSink& sink) const {
   const FlushDenormals ftz;
   refresh(w, s.p);
-  const int n = n_, P = properties(), no = outside_rows(), C = input_cols();
-  const int R = n * (1 + P) + no + 1;  // the last row: the volume growth creates
+  const int n = n_, P = properties(), no = outside_rows(), C = input_cols(), R = jacobian_rows();
   w.D.assign(size_t(R) * C, 0.0);
   if (needs_.number || (sel_.kernel && sel_.kernel->state_dependent()))
     ad_jacobian(w, s, w.D);
@@ -1086,15 +1085,12 @@ void Population::jacobian(Work& w, const State<double>& s, const Map& m, Jacobia
     const std::vector<int>& fc = m.field_col[field_index_[fi]];
     for (int i = 0; i < n && !fc.empty(); ++i) cols[n * (1 + P) + static_cast<int>(fi) * n + i] = fc[i];
   }
-  // Column by column from the transposed D, so that a dense sink's column (the unit's rows, mostly consecutive) is
-  // written in order: row by row, every entry was a store a column apart. Each sink entry receives its terms in the
-  // same order as row by row (several engine columns can map to one sink column: the temperature field).
-  w.Dt.resize(size_t(R) * C);
-  Eigen::Map<Eigen::MatrixXd>(w.Dt.data(), R, C) =
-      Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(w.D.data(), R, C);
+  // Column by column (D is column-major), so that a dense sink's column (the unit's rows, mostly consecutive) is
+  // written in order. Each sink entry receives its terms in the same order as row by row (several engine columns can
+  // map to one sink column: the temperature field).
   for (int c = 0; c < C; ++c) {
     if (cols[c] < 0) continue;
-    const double* d = &w.Dt[size_t(c) * R];
+    const double* d = &w.D[size_t(c) * R];
     const double sc = scales[c];
     if (double* col = sink.dense_column(cols[c])) {
       for (int r = 0; r < R; ++r)
@@ -1110,6 +1106,7 @@ void Population::jacobian(Work& w, const State<double>& s, const Map& m, Jacobia
 // q, the fields read), before folding.
 void Population::analytic_jacobian(Work& w, const State<double>& s, std::vector<double>& Dv) const {
   const int n = n_, P = properties(), C = input_cols(), nfr = static_cast<int>(field_index_.size());
+  const size_t R = jacobian_rows();
   const auto& x = grid_->pivots();
   double* D = Dv.data();
   const size_t out0 = size_t(n) * (1 + P);
@@ -1118,7 +1115,7 @@ void Population::analytic_jacobian(Work& w, const State<double>& s, std::vector<
   auto rowO = [&](int k) { return out0 + k; };
   auto colQ = [&](int p, int i) { return n * (1 + p) + i; };
   auto colF = [&](int fi, int i) { return n * (1 + P) + fi * n + i; };
-  auto add = [&](size_t r, int c, double v) { D[r * C + c] += v; };
+  auto add = [&](size_t r, int c, double v) { D[size_t(c) * R + r] += v; };  // column-major
   const double* N = s.N;
   // Per-particle properties and their derivatives.
   std::vector<double> pi(size_t(P) * n), dpi_dN(size_t(P) * n), dpi_dq(size_t(P) * n);
@@ -1382,7 +1379,7 @@ void Population::analytic_jacobian(Work& w, const State<double>& s, std::vector<
 void Population::ad_jacobian(Work& w, const State<double>& s, std::vector<double>& D) const {
   make_jets(w);
   const int n = n_, P = properties(), no = outside_rows(), C = input_cols(),
-            nfr = static_cast<int>(field_index_.size());
+            nfr = static_cast<int>(field_index_.size()), R = jacobian_rows();
   int np = 0;
   for (int k : kernel_params_) np = std::max(np, k + 1);
   w.jp.resize(np);
@@ -1423,11 +1420,12 @@ void Population::ad_jacobian(Work& w, const State<double>& s, std::vector<double
     grown = Jet(0.0);
     rates_t(w, js, jr, false);  // folding is applied to D afterwards
     for (int c = c0; c < c1; ++c) {
-      for (int i = 0; i < n; ++i) D[size_t(i) * C + c] = dN[i].v[c - c0];
+      double* col = D.data() + size_t(c) * R;
+      for (int i = 0; i < n; ++i) col[i] = dN[i].v[c - c0];
       for (int p = 0; p < P; ++p)
-        for (int i = 0; i < n; ++i) D[(size_t(n) * (1 + p) + i) * C + c] = dq[size_t(p) * n + i].v[c - c0];
-      for (int k = 0; k < no; ++k) D[(size_t(n) * (1 + P) + k) * C + c] = out[k].v[c - c0];
-      D[(size_t(n) * (1 + P) + no) * C + c] = grown.v[c - c0];
+        for (int i = 0; i < n; ++i) col[size_t(n) * (1 + p) + i] = dq[size_t(p) * n + i].v[c - c0];
+      for (int k = 0; k < no; ++k) col[size_t(n) * (1 + P) + k] = out[k].v[c - c0];
+      col[size_t(n) * (1 + P) + no] = grown.v[c - c0];
     }
   }
 }

@@ -158,11 +158,14 @@ class Population {
   void refresh(Work& w, const double* p) const;
   void pair_matrices(Work& w, const ClassState<double>& cs, const double* p) const;
   bool separable_tables(Work& w, const FixedPivotAggregation* fp, const CellAverageAggregation* ca) const;
+  // The engine's Jacobian D (jacobian_rows() x input_cols(), column-major): rates of the class numbers, the
+  // properties, the outside rows and the volume growth creates, against N, q and the fields read.
   void analytic_jacobian(Work& w, const State<double>& s, std::vector<double>& D) const;
   void ad_jacobian(Work& w, const State<double>& s, std::vector<double>& D) const;
   void fold_rows(double* D, int cols) const;
   void fragment_matrix(const double* p, std::vector<double>& A) const;
   int input_cols() const;  // N, q, fields read
+  int jacobian_rows() const { return n_ * (1 + properties()) + outside_rows() + 1; }
 
   std::shared_ptr<const Grid> grid_;
   int n_ = 0;
