@@ -128,8 +128,17 @@ def load_script(path: str, name: str):
 
     spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
+    baseline(f"{name}.py", spec.loader.exec_module, module)
     return module
+
+
+def baseline(label: str, fn, *args):
+    """fn(*args) of a baseline run in this process; RuntimeError naming ``label`` if it fails, as json_lines does
+    for a baseline run as its own process."""
+    try:
+        return fn(*args)
+    except Exception as e:  # noqa: BLE001 - any failure of the baseline, named
+        raise RuntimeError(f"{label} failed: {type(e).__name__}: {e}") from e
 
 
 def bench_scene(repeats: int, classes=(10, 20, 40), scipy: bool = True, scipy_repeats: int = 3,
@@ -153,7 +162,8 @@ def bench_scene(repeats: int, classes=(10, 20, 40), scipy: bool = True, scipy_re
                 print(f"scene: {n} classes, breakage {'on' if breakage else 'off'}", file=sys.stderr, flush=True)
             fs = load_text(scene_variant_text(scene, n, breakage), f"stoeckl_gf25_batch_{n}")
             res = fs.simulate()  # warm-up: first-touch allocations
-            timed = sp.Timed(n, breakage) if sp else None  # built and warmed up outside the rounds
+            # built and warmed up outside the rounds
+            timed = baseline("scipy_gf25_batch.py", sp.Timed, n, breakage) if sp else None
             walls, ratios = [], []
             for _ in range(rounds):
                 mine = []
@@ -163,7 +173,7 @@ def bench_scene(repeats: int, classes=(10, 20, 40), scipy: bool = True, scipy_re
                     mine.append(time.perf_counter() - t0)
                 walls += mine
                 if timed:
-                    ratios.append(timed.solve() / statistics.median(mine))
+                    ratios.append(baseline("scipy_gf25_batch.py", timed.solve) / statistics.median(mine))
             summary = res.summary
             wall = statistics.median(walls)
             ref = ISSUE_REFERENCE_S.get(n) if breakage else None

@@ -111,6 +111,24 @@ def test_missing_executable_is_a_clear_error(monkeypatch, tmp_path):
         bench.bench_pbm(quick=True)
 
 
+def test_a_failing_baseline_is_one_line_not_a_traceback(monkeypatch, tmp_path, capsys):
+    """The SciPy scene script runs in this process (alternating with granuflow's runs): its failure is named in one
+    line, exit 1, as a baseline run as its own process is."""
+    from granuflow.cli import main
+
+    broken = tmp_path / "scipy_gf25_batch.py"
+    broken.write_text("class Timed:\n    def __init__(self, n, b):\n        raise ValueError('no model')\n")
+    monkeypatch.setattr(bench, "scipy_scene_script", lambda: str(broken))
+    assert main(["bench", "scene", "--quick", "--repeats", "1"]) == 1
+    err = capsys.readouterr().err
+    assert err.strip() == "granuflow: benchmark failed: scipy_gf25_batch.py failed: ValueError: no model", err
+    broken.write_text("def broken(:\n")  # not even importable
+    assert main(["bench", "scene", "--quick", "--repeats", "1"]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("granuflow: benchmark failed: scipy_gf25_batch.py failed: SyntaxError"), err
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1, err
+
+
 def test_bench_scene_reports_each_variant_with_the_scene_physics():
     """`granuflow bench scene`: one record per class count and breakage switch, from the headline scene itself,
     and an independent SciPy implementation of the same equations agrees with each."""

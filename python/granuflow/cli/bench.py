@@ -3,12 +3,22 @@ honours --quick (a reduced set, stated in its help) and --repeats; progress goes
 from __future__ import annotations
 
 import json
+import sys
 
 from .. import progress as progress_bars
-from .common import check_at_least, progress_option
+from .common import check_at_least, one_line, progress_option
 
 
 def cmd_bench(args) -> int:
+    """Runs the benchmark; a failing baseline (a SciPy script, the pbm executable) is one line and exit 1."""
+    try:
+        return _bench(args)
+    except RuntimeError as e:
+        print(f"granuflow: benchmark failed: {one_line(e)}", file=sys.stderr)
+        return 1
+
+
+def _bench(args) -> int:
     from .. import bench
 
     check_at_least("--repeats", args.repeats, 1)
