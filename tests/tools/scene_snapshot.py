@@ -70,7 +70,6 @@ def variants():
         ("pbm bdf sens", pbm, {}, {"method": "bdf", "sensitivities": None}),
         ("pbm ida sens", pbm, {}, {"method": "ida", "sensitivities": None}),
         ("stiffening tanks auto", STIFFENING_TANKS, {}, {}),
-        ("stiffening tanks auto sens", STIFFENING_TANKS, {}, {"sensitivities": ["t1.mass"]}),
         ("stiffening tanks bdf", STIFFENING_TANKS, {}, {"method": "bdf"}),
         ("tanks ida", tanks, {}, {"method": "ida"}),
         ("loop gmres", loop, {}, {"linear_solver": "gmres"}),
