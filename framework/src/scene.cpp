@@ -14,217 +14,10 @@
 
 #include "granuflow/errors.hpp"
 #include "granuflow/quantity.hpp"
+#include "yaml_text.hpp"
 
 namespace granuflow {
 namespace {
-
-// Limits that keep a hostile or mistaken file from hanging the loader or filling memory: a scene is a few
-// kilobytes (an input table of 10^4 knots about 200 kB); YAML aliases can make a few hundred bytes stand for
-// 10^9 values, so nodes are counted with aliases expanded before anything walks the tree.
-constexpr size_t kMaxSceneBytes = 1 << 20;
-constexpr uint64_t kMaxNodes = 200000;
-constexpr int kMaxDepth = 64;
-
-// User text inside a message: one line, at most 60 characters shown.
-std::string shown(const std::string& text) {
-  std::string out;
-  for (unsigned char c : text) {
-    if (out.size() >= 60) return out + "...";
-    if (c == '\n')
-      out += "\\n";
-    else if (c < 0x20 || c == 0x7f) {
-      char b[8];
-      std::snprintf(b, sizeof b, "\\x%02x", c);
-      out += b;
-    } else
-      out += static_cast<char>(c);
-  }
-  return out;
-}
-
-// Line and column (1-based) of byte `pos` of `text`.
-std::string position(const std::string& text, size_t pos) {
-  size_t line = 1, col = 1;
-  for (size_t i = 0; i < pos && i < text.size(); ++i) {
-    if (text[i] == '\n')
-      ++line, col = 1;
-    else
-      ++col;
-  }
-  return "line " + std::to_string(line) + ", column " + std::to_string(col);
-}
-
-// The offset of the first byte that is not part of well-formed UTF-8 (RFC 3629: no overlong forms, no
-// surrogates, at most U+10FFFF), or npos.
-size_t invalid_utf8(const std::string& s) {
-  const auto* b = reinterpret_cast<const unsigned char*>(s.data());
-  const size_t n = s.size();
-  for (size_t i = 0; i < n;) {
-    const unsigned c = b[i];
-    size_t len;
-    unsigned lo = 0x80, hi = 0xbf;
-    if (c < 0x80) {
-      ++i;
-      continue;
-    } else if (c >= 0xc2 && c <= 0xdf) {
-      len = 2;
-    } else if (c >= 0xe0 && c <= 0xef) {
-      len = 3;
-      if (c == 0xe0) lo = 0xa0;
-      if (c == 0xed) hi = 0x9f;
-    } else if (c >= 0xf0 && c <= 0xf4) {
-      len = 4;
-      if (c == 0xf0) lo = 0x90;
-      if (c == 0xf4) hi = 0x8f;
-    } else {
-      return i;
-    }
-    if (i + len > n) return i;
-    if (b[i + 1] < lo || b[i + 1] > hi) return i;
-    for (size_t k = 2; k < len; ++k)
-      if (b[i + k] < 0x80 || b[i + k] > 0xbf) return i;
-    i += len;
-  }
-  return std::string::npos;
-}
-
-// Walks the parser's events (no tree is built) and refuses what a scene never needs: more nodes than
-// kMaxNodes once aliases are expanded, an alias inside the node it names (a cycle), nesting deeper than
-// kMaxDepth, and tags other than YAML's standard ones (a scene holds plain values, lists and mappings).
-class ShapeCheck : public YAML::EventHandler {
- public:
-  ShapeCheck(std::string label, std::string kind) : label_(std::move(label)), kind_(std::move(kind)) {}
-  void OnDocumentStart(const YAML::Mark&) override {}
-  void OnDocumentEnd() override {}
-  void OnNull(const YAML::Mark& m, YAML::anchor_t a) override { leaf(m, a, ""); }
-  void OnAlias(const YAML::Mark& m, YAML::anchor_t a) override {
-    const auto it = size_.find(a);
-    if (it == size_.end())
-      fail(m, "an alias refers to a node that contains it (a cycle); a " + kind_ + " cannot be recursive");
-    add(m, it->second);
-  }
-  void OnScalar(const YAML::Mark& m, const std::string& tag, YAML::anchor_t a, const std::string&) override {
-    leaf(m, a, tag);
-  }
-  void OnSequenceStart(const YAML::Mark& m, const std::string& tag, YAML::anchor_t a,
-                       YAML::EmitterStyle::value) override {
-    open(m, tag, a);
-  }
-  void OnSequenceEnd() override { close(); }
-  void OnMapStart(const YAML::Mark& m, const std::string& tag, YAML::anchor_t a, YAML::EmitterStyle::value) override {
-    open(m, tag, a);
-  }
-  void OnMapEnd() override { close(); }
-
- private:
-  struct Open {
-    YAML::anchor_t anchor;
-    uint64_t nodes;
-    YAML::Mark mark;
-  };
-  [[noreturn]] void fail(const YAML::Mark& m, const std::string& what) const {
-    throw ConfigError(label_ + ": line " + std::to_string(m.line + 1) + ", column " + std::to_string(m.column + 1) +
-                      ": " + what);
-  }
-  void check_tag(const YAML::Mark& m, const std::string& tag) const {
-    static const std::set<std::string> standard = {"",
-                                                   "?",
-                                                   "!",
-                                                   "tag:yaml.org,2002:str",
-                                                   "tag:yaml.org,2002:int",
-                                                   "tag:yaml.org,2002:float",
-                                                   "tag:yaml.org,2002:bool",
-                                                   "tag:yaml.org,2002:null",
-                                                   "tag:yaml.org,2002:map",
-                                                   "tag:yaml.org,2002:seq"};
-    if (!standard.count(tag))
-      fail(m, "YAML tag '" + shown(tag.rfind("tag:yaml.org,2002:", 0) == 0 ? "!!" + tag.substr(18) : tag) +
-                  "' is not allowed (a " + kind_ +
-                  " holds plain values, lists and mappings; "
-                  "allowed tags: !!str, !!int, !!float, !!bool, !!null, !!map, !!seq)");
-  }
-  void add(const YAML::Mark& m, uint64_t n) {
-    uint64_t& to = stack_.empty() ? total_ : stack_.back().nodes;
-    to = std::min(to + n, kMaxNodes + 1);
-    if (to > kMaxNodes)
-      fail(m, "more than " + std::to_string(kMaxNodes) + " values once YAML aliases (*name) are expanded; a " + kind_ +
-                  " is far smaller (an alias bomb?)");
-  }
-  void leaf(const YAML::Mark& m, YAML::anchor_t a, const std::string& tag) {
-    check_tag(m, tag);
-    if (a) size_[a] = 1;
-    add(m, 1);
-  }
-  void open(const YAML::Mark& m, const std::string& tag, YAML::anchor_t a) {
-    check_tag(m, tag);
-    if (stack_.size() >= size_t(kMaxDepth))
-      fail(m, "lists and mappings nested deeper than " + std::to_string(kMaxDepth) + " levels");
-    stack_.push_back({a, 1, m});
-  }
-  void close() {
-    const Open o = stack_.back();
-    stack_.pop_back();
-    if (o.anchor) size_[o.anchor] = o.nodes;
-    add(o.mark, o.nodes);
-  }
-  std::string label_, kind_;
-  std::vector<Open> stack_;
-  std::map<YAML::anchor_t, uint64_t> size_;
-  uint64_t total_ = 0;
-};
-
-}  // namespace
-
-void check_yaml_text(const std::string& text, const std::string& label, const std::string& kind) {
-  if (text.size() > kMaxSceneBytes)
-    throw ConfigError(label + ": " + std::to_string(text.size()) + " bytes; a " + kind + " file is at most " +
-                      std::to_string(kMaxSceneBytes) + " bytes");
-  for (size_t i = 0; i < text.size(); ++i) {
-    const unsigned char c = text[i];
-    if ((c < 0x20 && c != '\n' && c != '\r' && c != '\t') || c == 0x7f) {
-      char b[8];
-      std::snprintf(b, sizeof b, "0x%02x", c);
-      throw ConfigError(label + ": " + position(text, i) + ": control byte " + b + ": not a text file (a " + kind +
-                        " is YAML text in UTF-8)");
-    }
-  }
-  if (const size_t bad = invalid_utf8(text); bad != std::string::npos) {
-    char b[8];
-    std::snprintf(b, sizeof b, "0x%02x", static_cast<unsigned char>(text[bad]));
-    throw ConfigError(label + ": " + position(text, bad) + ": byte " + b + " is not UTF-8 (a " + kind +
-                      " is YAML text in UTF-8; re-save the file as UTF-8)");
-  }
-  std::istringstream in(text);
-  YAML::Parser parser(in);
-  ShapeCheck check(label, kind);
-  int documents = 0;
-  try {
-    while (parser.HandleNextDocument(check))
-      if (++documents > 1) throw ConfigError(label + ": more than one YAML document (---); a " + kind + " is one");
-  } catch (const YAML::Exception& e) {
-    throw ConfigError(label + ": not valid YAML: " + e.what());
-  }
-}
-
-namespace {
-
-// Messages end up on one terminal line (exit 2 prints one line): escape what would break it, and keep a very
-// long one readable.
-std::string one_line(const std::string& m) {
-  std::string out;
-  for (unsigned char c : m) {
-    if (c == '\n')
-      out += "\\n";
-    else if (c == '\r' || c == '\t')
-      out += ' ';
-    else if (c < 0x20 || c == 0x7f)
-      out += '?';
-    else
-      out += static_cast<char>(c);
-  }
-  if (out.size() > 1200) out = out.substr(0, 800) + " ... " + out.substr(out.size() - 300);
-  return out;
-}
 
 std::string kind_name(const YAML::Node& n) {
   switch (n.Type()) {
@@ -257,110 +50,143 @@ class Loader {
     s.flowsheet = std::make_unique<Flowsheet>(s.name);
     Flowsheet& fs = *s.flowsheet;
 
-    const YAML::Node units = required(root, "units", "");
-    if (!units.IsMap() || units.size() == 0) fail("units", "expected a non-empty mapping of unit name -> {type, ...}");
-    check_unique(units, "units");
-    std::vector<std::pair<std::string, YAML::Node>> params;
+    Params params;
     std::map<std::string, std::string> given;  // unit.param -> scene key that set it (params or inputs)
-    // One unit per entry; the `particles` section is the unit "particles" of type particles (the size grid and
-    // product shared by every particle unit), declared first so that the others find it.
-    auto add = [&](const std::string& name, const std::string& at, const YAML::Node& u, const std::string& implied) {
-      if (!u.IsMap())
-        fail(at, std::string("expected a mapping with ") + (implied.empty() ? "'type'" : "'settings' and 'params'") +
-                     ", got " + kind_name(u));
-      if (implied.empty())
-        check_keys(u, at, {"type", "settings", "params"});
-      else
-        check_keys(u, at, {"settings", "params"});
-      const std::string type = implied.empty() ? scalar(required(u, "type", at), at + ".type") : implied;
-      std::map<std::string, std::string> settings;
-      if (u["settings"]) {
-        if (!u["settings"].IsMap()) fail(at + ".settings", "expected a mapping, got " + kind_name(u["settings"]));
-        check_unique(u["settings"], at + ".settings");
-        for (const auto& st : u["settings"])
-          settings[key_of(st.first, at + ".settings")] =
-              scalar(st.second, at + ".settings." + key_of(st.first, at + ".settings"));
-      }
-      try {
-        fs.add_unit(name, units_.create(type, label_ + ": " + at + ".type"),
-                    Settings(label_ + ": " + at + ".settings", settings));
-      } catch (const ConfigError& e) {
-        rethrow(e);
-      }
-      if (u["params"]) params.emplace_back(name, u["params"]);
-    };
-    if (root["particles"]) {
-      if (units["particles"]) fail("units.particles", "'particles' is the name of the scene's particle system");
-      add("particles", "particles", root["particles"], "particles");
-    }
-    for (const auto& kv : units) {
-      const std::string name = key_of(kv.first, "units");
-      add(name, "units." + name, kv.second, "");
-    }
-
-    if (root["connections"]) {
-      const YAML::Node c = root["connections"];
-      if (!c.IsSequence()) fail("connections", "expected a list of \"unit.port -> unit.port\"");
-      for (size_t i = 0; i < c.size(); ++i) {
-        const std::string at = "connections[" + std::to_string(i) + "]";
-        const std::string text = scalar(c[i], at);
-        const auto arrow = text.find("->");
-        if (arrow == std::string::npos) fail(at, "'" + shown(text) + "': expected \"unit.port -> unit.port\"");
-        try {
-          fs.connect(trim(text.substr(0, arrow)), trim(text.substr(arrow + 2)));
-        } catch (const ConfigError& e) {
-          fail(at, e.what());
-        }
-      }
-    }
+    load_units(root, fs, params);
+    if (root["connections"]) load_connections(root["connections"], fs);
     try {
       fs.finalize();
     } catch (const ConfigError& e) {
       fail("connections", e.what());
     }
-
-    for (const auto& [unit, node] : params) {
-      const std::string at = (unit == "particles" && root["particles"] ? "" : "units.") + unit + ".params";
-      if (!node.IsMap()) fail(at, "expected a mapping of parameter -> value, got " + kind_name(node));
-      check_unique(node, at);
-      for (const auto& p : node) {
-        const std::string key = key_of(p.first, at);
-        const std::string q = unit + "." + key;
-        try {
-          fs.param_id(q);
-        } catch (const ConfigError& e) {
-          fail(at + "." + key, e.what());
-        }
-        const double v = parse_param_value(fs, q, scalar(p.second, at + "." + key), label_ + ": " + at + "." + key);
-        try {
-          fs.set_param(q, v);
-        } catch (const ConfigError& e) {
-          fail(at + "." + key, e.what());
-        }
-        given[q] = at + "." + key;
-      }
-    }
-
+    for (const auto& [unit, node] : params)
+      load_params((unit == "particles" && root["particles"] ? "" : "units.") + unit + ".params", unit, node, fs, given);
     if (root["inputs"]) load_inputs(root["inputs"], fs, given);
-    if (root["links"]) {
-      const YAML::Node l = root["links"];
-      if (!l.IsMap()) fail("links", "expected a mapping of unit.param -> unit.param it follows");
-      check_unique(l, "links");
-      for (const auto& kv : l) {
-        const std::string target = key_of(kv.first, "links");
-        const std::string source = scalar(kv.second, "links." + target);
-        // A value given for a parameter that follows another would be overwritten at the start of every run.
-        if (auto g = given.find(target); g != given.end())
-          fail("links." + target, target + " follows " + source + " by this link but is also given as " + g->second +
-                                      "; remove one of them (set " + source + " instead)");
-        try {
-          fs.link(target, source);
-        } catch (const ConfigError& e) {
-          fail("links." + target, e.what());
-        }
+    if (root["links"]) load_links(root["links"], fs, given);
+    check_across_parameters(fs, given);
+    s.options.t_end = quantity(required(root, "t_end", ""), "t_end", "s");
+    if (root["output"]) load_output(root["output"], s.options);
+    if (root["solver"]) load_solver(root["solver"], s.options);
+    try {
+      s.options.validate(true);
+    } catch (const ConfigError& e) {
+      rethrow(e);
+    }
+    if (root["summary"]) load_summary(root["summary"], fs, s.summary);
+    YAML::Node extra;
+    for (const char* k : {"plots", "sweep", "notes"})
+      if (root[k]) extra[k] = root[k];
+    YAML::Emitter em;
+    em << extra;
+    s.extra_yaml = em.c_str();
+    return s;
+  }
+
+ private:
+  using Params = std::vector<std::pair<std::string, YAML::Node>>;  // unit name, its params node
+
+  // One unit per entry; the `particles` section is the unit "particles" of type particles (the size grid and
+  // product shared by every particle unit), declared first so that the others find it.
+  void load_units(const YAML::Node& root, Flowsheet& fs, Params& params) const {
+    const YAML::Node units = required(root, "units", "");
+    if (!units.IsMap() || units.size() == 0) fail("units", "expected a non-empty mapping of unit name -> {type, ...}");
+    check_unique(units, "units");
+    if (root["particles"]) {
+      if (units["particles"]) fail("units.particles", "'particles' is the name of the scene's particle system");
+      add_unit(fs, "particles", "particles", root["particles"], "particles", params);
+    }
+    for (const auto& kv : units) {
+      const std::string name = key_of(kv.first, "units");
+      add_unit(fs, name, "units." + name, kv.second, "", params);
+    }
+  }
+
+  // `implied`: the type of a section that is a unit by its place (particles), or "" when the entry names its type.
+  void add_unit(Flowsheet& fs, const std::string& name, const std::string& at, const YAML::Node& u,
+                const std::string& implied, Params& params) const {
+    if (!u.IsMap())
+      fail(at, std::string("expected a mapping with ") + (implied.empty() ? "'type'" : "'settings' and 'params'") +
+                   ", got " + kind_name(u));
+    if (implied.empty())
+      check_keys(u, at, {"type", "settings", "params"});
+    else
+      check_keys(u, at, {"settings", "params"});
+    const std::string type = implied.empty() ? scalar(required(u, "type", at), at + ".type") : implied;
+    std::map<std::string, std::string> settings;
+    if (u["settings"]) {
+      if (!u["settings"].IsMap()) fail(at + ".settings", "expected a mapping, got " + kind_name(u["settings"]));
+      check_unique(u["settings"], at + ".settings");
+      for (const auto& st : u["settings"])
+        settings[key_of(st.first, at + ".settings")] =
+            scalar(st.second, at + ".settings." + key_of(st.first, at + ".settings"));
+    }
+    try {
+      fs.add_unit(name, units_.create(type, label_ + ": " + at + ".type"),
+                  Settings(label_ + ": " + at + ".settings", settings));
+    } catch (const ConfigError& e) {
+      rethrow(e);
+    }
+    if (u["params"]) params.emplace_back(name, u["params"]);
+  }
+
+  void load_connections(const YAML::Node& c, Flowsheet& fs) const {
+    if (!c.IsSequence()) fail("connections", "expected a list of \"unit.port -> unit.port\"");
+    for (size_t i = 0; i < c.size(); ++i) {
+      const std::string at = "connections[" + std::to_string(i) + "]";
+      const std::string text = scalar(c[i], at);
+      const auto arrow = text.find("->");
+      if (arrow == std::string::npos) fail(at, "'" + shown(text) + "': expected \"unit.port -> unit.port\"");
+      try {
+        fs.connect(trim(text.substr(0, arrow)), trim(text.substr(arrow + 2)));
+      } catch (const ConfigError& e) {
+        fail(at, e.what());
       }
     }
-    // Checks across parameters of a unit (t_off >= t_on ...), as a run would find them.
+  }
+
+  void load_params(const std::string& at, const std::string& unit, const YAML::Node& node, Flowsheet& fs,
+                   std::map<std::string, std::string>& given) const {
+    if (!node.IsMap()) fail(at, "expected a mapping of parameter -> value, got " + kind_name(node));
+    check_unique(node, at);
+    for (const auto& p : node) {
+      const std::string key = key_of(p.first, at);
+      const std::string q = unit + "." + key;
+      try {
+        fs.param_id(q);
+      } catch (const ConfigError& e) {
+        fail(at + "." + key, e.what());
+      }
+      const double v = parse_param_value(fs, q, scalar(p.second, at + "." + key), label_ + ": " + at + "." + key);
+      try {
+        fs.set_param(q, v);
+      } catch (const ConfigError& e) {
+        fail(at + "." + key, e.what());
+      }
+      given[q] = at + "." + key;
+    }
+  }
+
+  void load_links(const YAML::Node& l, Flowsheet& fs, const std::map<std::string, std::string>& given) const {
+    if (!l.IsMap()) fail("links", "expected a mapping of unit.param -> unit.param it follows");
+    check_unique(l, "links");
+    for (const auto& kv : l) {
+      const std::string target = key_of(kv.first, "links");
+      const std::string source = scalar(kv.second, "links." + target);
+      // A value given for a parameter that follows another would be overwritten at the start of every run.
+      if (auto g = given.find(target); g != given.end())
+        fail("links." + target, target + " follows " + source + " by this link but is also given as " + g->second +
+                                    "; remove one of them (set " + source + " instead)");
+      try {
+        fs.link(target, source);
+      } catch (const ConfigError& e) {
+        fail("links." + target, e.what());
+      }
+    }
+  }
+
+  // Checks across parameters of a unit (t_off >= t_on ...), as a run would find them, named by the scene key that
+  // gave the parameter (or its default).
+  void check_across_parameters(Flowsheet& fs, const std::map<std::string, std::string>& given) const {
     try {
       fs.check_units();
     } catch (const ConfigError& e) {
@@ -376,38 +202,22 @@ class Loader {
         }
       fail("", m);
     }
-    s.options.t_end = quantity(required(root, "t_end", ""), "t_end", "s");
-    if (root["output"]) load_output(root["output"], s.options);
-    if (root["solver"]) load_solver(root["solver"], s.options);
-    try {
-      s.options.validate(true);
-    } catch (const ConfigError& e) {
-      rethrow(e);
-    }
-    if (root["summary"]) {
-      const YAML::Node sm = root["summary"];
-      if (!sm.IsMap()) fail("summary", "expected a mapping of summary key -> unit.state or unit.output");
-      check_unique(sm, "summary");
-      const auto states = fs.state_names();
-      const auto outputs = fs.output_names();
-      for (const auto& kv : sm) {
-        const std::string key = key_of(kv.first, "summary"), src = scalar(kv.second, "summary." + key);
-        if (std::find(states.begin(), states.end(), src) == states.end() &&
-            std::find(outputs.begin(), outputs.end(), src) == outputs.end())
-          fail("summary." + key, "'" + shown(src) + "' is neither a state nor a reported output of the flowsheet");
-        s.summary[key] = src;
-      }
-    }
-    YAML::Node extra;
-    for (const char* k : {"plots", "sweep", "notes"})
-      if (root[k]) extra[k] = root[k];
-    YAML::Emitter em;
-    em << extra;
-    s.extra_yaml = em.c_str();
-    return s;
   }
 
- private:
+  void load_summary(const YAML::Node& sm, const Flowsheet& fs, std::map<std::string, std::string>& summary) const {
+    if (!sm.IsMap()) fail("summary", "expected a mapping of summary key -> unit.state or unit.output");
+    check_unique(sm, "summary");
+    const auto states = fs.state_names();
+    const auto outputs = fs.output_names();
+    for (const auto& kv : sm) {
+      const std::string key = key_of(kv.first, "summary"), src = scalar(kv.second, "summary." + key);
+      if (std::find(states.begin(), states.end(), src) == states.end() &&
+          std::find(outputs.begin(), outputs.end(), src) == outputs.end())
+        fail("summary." + key, "'" + shown(src) + "' is neither a state nor a reported output of the flowsheet");
+      summary[key] = src;
+    }
+  }
+
   [[noreturn]] void fail(const std::string& key, const std::string& what) const {
     throw ConfigError(label_ + ": " + (key.empty() ? "" : key + ": ") + what);
   }
@@ -498,8 +308,13 @@ class Loader {
     if (s["atol"]) opt.atol = number(s["atol"], "solver.atol");
     if (s["max_steps"]) opt.max_steps = whole_number(s["max_steps"], "solver.max_steps");
     if (s["max_step"]) opt.max_step = quantity(s["max_step"], "solver.max_step", "s");
-    if (s["linear_solver"]) opt.linear_solver = scalar(s["linear_solver"], "solver.linear_solver");
-    if (s["method"]) opt.method = scalar(s["method"], "solver.method");
+    try {  // "solver.method = 'x': not one of ...", after the file's name
+      if (s["linear_solver"])
+        opt.linear_solver = parse_linear_solver(scalar(s["linear_solver"], "solver.linear_solver"));
+      if (s["method"]) opt.method = parse_method(scalar(s["method"], "solver.method"));
+    } catch (const ConfigError& e) {
+      rethrow(e);
+    }
     if (s["dense_limit"]) opt.dense_limit = whole_number(s["dense_limit"], "solver.dense_limit");
   }
   void load_inputs(const YAML::Node& in, Flowsheet& fs, std::map<std::string, std::string>& given) const {

@@ -216,8 +216,8 @@ void Ida::tune_refactoring(int block) {
 // zone inlined. Past kDenseMax unknowns the dense matrix itself is the problem.
 constexpr int kDenseMax = 3000;
 constexpr double kDenseFill = 0.25;
-bool use_dense(const Flowsheet& fs, const std::string& choice, int dense_limit) {
-  if (choice != "auto") return choice == "dense";
+bool use_dense(const Flowsheet& fs, LinearSolverChoice choice, int dense_limit) {
+  if (choice != LinearSolverChoice::kAuto) return choice == LinearSolverChoice::kDense;
   const int n = fs.n_states() - fs.n_explicit_states();
   if (n <= dense_limit) return true;
   if (n > kDenseMax) return false;
@@ -228,9 +228,9 @@ bool use_dense(const Flowsheet& fs, const std::string& choice, int dense_limit) 
 
 namespace granuflow::detail {
 
-LinearSolverKind choose_linear_solver(const Flowsheet& fs, const std::string& choice, int dense_limit) {
-  if (choice == "gmres") return LinearSolverKind::kGmres;
-  if (choice == "auto" && fs.n_states() - fs.n_explicit_states() > dense_limit)
+LinearSolverKind choose_linear_solver(const Flowsheet& fs, LinearSolverChoice choice, int dense_limit) {
+  if (choice == LinearSolverChoice::kGmres) return LinearSolverKind::kGmres;
+  if (choice == LinearSolverChoice::kAuto && fs.n_states() - fs.n_explicit_states() > dense_limit)
     for (const auto& u : fs.units())
       if (u.spec.has_preconditioner() && static_cast<int>(u.spec.states().size()) > dense_limit)
         return LinearSolverKind::kGmres;

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "granuflow/dae_system.hpp"
+#include "granuflow/simulator.hpp"
 #include "jacobian_cache.hpp"
 #include "serial_vector_ops.hpp"
 
@@ -54,8 +55,8 @@ void make_linear_solver(bool dense, const DaeSystem& sys, N_Vector y, SUNContext
 // the residual, left-preconditioned by the units' blocks (DaeSystem::precondition_setup/solve). It is the only
 // choice for units whose Jacobian is both large and dense (a 2-D population: every bin pair aggregates).
 enum class LinearSolverKind { kDense, kSparse, kGmres };
-// "auto": dense up to dense_limit unknowns; beyond, gmres if a unit preconditions itself, else use_dense().
-LinearSolverKind choose_linear_solver(const Flowsheet& fs, const std::string& choice, int dense_limit);
+// kAuto: dense up to dense_limit unknowns; beyond, gmres if a unit preconditions itself, else use_dense().
+LinearSolverKind choose_linear_solver(const Flowsheet& fs, LinearSolverChoice choice, int dense_limit);
 const char* linear_solver_name(LinearSolverKind k);
 inline constexpr int kGmresMaxKrylov = 20;  // Krylov dimension (no restarts)
 std::string ida_flag_text(int flag);
@@ -105,6 +106,6 @@ struct Ida {
 };
 
 // Dense Jacobians whenever the system is small or mostly full; see solver_setup.cpp.
-bool use_dense(const Flowsheet& fs, const std::string& choice, int dense_limit);
+bool use_dense(const Flowsheet& fs, LinearSolverChoice choice, int dense_limit);
 
 }  // namespace granuflow::detail

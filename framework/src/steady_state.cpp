@@ -458,13 +458,78 @@ std::string kin_flag_text(int flag) {
   return s;
 }
 
+// Names the unit with the largest residual at the last iterate (if the residual itself throws there, the solver
+// failure is still what the caller gets).
+[[noreturn]] void throw_no_steady_state(const Flowsheet& fs, SteadySystem& s, const SteadyOptions& opt,
+                                        const SteadyResult& r, int flag, const std::vector<double>& y) {
+  const int n = s.n;
+  std::string msg = "steady-state solve (KINSOL) failed after " + std::to_string(r.iterations) +
+                    " iterations: " + kin_flag_text(flag) + (s.last_error.empty() ? "" : " (" + s.last_error + ")");
+  if (r.pseudo_steps > 0)
+    msg += ", after " + std::to_string(r.pseudo_steps) +
+           " pseudo-transient steps (the dynamics did not settle: the flowsheet may have no steady state, e.g. a "
+           "hold-up that keeps growing once a discharge reaches its capacity, or one that is unstable; simulate "
+           "it in time to see which)";
+  std::vector<double> rr(n);
+  int iw = 0;
+  try {
+    s.residual(y.data(), s.zeros.data(), rr.data());
+    auto size = [&](int i) { return std::isfinite(rr[i]) ? std::abs(rr[i]) : HUGE_VAL; };
+    for (int i = 1; i < n; ++i)
+      if (size(i) > size(iw)) iw = i;
+  } catch (...) {
+    throw SolverError(msg, opt.t, "?", HUGE_VAL);
+  }
+  throw SolverError(msg + " at " + s.sys->describe_row(iw), opt.t, fs.units()[fs.state_unit(iw)].name,
+                    std::abs(rr[iw]));
+}
+
+// The trivial root: every differential state of a unit that started non-zero is zero now.
+void warn_of_trivial_root(const Flowsheet& fs, const DaeSystem& sys, const std::vector<double>& y0,
+                          const std::vector<double>& y, SteadyResult& r) {
+  const int n = sys.size();
+  const auto sc = sys.scales();
+  const auto id = sys.differential_id();
+  for (const auto& u : fs.units()) {
+    double a0 = 0, a1 = 0;
+    const int ns = static_cast<int>(u.spec.states().size());
+    for (int k = 0; k < ns; ++k) {
+      const int i = u.offset + k;
+      if (i >= n || id[i] == 0) continue;
+      a0 += std::abs(y0[i]) / sc[i], a1 += std::abs(y[i]) / sc[i];
+    }
+    if (a0 > 0 && a1 <= 1e-4 * a0)  // Newton approaches a degenerate root only linearly
+      r.warnings.push_back("the steady state found is the trivial one: every differential state of unit '" + u.name +
+                           "' is zero (e.g. a population that emptied)");
+  }
+}
+
+// Outputs and the boundary flows at the steady state: quadratures integrate flows, so their rates are the flows
+// and their accumulated values have no steady meaning (NaN).
+void steady_outputs(const Flowsheet& fs, DaeSystem& sys, double t, const std::vector<double>& y,
+                    const std::vector<double>& zeros, const std::vector<double>& yp_full, SteadyResult& r) {
+  std::vector<double> qrate(sys.n_quadratures(), 0.0), qnan(sys.n_quadratures(), std::nan(""));
+  if (sys.n_quadratures() > 0) sys.quadrature(t, y.data(), zeros.data(), qrate.data());
+  r.outputs.assign(fs.n_outputs(), 0.0);
+  sys.report(t, r.y.data(), yp_full.data(), qnan.data(), r.outputs.data());
+  for (const auto& u : fs.units()) {
+    const auto& quads = u.spec.quadratures();
+    for (size_t j = 0; j < quads.size(); ++j) {
+      const OutputSpec& o = u.spec.outputs()[quads[j].output.i];
+      if (o.quantity.empty() || (o.role != OutputRole::kBalanceIn && o.role != OutputRole::kBalanceOut)) continue;
+      auto& f = r.boundary_flows[o.quantity];
+      (o.role == OutputRole::kBalanceIn ? f.first : f.second) += qrate[u.quad_offset + j];
+    }
+  }
+}
+
 }  // namespace
 
 SteadyResult solve_steady_state(Flowsheet& fs, const SteadyOptions& opt, const std::vector<double>* guess) {
   opt.validate();
   const auto wall0 = std::chrono::steady_clock::now();
   if (!fs.finalized()) fs.finalize();
-  const bool dense = use_dense(fs, "auto", SimOptions().dense_limit);
+  const bool dense = use_dense(fs, LinearSolverChoice::kAuto, SimOptions().dense_limit);
   const std::shared_ptr<DaeSystem> held = fs.take_system(dense);
   DaeSystem& sys = *held;
   const int n = sys.size();
@@ -511,61 +576,13 @@ SteadyResult solve_steady_state(Flowsheet& fs, const SteadyOptions& opt, const s
     flag = newton(s, y, opt, uscale, wf, &r.iterations, &r.residual_norm);
     r.method = "pseudo-transient continuation, then newton";
   }
-  if (flag < 0) {
-    std::string msg = "steady-state solve (KINSOL) failed after " + std::to_string(r.iterations) +
-                      " iterations: " + kin_flag_text(flag) + (s.last_error.empty() ? "" : " (" + s.last_error + ")");
-    if (r.pseudo_steps > 0)
-      msg += ", after " + std::to_string(r.pseudo_steps) +
-             " pseudo-transient steps (the dynamics did not settle: the flowsheet may have no steady state, e.g. a "
-             "hold-up that keeps growing once a discharge reaches its capacity, or one that is unstable; simulate "
-             "it in time to see which)";
-    // Name the unit with the largest residual at the last iterate (if the residual itself throws there, the
-    // solver failure is still what the caller gets).
-    std::vector<double> rr(n);
-    int iw = 0;
-    try {
-      s.residual(y.data(), s.zeros.data(), rr.data());
-      auto size = [&](int i) { return std::isfinite(rr[i]) ? std::abs(rr[i]) : HUGE_VAL; };
-      for (int i = 1; i < n; ++i)
-        if (size(i) > size(iw)) iw = i;
-    } catch (...) {
-      throw SolverError(msg, opt.t, "?", HUGE_VAL);
-    }
-    throw SolverError(msg + " at " + sys.describe_row(iw), opt.t, fs.units()[fs.state_unit(iw)].name, std::abs(rr[iw]));
-  }
-  // The trivial root: every differential state of a unit that started non-zero is zero now.
-  const auto id = sys.differential_id();
-  for (const auto& u : fs.units()) {
-    double a0 = 0, a1 = 0;
-    const int ns = static_cast<int>(u.spec.states().size());
-    for (int k = 0; k < ns; ++k) {
-      const int i = u.offset + k;
-      if (i >= n || id[i] == 0) continue;
-      a0 += std::abs(y0[i]) / sc[i], a1 += std::abs(y[i]) / sc[i];
-    }
-    if (a0 > 0 && a1 <= 1e-4 * a0)  // Newton approaches a degenerate root only linearly
-      r.warnings.push_back("the steady state found is the trivial one: every differential state of unit '" + u.name +
-                           "' is zero (e.g. a population that emptied)");
-  }
+  if (flag < 0) throw_no_steady_state(fs, s, opt, r, flag, y);
+  warn_of_trivial_root(fs, sys, y0, y, r);
   std::vector<double> yp_full(sys.full_size());
   r.y.resize(sys.full_size());
   sys.extend(opt.t, y.data(), s.zeros.data(), r.y.data(), yp_full.data());
   r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-  // Outputs and the boundary flows at the steady state: quadratures integrate flows, so their rates are the flows
-  // and their accumulated values have no steady meaning (NaN).
-  std::vector<double> qrate(sys.n_quadratures(), 0.0), qnan(sys.n_quadratures(), std::nan(""));
-  if (sys.n_quadratures() > 0) sys.quadrature(opt.t, y.data(), s.zeros.data(), qrate.data());
-  r.outputs.assign(fs.n_outputs(), 0.0);
-  sys.report(opt.t, r.y.data(), yp_full.data(), qnan.data(), r.outputs.data());
-  for (const auto& u : fs.units()) {
-    const auto& quads = u.spec.quadratures();
-    for (size_t j = 0; j < quads.size(); ++j) {
-      const OutputSpec& o = u.spec.outputs()[quads[j].output.i];
-      if (o.quantity.empty() || (o.role != OutputRole::kBalanceIn && o.role != OutputRole::kBalanceOut)) continue;
-      auto& f = r.boundary_flows[o.quantity];
-      (o.role == OutputRole::kBalanceIn ? f.first : f.second) += qrate[u.quad_offset + j];
-    }
-  }
+  steady_outputs(fs, sys, opt.t, y, s.zeros, yp_full, r);
   if (opt.stability && dense) {
     const auto t0 = std::chrono::steady_clock::now();
     stability(s, y, s.kept.size(), r);

@@ -76,9 +76,9 @@ py::dict simulate(Scene& s, std::optional<double> t_end, std::optional<std::vect
   if (n_out) o.n_out = *n_out, o.t_out.clear();
   if (rtol) o.rtol = *rtol;
   if (atol) o.atol = *atol;
-  if (linear_solver) o.linear_solver = *linear_solver;
+  if (linear_solver) o.linear_solver = parse_linear_solver(*linear_solver, "simulate(): linear_solver");
   if (max_steps) o.max_steps = *max_steps;
-  if (method) o.method = *method;
+  if (method) o.method = parse_method(*method, "simulate(): method");
   o.sensitivities = std::move(sensitivities);
   try {  // named as the keywords of simulate(), not as the C++ struct
     o.validate();

@@ -72,7 +72,7 @@ struct Run {
 inline Run run(Flowsheet& fs, std::vector<double> t_out, double rtol = 1e-8, double atol = 1e-12,
                const std::string& method = "auto") {
   SimOptions o;
-  o.method = method;
+  o.method = parse_method(method);
   o.t_end = t_out.back();
   o.t_out = std::move(t_out);
   o.rtol = rtol;

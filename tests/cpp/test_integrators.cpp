@@ -2,6 +2,7 @@
 // on an ODE, sensitivities from CVODES, clear refusals, and per-class tolerances that keep explicit methods honest.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <regex>
 
 #include "granuflow/errors.hpp"
@@ -31,9 +32,33 @@ connections: [feed.out -> t0.in, t0.out -> t1.in, t1.out -> product.in]
 
 SimResult run(Scene& s, const std::string& method, std::vector<std::string> sens = {}) {
   SimOptions o = s.options;
-  o.method = method;
+  o.method = parse_method(method);
   o.sensitivities = std::move(sens);
   return simulate(*s.flowsheet, o);
+}
+
+// Every integrator fails the same way through the one run driver: a SolverError at the time it stopped, naming the
+// unit of the worst weighted residual (here a stirred tank: the feed and product hold no states) and its size.
+TEST(Integrators, EveryIntegratorsFailureNamesTimeUnitAndWorstResidual) {
+  for (const std::string m : {"ida", "bdf", "adams", "erk"}) {
+    Scene s = scene_from_text(kStiffTanks);
+    SimOptions o = s.options;
+    o.method = parse_method(m);
+    o.max_steps = 4;  // far too few for 1000 s
+    try {
+      simulate(*s.flowsheet, o);
+      FAIL() << m << " ran 1000 s in 4 steps";
+    } catch (const SolverError& e) {
+      const std::string msg = e.what();
+      EXPECT_GT(e.t(), 0.0) << m << ": " << msg;
+      EXPECT_LT(e.t(), 1000.0) << m << ": " << msg;
+      EXPECT_TRUE(e.unit() == "t0" || e.unit() == "t1") << m << ": unit '" << e.unit() << "': " << msg;
+      EXPECT_TRUE(std::isfinite(e.worst_residual()) && e.worst_residual() >= 0.0) << m << ": " << msg;
+      EXPECT_NE(msg.find("unit '" + e.unit() + "'"), std::string::npos) << m << ": " << msg;
+      EXPECT_NE(msg.find("worst weighted residual"), std::string::npos) << m << ": " << msg;
+      EXPECT_NE(msg.find("TOO_MUCH_WORK"), std::string::npos) << m << ": " << msg;
+    }
+  }
 }
 
 TEST(Integrators, AutoPicksIdasForADaeAndSaysWhy) {
@@ -44,7 +69,7 @@ TEST(Integrators, AutoPicksIdasForADaeAndSaysWhy) {
   EXPECT_EQ(r.stats.method, "bdf (IDAS)");
   EXPECT_NE(r.stats.method_reason.find("a DAE"), std::string::npos) << r.stats.method_reason;
   for (const std::string m : {"adams", "erk"}) {
-    o.method = m;
+    o.method = parse_method(m);
     try {
       simulate(*s.flowsheet, o);
       FAIL() << m << " ran on a DAE";
@@ -127,7 +152,7 @@ TEST(Integrators, VolumeWeightedTolerancesKeepAnExplicitMethodsSecondMomentRight
     st["aggregation"] = "sum", st["aggregation_scheme"] = "cell_average", st["tolerance_weighting"] = weighting;
     auto fs = pbm_test::flowsheet(st, {});
     SimOptions o;
-    o.t_end = 3, o.t_out = {0, 3}, o.rtol = 1e-3, o.atol = 1e-3, o.method = "erk";
+    o.t_end = 3, o.t_out = {0, 3}, o.rtol = 1e-3, o.atol = 1e-3, o.method = Method::kErk;
     const SimResult r = simulate(*fs, o);
     *steps = r.stats.steps;
     return pbm_test::moment(g, &r.y[r.n_states()], 2) / pbm_analytic::golovin_m2(3.0) - 1.0;

@@ -24,8 +24,8 @@ using testing::scene_from_text;
 // Every state at the last output time, run with `solver` (and the integrator `method`).
 SimResult run(Scene& s, const std::string& solver, const std::string& method = "auto") {
   SimOptions o = s.options;
-  o.linear_solver = solver;
-  o.method = method;
+  o.linear_solver = parse_linear_solver(solver);
+  o.method = parse_method(method);
   return simulate(*s.flowsheet, o);
 }
 
@@ -67,13 +67,12 @@ TEST(LinearSolvers, GmresGivesTheDirectAnswerForAPopulationOnIdasAndCvodes) {
 TEST(LinearSolvers, GmresRefusesSensitivitiesAndUnknownChoicesAreNamed) {
   Scene s = scene_from_file("flowsheets/pbm_constant_kernel.yaml");
   SimOptions o = s.options;
-  o.linear_solver = "gmres";
+  o.linear_solver = LinearSolverChoice::kGmres;
   o.sensitivities = {"pbm.agg_beta0"};
   EXPECT_THROW(simulate(*s.flowsheet, o), ConfigError);
   o.sensitivities.clear();
-  o.linear_solver = "krylov";
   try {
-    simulate(*s.flowsheet, o);
+    o.linear_solver = parse_linear_solver("krylov");
     FAIL();
   } catch (const ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("auto, dense, sparse, gmres"), std::string::npos) << e.what();

@@ -157,7 +157,7 @@ TEST(Pbm2D, SceneFileRunsAndClosesItsBalances) {
   // past dense_limit an implicit integrator takes GMRES with the unit's preconditioner by itself
   for (const char* method : {"ida", "bdf"}) {
     SimOptions o = s.options;
-    o.method = method;
+    o.method = parse_method(method);
     const SimResult ri = simulate(*s.flowsheet, o);
     EXPECT_EQ(ri.stats.linear_solver.rfind("gmres", 0), 0u) << method << ": " << ri.stats.linear_solver;
     EXPECT_NEAR(output(ri, last, "granulator.D_avg"), output(r, last, "granulator.D_avg"), 1e-5 * 3e-3) << method;
@@ -323,7 +323,7 @@ TEST(Pbm2D, EveryIntegratorAndLinearSolverGivesTheSameAnswer) {
   for (const char* method : {"ida", "bdf"})
     for (const char* solver : {"gmres", "dense"}) {
       SCOPED_TRACE(std::string(method) + " " + solver);
-      o.method = method, o.linear_solver = solver;
+      o.method = parse_method(method), o.linear_solver = parse_linear_solver(solver);
       const SimResult r = simulate(*s.flowsheet, o);
       EXPECT_NEAR(output(r, 2, "g.D_avg"), D, 1e-6 * D);
       if (std::string(solver) == "gmres") {

@@ -320,7 +320,7 @@ TEST(PbmKernels, SensitivityToAKernelParameterEqualsFiniteDifferences) {
     // the reference on IDAS, whose answer moves smoothly with the parameter at this tolerance (an explicit method's
     // step sequence jumps with it, and the difference quotient multiplies that by 1 / h); the sensitivities
     // themselves come from the method auto chose (Adams: the sum kernel is not stiff)
-    q.method = "ida";
+    q.method = Method::kIda;
     return simulate(*f, q).y;
   };
   const auto up = final_state(1.0 + h), dn = final_state(1.0 - h);

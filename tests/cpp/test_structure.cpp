@@ -61,13 +61,13 @@ TEST(Structure, RecycleWithoutHoldUpRunsDenseAndIsNamedWhereItCannotStart) {
   // A loop of algebraic units that returns part of its flow has a solution, mixer = feed / split. Dense, the
   // splitter (explicit) is evaluated inside the mixer's equations and consistent initialization finds it.
   Scene dense = scene_from_text(kLoop);
-  dense.options.linear_solver = "dense";
+  dense.options.linear_solver = LinearSolverChoice::kDense;
   const SimResult r = simulate(*dense.flowsheet, dense.options);
   EXPECT_NEAR(r.state(r.t.size() - 1, dense.flowsheet->state_id("mixer.mdot")), 0.5 / 0.6, 1e-9);
   // Sparse, the splitter's own guesses (0.1 kg/s out of 0.1 kg/s) make the mixing equations singular at the
   // start, where IDACalcIC used to fail blaming mixer.mdot; the loop is named instead, with the way out.
   Scene sparse = scene_from_text(kLoop);
-  sparse.options.linear_solver = "sparse";
+  sparse.options.linear_solver = LinearSolverChoice::kSparse;
   try {
     simulate(*sparse.flowsheet, sparse.options);
     FAIL() << "the sparse run started from a singular point";
@@ -84,7 +84,7 @@ TEST(Structure, RecycleReturningAllItsFlowIsRefusedNamingTheLoop) {
   text.replace(text.find("split: 0.6"), 10, "split: 0.0");
   for (const char* solver : {"dense", "sparse"}) {
     Scene s = scene_from_text(text);
-    s.options.linear_solver = solver;
+    s.options.linear_solver = parse_linear_solver(solver);
     try {
       simulate(*s.flowsheet, s.options);
       FAIL() << "a total recycle without hold-up ran (" << solver << ")";

@@ -59,8 +59,8 @@ int main(int argc, char** argv) {
   try {
     Scene s = load_scene(path, units::builtin());
     if (t_end > 0) s.options.t_end = t_end, s.options.t_out.clear();
-    if (!linear_solver.empty()) s.options.linear_solver = linear_solver;
-    if (!method.empty()) s.options.method = method;
+    if (!linear_solver.empty()) s.options.linear_solver = parse_linear_solver(linear_solver, "--linear-solver");
+    if (!method.empty()) s.options.method = parse_method(method, "--method");
     SimResult r;
     double best = 1e300;
     for (int k = 0; k < repeat; ++k) {

@@ -1,6 +1,7 @@
-// The IDAS simulator: consistent initial conditions, exact Jacobians, stops and re-initialization at input
-// breakpoints, output at requested times, forward sensitivities w.r.t. named parameters, and a KINSOL
-// steady-state solve. Failures throw SolverError naming the time, the unit and the worst residual.
+// Dynamic runs and steady states: one run driver (run_driver.hpp) over the integrators (IDAS, CVODES, ARKODE) with
+// consistent starts, exact Jacobians, stops and re-initialization at input breakpoints, output at requested times and
+// forward sensitivities w.r.t. named parameters; and a KINSOL steady-state solve. Failures throw SolverError naming
+// the time, the unit and the worst residual.
 #pragma once
 #include <map>
 #include <string>
@@ -15,6 +16,20 @@ namespace granuflow {
 // Output times per run (output.n, the length of output.times): validate() refuses more.
 inline constexpr int kMaxOutputTimes = 100000;
 
+// The integrator (solver.method): ida (IDAS, BDF: any flowsheet); bdf or adams (CVODES) and erk (ARKODE,
+// Dormand-Prince 5(4)) for flowsheets that are ODEs (every state differential once explicit units are inlined); auto:
+// IDAS for a DAE, for an ODE by its stiffness (ode_simulator.hpp). SolverStats::method says what ran.
+enum class Method { kAuto, kIda, kBdf, kAdams, kErk };
+// The Newton systems' linear solver (solver.linear_solver). auto: dense up to dense_limit states; beyond, gmres when a
+// unit preconditions itself, else dense or sparse by the Jacobian's fill.
+enum class LinearSolverChoice { kAuto, kDense, kSparse, kGmres };
+// Options are text only at the edges (scene files, Python, the command line): parsed once here, with a ConfigError
+// naming `key`, the text and the names allowed.
+Method parse_method(const std::string& text, const std::string& key = "solver.method");
+LinearSolverChoice parse_linear_solver(const std::string& text, const std::string& key = "solver.linear_solver");
+const char* to_string(Method m);
+const char* to_string(LinearSolverChoice c);
+
 struct SimOptions {
   double t_end = 0.0;                      // s, > 0
   std::vector<double> t_out;               // output times in [0, t_end], increasing; empty: n_out equispaced
@@ -28,13 +43,8 @@ struct SimOptions {
   // the staggered corrector at every step of the state, only without their own step-size control: about
   // half the steps, and accurate to roughly the states' tolerance on smooth problems (calibration Jacobians).
   bool sens_error_control = true;
-  // auto | dense | sparse | gmres (auto: dense up to dense_limit states; beyond, gmres when a unit preconditions
-  // itself, else dense or sparse by the Jacobian's fill)
-  std::string linear_solver = "auto";
-  // Integrator: ida (IDAS, BDF: any flowsheet), bdf or adams (CVODES) and erk (ARKODE, Dormand-Prince 5(4)) for
-  // flowsheets that are ODEs (every state differential once explicit units are inlined), or auto: IDAS for a DAE,
-  // for an ODE by its stiffness (ode_simulator.hpp). SolverStats::method says what ran.
-  std::string method = "auto";
+  LinearSolverChoice linear_solver = LinearSolverChoice::kAuto;
+  Method method = Method::kAuto;
   int dense_limit = 400;
   // Throws ConfigError naming the value and the rule, and the field as SimOptions.<field> or, with scene_keys, as the
   // scene file's key.

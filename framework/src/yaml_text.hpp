@@ -1,0 +1,20 @@
+// The guard in front of every YAML file granuflow reads (scene, sweep, experiment and stage files): size, bytes,
+// UTF-8, node count with aliases expanded, depth and tags are checked before anything walks the tree
+// (check_yaml_text in scene.hpp); and the two ways user text enters a message.
+#pragma once
+#include <cstddef>
+#include <string>
+
+namespace granuflow {
+
+// Limits that keep a hostile or mistaken file from hanging the loader or filling memory: a scene is a few
+// kilobytes (an input table of 10^4 knots about 200 kB).
+inline constexpr size_t kMaxSceneBytes = 1 << 20;
+
+// User text inside a message: one line, at most 60 characters shown.
+std::string shown(const std::string& text);
+// Messages end up on one terminal line (exit 2 prints one line): escape what would break it, and keep a very
+// long one readable.
+std::string one_line(const std::string& m);
+
+}  // namespace granuflow
