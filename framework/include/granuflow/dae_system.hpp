@@ -5,6 +5,9 @@
 //
 // A DaeSystem is one run's view of a flowsheet: it reads the flowsheet's parameters once (run_params) and keeps
 // every unit's Workspace, so several DaeSystems over one flowsheet can run in parallel threads.
+//
+// Implemented in src/dae_system.cpp (layout), dae_residual.cpp, dae_jacobian.cpp, dae_ad.cpp, dae_schur.cpp,
+// dae_sensitivities.cpp and block_preconditioner.cpp; src/dae_internal.hpp holds what they share.
 #pragma once
 #include <Eigen/Dense>
 #include <Eigen/SparseCore>
@@ -110,6 +113,8 @@ class DaeSystem {
   class FactoringSink;
   void fill_params(double t);
   void build_sparse_maps() const;
+  void build_schur_structure();
+  void check_explicit_residuals();
   void build_ad_plan(int u);
   template <class T>
   Ctx<T> ctx(int u, double t, const T* y, const T* yp, const std::vector<std::vector<T>>& params, T* r) const;
@@ -161,6 +166,13 @@ class DaeSystem {
     // entries in any order; a repeated entry stays a second term of its row, which every use sums
     void assign(int n_rows, const std::vector<Eigen::Triplet<double>>& entries);
   };
+  // dF_R/dy_R of an inlined Jacobian from the assembled rows (dae_schur.cpp): schur_complement() runs the others.
+  void schur_complement(double* dense);
+  void schur_rs();  // J_RS as triplets
+  void schur_z();   // Z = J_SS^-1 J_SR by forward substitution
+  void schur_subtract_z(double* dense);
+  void schur_subtract_rs_outer(double* dense);
+  void schur_subtract_outer(double* dense);
   void subtract_product(SparseRows& z, const SparseRows& s, const SparseRows& zv);
   // schur_acc_ += a * row r of z over the columns that row holds, each column listed once per stamp in `touched`
   void accumulate_row(const SparseRows& z, int r, double a, int stamp, std::vector<int>& touched);

@@ -1,0 +1,72 @@
+#include "experiment_cost.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <exception>
+
+namespace granuflow::calib {
+
+bool ExperimentCost::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
+  try {
+    compute(parameters[0], residuals, jacobians && jacobians[0] ? jacobians[0] : nullptr);
+    return true;
+  } catch (const std::exception& e) {
+    std::lock_guard<std::mutex> lock(error_mutex_);
+    last_error_ = model_->name() + ": " + e.what();
+    return false;
+  }
+}
+
+void ExperimentCost::compute(const double* theta, double* r, double* J) const {
+  std::vector<double> m, dm;
+  model_->run(theta, m, J ? &dm : nullptr);
+  const int rows = model_->rows();
+  if (sigma_.empty()) sigma_ = sigma_at(m);
+  weigh(m, J ? &dm : nullptr, r, J);
+  if (J) {
+    last_theta_.assign(theta, theta + n_);
+    last_m_ = std::move(m);
+    last_dm_ = std::move(dm);
+    last_r_.assign(r, r + rows);
+    last_J_.assign(J, J + size_t(rows) * n_);
+  }
+}
+
+void ExperimentCost::at(const double* theta, std::vector<double>& r, std::vector<double>& J) const {
+  if (!cached(theta)) {
+    r.resize(model_->rows());
+    J.resize(size_t(model_->rows()) * n_);
+    compute(theta, r.data(), J.data());
+  }
+  r = last_r_, J = last_J_;
+}
+
+double ExperimentCost::reweight(const double* theta) const {
+  if (basis_ != SigmaBasis::kModel || !cached(theta)) return 0.0;
+  const std::vector<double> s = sigma_at(last_m_);
+  double change = 0.0;
+  for (size_t i = 0; i < s.size(); ++i) change = std::max(change, std::abs(s[i] / sigma_[i] - 1.0));
+  sigma_ = s;
+  weigh(last_m_, &last_dm_, last_r_.data(), last_J_.data());
+  return change;
+}
+
+std::vector<double> ExperimentCost::sigma_at(const std::vector<double>& m) const {
+  const auto& d = model_->data();
+  std::vector<double> s(m.size());
+  for (size_t i = 0; i < m.size(); ++i) {
+    const double base = basis_ == SigmaBasis::kModel ? m[i] : d[i];
+    s[i] = model_->sigma_abs(i) > 0 ? model_->sigma_abs(i) : model_->sigma_rel(i) * std::max(std::abs(base), 1e-300);
+  }
+  return s;
+}
+
+void ExperimentCost::weigh(const std::vector<double>& m, const std::vector<double>* dm, double* r, double* J) const {
+  const auto& d = model_->data();
+  for (size_t i = 0; i < m.size(); ++i) r[i] = (m[i] - d[i]) / sigma_[i];
+  if (J)
+    for (size_t i = 0; i < m.size(); ++i)
+      for (int k = 0; k < n_; ++k) J[i * n_ + k] = (*dm)[i * n_ + k] / sigma_[i];
+}
+
+}  // namespace granuflow::calib
