@@ -127,6 +127,20 @@ void ode_err(int code, const char* module, const char* function, char* msg, void
   static_cast<OdeUser*>(ud)->last_error = std::string(module) + "." + function + ": " + msg;
 }
 
+// The integrator's current time, y' there and its error weights (the first n of n_vec components).
+template <class Time, class Dky, class Weights>
+double last_state(void* mem, SUNContext ctx, int n_vec, int n, Time time, Dky dky, Weights weights_of, double* yp,
+                  double* weights) {
+  realtype t = 0;
+  time(mem, &t);
+  NVec d(n_vec, ctx), w(n_vec, ctx);
+  dky(mem, t, 1, d.v);
+  weights_of(mem, w.v);
+  std::copy(d.data(), d.data() + n, yp);
+  std::copy(w.data(), w.data() + n, weights);
+  return t;
+}
+
 class Cvode : public OdeIntegrator {
  public:
   Cvode(SUNContext ctx, OdeUser& u, bool bdf, const SimOptions& opt, double t0, const double* y0,
@@ -233,37 +247,14 @@ class Cvode : public OdeIntegrator {
       for (int k = 0; k < ns_; ++k) qS[k].assign(N_VGetArrayPointer(qS_[k]), N_VGetArrayPointer(qS_[k]) + u_.nq);
     }
   }
-  long steps() const override {
-    long v = 0;
-    CVodeGetNumSteps(mem_, &v);
-    return v + done_.steps;
-  }
-  void add_stats(SolverStats& s) const override {
-    SolverStats c = done_;
-    add_current(c);
-    add_counts(s, c);
-  }
-  std::string flag_text(int flag) const override {
-    char* name = CVodeGetReturnFlagName(flag);
-    std::string s = name ? name : "CVODE error";
-    free(name);
-    return s;
-  }
+  std::string flag_text(int flag) const override { return flag_name(CVodeGetReturnFlagName(flag), "CVODE error"); }
   bool too_much_work(int flag) const override { return flag == CV_TOO_MUCH_WORK; }
   double failed_state(double* yp, double* weights) const override {
-    realtype t = 0;
-    CVodeGetCurrentTime(mem_, &t);
-    NVec d(u_.n, ctx_), w(u_.n, ctx_);
-    CVodeGetDky(mem_, t, 1, d.v);
-    CVodeGetErrWeights(mem_, w.v);
-    std::copy(d.data(), d.data() + u_.n, yp);
-    std::copy(w.data(), w.data() + u_.n, weights);
-    return t;
+    return last_state(mem_, ctx_, u_.n, u_.n, CVodeGetCurrentTime, CVodeGetDky, CVodeGetErrWeights, yp, weights);
   }
 
  private:
-  // CVodeReInit zeroes the counters: keep what each stretch did.
-  void add_current(SolverStats& s) const {
+  void add_current(SolverStats& s) const override {
     long v = 0;
     CVodeGetNumSteps(mem_, &v), s.steps += v;
     if (bdf_) CVodeGetNumLinSolvSetups(mem_, &v), s.linear_setups += v;
@@ -276,7 +267,6 @@ class Cvode : public OdeIntegrator {
       CVodeGetNumLinConvFails(mem_, &v), s.linear_failures += v;
     }
   }
-  void bank_counts() { add_current(done_); }
 
   OdeUser& u_;
   SUNContext ctx_;
@@ -289,7 +279,6 @@ class Cvode : public OdeIntegrator {
   int ns_ = 0;
   N_Vector* yS_ = nullptr;
   N_Vector* qS_ = nullptr;
-  SolverStats done_;
 };
 
 // Dormand-Prince 5(4) with ARKODE's adaptive step; quadratures appended to the state.
@@ -327,47 +316,24 @@ class Erk : public OdeIntegrator {
   }
   void quadratures(double, double* q) override { std::copy(y_.data() + u_.n, y_.data() + u_.n + u_.nq, q); }
   void sensitivities(double, std::vector<std::vector<double>>&, std::vector<std::vector<double>>&) override {}
-  long steps() const override {
-    long v = 0;
-    ERKStepGetNumSteps(mem_, &v);
-    return v + done_.steps;
-  }
-  void add_stats(SolverStats& s) const override {
-    SolverStats c = done_;
-    add_current(c);
-    add_counts(s, c);
-  }
-  std::string flag_text(int flag) const override {
-    char* name = ERKStepGetReturnFlagName(flag);
-    std::string s = name ? name : "ARKODE error";
-    free(name);
-    return s;
-  }
+  std::string flag_text(int flag) const override { return flag_name(ERKStepGetReturnFlagName(flag), "ARKODE error"); }
   bool too_much_work(int flag) const override { return flag == ARK_TOO_MUCH_WORK; }
   double failed_state(double* yp, double* weights) const override {
-    realtype t = 0;
-    ERKStepGetCurrentTime(mem_, &t);
-    NVec d(u_.n + u_.nq, ctx_), w(u_.n + u_.nq, ctx_);
-    ERKStepGetDky(mem_, t, 1, d.v);
-    ERKStepGetErrWeights(mem_, w.v);
-    std::copy(d.data(), d.data() + u_.n, yp);
-    std::copy(w.data(), w.data() + u_.n, weights);
-    return t;
+    return last_state(mem_, ctx_, u_.n + u_.nq, u_.n, ERKStepGetCurrentTime, ERKStepGetDky, ERKStepGetErrWeights, yp,
+                      weights);
   }
 
  private:
-  void add_current(SolverStats& s) const {
+  void add_current(SolverStats& s) const override {
     long v = 0;
     ERKStepGetNumSteps(mem_, &v), s.steps += v;
     ERKStepGetNumErrTestFails(mem_, &v), s.error_test_failures += v;
   }
-  void bank_counts() { add_current(done_); }
 
   OdeUser& u_;
   SUNContext ctx_;
   NVec y_, atol_;
   void* mem_ = nullptr;
-  SolverStats done_;
 };
 
 }  // namespace

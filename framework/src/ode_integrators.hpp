@@ -8,6 +8,7 @@
 
 #include "granuflow/simulator.hpp"
 #include "solver_setup.hpp"
+#include "stepper.hpp"
 
 namespace granuflow::detail {
 
@@ -42,12 +43,21 @@ class OdeIntegrator {
   virtual int advance(double tout, double* y, double* t) = 0;
   virtual void quadratures(double t, double* q) = 0;
   virtual void sensitivities(double t, std::vector<std::vector<double>>& yS, std::vector<std::vector<double>>& qS) = 0;
-  virtual long steps() const = 0;
-  virtual void add_stats(SolverStats& s) const = 0;
+  // Adds the counts of every stretch between restarts (a restart zeroes the integrator's own) to s.
+  void add_stats(SolverStats& s) const {
+    SolverStats c = done_;
+    add_current(c);
+    add_counts(s, c);
+  }
   virtual std::string flag_text(int flag) const = 0;
   virtual bool too_much_work(int flag) const = 0;
   // After a failure: the current time, y' there (interpolated) and the error weights, each of the n unknowns.
   virtual double failed_state(double* yp, double* weights) const = 0;
+
+ protected:
+  virtual void add_current(SolverStats& s) const = 0;  // the counts since the last restart
+  void bank_counts() { add_current(done_); }           // before a restart
+  SolverStats done_;
 };
 
 // CVODES: BDF (Newton: dense, sparse or GMRES as the OdeUser says) or Adams (fixed-point iteration); ARKODE's

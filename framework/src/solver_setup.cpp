@@ -23,12 +23,13 @@ void make_linear_solver(bool dense, const DaeSystem& sys, N_Vector y, SUNContext
   }
 }
 
-std::string ida_flag_text(int flag) {
-  const char* name = IDAGetReturnFlagName(flag);
-  std::string s = name ? name : "IDA error";
-  free(const_cast<char*>(name));
+std::string flag_name(char* name, const char* fallback) {
+  std::string s = name ? name : fallback;
+  free(name);
   return s;
 }
+
+std::string ida_flag_text(int flag) { return flag_name(IDAGetReturnFlagName(flag), "IDA error"); }
 
 void set_sparse_pattern(const SparsityPattern& pat, SUNMatrix J) {
   sunindextype* cp = SUNSparseMatrix_IndexPointers(J);

@@ -59,6 +59,8 @@ enum class LinearSolverKind { kDense, kSparse, kGmres };
 LinearSolverKind choose_linear_solver(const Flowsheet& fs, LinearSolverChoice choice, int dense_limit);
 const char* linear_solver_name(LinearSolverKind k);
 inline constexpr int kGmresMaxKrylov = 20;  // Krylov dimension (no restarts)
+// SUNDIALS' name of a return flag from a *GetReturnFlagName call (which hands the string to the caller), or fallback.
+std::string flag_name(char* name, const char* fallback);
 std::string ida_flag_text(int flag);
 void check(int flag, const char* call);  // throws on a negative SUNDIALS flag
 // The flowsheet's sparsity pattern into a compressed-column SUNMatrix (column pointers and row indices; SUNDIALS

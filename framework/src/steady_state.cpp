@@ -451,12 +451,7 @@ void stability(SteadySystem& s, const std::vector<double>& y, size_t conserved, 
   r.imag_of_max = std::abs(top->imag());
 }
 
-std::string kin_flag_text(int flag) {
-  char* name = KINGetReturnFlagName(flag);
-  std::string s = name ? name : "KINSOL error";
-  free(name);
-  return s;
-}
+std::string kin_flag_text(int flag) { return flag_name(KINGetReturnFlagName(flag), "KINSOL error"); }
 
 // Names the unit with the largest residual at the last iterate (if the residual itself throws there, the solver
 // failure is still what the caller gets).
