@@ -111,7 +111,8 @@ FvGrowth::Stencil FvGrowth::stencil(int f, bool upward) const {
 // The one loop over the faces: phi_f from the cell densities rho (upwind by the sign of G_f, or all upward), the
 // donors, and with kDerivatives d phi_f / d N of the (up to) three cells (flux_jacobian). Upward, the faces whose
 // donor has neighbours on both sides (2 .. n - 1) are one vector loop without tests; the others (nothing through the
-// bottom face, first order next to the ends) take the same face_density through their stencil.
+// bottom face, first order next to the ends) go through their stencil, or, upward without derivatives, take the
+// donor's density directly (what their stencil gives).
 template <class T, Limiter L, bool kUpward, bool kDerivatives>
 void FvGrowth::face_densities(const T* rho, const T* G, T* phi, int* donor, FaceDerivatives* dphi) const {
   const int n = n_, nf = n_ + 1;
