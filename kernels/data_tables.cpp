@@ -67,14 +67,33 @@ int CollisionCounts::class_of(double d) const {
   return static_cast<int>(std::upper_bound(edges.begin(), edges.end(), d) - edges.begin()) - 1;
 }
 
-CollisionCounts parse_collision_counts(const std::string& text, const std::string& path) {
-  auto fail = [&](int row, int col, const std::string& what) -> ConfigError {
+namespace {
+constexpr const char* kCollisionKeys = "dt_s, edges_m, particles, counts";
+
+// A collision file's rows: the single rows dt_s, edges_m and particles by key, and the counts rows in order.
+struct CollisionRows {
+  std::string path;
+  std::map<std::string, Line> single;
+  std::vector<Line> counts;
+  ConfigError fail(int row, int col, const std::string& what) const {
     return ConfigError(path + ": row " + std::to_string(row) + (col > 0 ? ", column " + std::to_string(col) : "") +
                        ": " + what);
-  };
-  static const char* kKeys = "dt_s, edges_m, particles, counts";
-  std::map<std::string, Line> single;  // dt_s, edges_m, particles
-  std::vector<Line> count_rows;
+  }
+  // Field k of line l as a finite number.
+  double number(const Line& l, size_t k) const {
+    const std::string& f = l.fields[k];
+    char* end = nullptr;
+    errno = 0;
+    const double v = f.empty() ? NAN : std::strtod(f.c_str(), &end);
+    if (f.empty() || *end != '\0' || errno == ERANGE || !std::isfinite(v))
+      throw fail(l.row, static_cast<int>(k) + 1, "'" + f + "' is not a finite number");
+    return v;
+  }
+};
+
+CollisionRows collision_rows(const std::string& text, const std::string& path) {
+  CollisionRows r;
+  r.path = path;
   std::istringstream in(text);
   std::string raw;
   int row = 0;
@@ -89,100 +108,109 @@ CollisionCounts parse_collision_counts(const std::string& text, const std::strin
     if (s.back() == ',') line.fields.emplace_back();
     const std::string key = line.fields.front();
     if (key == "counts") {
-      count_rows.push_back(std::move(line));
+      r.counts.push_back(std::move(line));
     } else if (key == "dt_s" || key == "edges_m" || key == "particles") {
-      if (single.count(key))
-        throw fail(row, 1, "'" + key + "' given twice (first on row " + std::to_string(single[key].row) + ")");
-      single[key] = std::move(line);
+      if (r.single.count(key))
+        throw r.fail(row, 1, "'" + key + "' given twice (first on row " + std::to_string(r.single[key].row) + ")");
+      r.single[key] = std::move(line);
     } else {
-      throw fail(row, 1, "unknown key '" + key + "' (expected one of " + kKeys + ")");
+      throw r.fail(row, 1, "unknown key '" + key + "' (expected one of " + kCollisionKeys + ")");
     }
   }
   for (const char* key : {"dt_s", "edges_m", "particles"})
-    if (!single.count(key))
-      throw ConfigError(path + ": no '" + key + "' row (a collision file has the rows " + kKeys +
+    if (!r.single.count(key))
+      throw ConfigError(path + ": no '" + key + "' row (a collision file has the rows " + kCollisionKeys +
                         "; docs/dem_collisions.md)");
-  if (count_rows.empty()) throw ConfigError(path + ": no 'counts' rows (one per class; docs/dem_collisions.md)");
+  if (r.counts.empty()) throw ConfigError(path + ": no 'counts' rows (one per class; docs/dem_collisions.md)");
+  return r;
+}
 
-  auto number = [&](const Line& l, size_t k) {
-    const std::string& f = l.fields[k];
-    char* end = nullptr;
-    errno = 0;
-    const double v = f.empty() ? NAN : std::strtod(f.c_str(), &end);
-    if (f.empty() || *end != '\0' || errno == ERANGE || !std::isfinite(v))
-      throw fail(l.row, static_cast<int>(k) + 1, "'" + f + "' is not a finite number");
-    return v;
-  };
-  CollisionCounts c;
-  c.path = path;
-  const Line& dt = single["dt_s"];
+// The counting window, the class edges and the particle numbers.
+void read_classes(CollisionRows& r, CollisionCounts& c) {
+  const Line& dt = r.single["dt_s"];
   if (dt.fields.size() != 2)
-    throw fail(dt.row, 0,
-               "dt_s takes one value (the counting window in s), got " + std::to_string(dt.fields.size() - 1));
-  c.dt = number(dt, 1);
-  if (!(c.dt > 0)) throw fail(dt.row, 2, "dt_s = " + fmt_num(c.dt) + " s: the counting window must be > 0");
+    throw r.fail(dt.row, 0,
+                 "dt_s takes one value (the counting window in s), got " + std::to_string(dt.fields.size() - 1));
+  c.dt = r.number(dt, 1);
+  if (!(c.dt > 0)) throw r.fail(dt.row, 2, "dt_s = " + fmt_num(c.dt) + " s: the counting window must be > 0");
 
-  const Line& ed = single["edges_m"];
+  const Line& ed = r.single["edges_m"];
   if (ed.fields.size() < 3)
-    throw fail(ed.row, 0,
-               "edges_m needs at least two class edges (diameters in m), got " + std::to_string(ed.fields.size() - 1));
+    throw r.fail(
+        ed.row, 0,
+        "edges_m needs at least two class edges (diameters in m), got " + std::to_string(ed.fields.size() - 1));
   for (size_t k = 1; k < ed.fields.size(); ++k) {
-    const double e = number(ed, k);
-    if (!(e > 0)) throw fail(ed.row, static_cast<int>(k) + 1, "edge " + fmt_num(e) + " m: diameters must be > 0");
+    const double e = r.number(ed, k);
+    if (!(e > 0)) throw r.fail(ed.row, static_cast<int>(k) + 1, "edge " + fmt_num(e) + " m: diameters must be > 0");
     if (!c.edges.empty() && !(e > c.edges.back()))
-      throw fail(ed.row, static_cast<int>(k) + 1,
-                 "edge " + fmt_num(e) + " m after " + fmt_num(c.edges.back()) + " m: edges must increase");
+      throw r.fail(ed.row, static_cast<int>(k) + 1,
+                   "edge " + fmt_num(e) + " m after " + fmt_num(c.edges.back()) + " m: edges must increase");
     c.edges.push_back(e);
   }
   const size_t n = c.edges.size() - 1;
 
-  const Line& pa = single["particles"];
+  const Line& pa = r.single["particles"];
   if (pa.fields.size() != n + 1)
-    throw fail(pa.row, 0,
-               std::to_string(pa.fields.size() - 1) + " particle numbers for " + std::to_string(n) +
-                   " classes (edges_m on row " + std::to_string(ed.row) + " gives " + std::to_string(n + 1) +
-                   " edges)");
+    throw r.fail(pa.row, 0,
+                 std::to_string(pa.fields.size() - 1) + " particle numbers for " + std::to_string(n) +
+                     " classes (edges_m on row " + std::to_string(ed.row) + " gives " + std::to_string(n + 1) +
+                     " edges)");
   for (size_t k = 1; k <= n; ++k) {
-    const double f = number(pa, k);
+    const double f = r.number(pa, k);
     if (!(f >= 0))
-      throw fail(pa.row, static_cast<int>(k) + 1, "particles " + fmt_num(f) + ": a particle number must be >= 0");
+      throw r.fail(pa.row, static_cast<int>(k) + 1, "particles " + fmt_num(f) + ": a particle number must be >= 0");
     c.particles.push_back(f);
   }
+}
 
+// The n x n counts: one row per class, symmetric, none for a class without particles.
+void read_counts(CollisionRows& r, CollisionCounts& c) {
+  const size_t n = c.edges.size() - 1;
+  const std::vector<Line>& count_rows = r.counts;
   if (count_rows.size() != n)
-    throw fail(count_rows.back().row, 0,
-               std::to_string(count_rows.size()) + " 'counts' rows for " + std::to_string(n) +
-                   " classes (one row per class, edges_m on row " + std::to_string(ed.row) + ")");
+    throw r.fail(count_rows.back().row, 0,
+                 std::to_string(count_rows.size()) + " 'counts' rows for " + std::to_string(n) +
+                     " classes (one row per class, edges_m on row " + std::to_string(r.single["edges_m"].row) + ")");
   c.counts.assign(n * n, 0.0);
   for (size_t i = 0; i < n; ++i) {
     const Line& l = count_rows[i];
     if (l.fields.size() != n + 1)
-      throw fail(l.row, 0,
-                 std::to_string(l.fields.size() - 1) + " counts for " + std::to_string(n) + " classes (class " +
-                     std::to_string(i + 1) + "'s row of the n x n matrix)");
+      throw r.fail(l.row, 0,
+                   std::to_string(l.fields.size() - 1) + " counts for " + std::to_string(n) + " classes (class " +
+                       std::to_string(i + 1) + "'s row of the n x n matrix)");
     for (size_t j = 0; j < n; ++j) {
-      const double v = number(l, j + 1);
+      const double v = r.number(l, j + 1);
       if (!(v >= 0))
-        throw fail(l.row, static_cast<int>(j) + 2, "count " + fmt_num(v) + ": collision counts must be >= 0");
+        throw r.fail(l.row, static_cast<int>(j) + 2, "count " + fmt_num(v) + ": collision counts must be >= 0");
       c.counts[i * n + j] = v;
     }
   }
+  const int pa_row = r.single["particles"].row;
   for (size_t i = 0; i < n; ++i)
     for (size_t j = 0; j < n; ++j) {
       const double a = c.counts[i * n + j], b = c.counts[j * n + i];
       if (j > i && std::abs(a - b) > 1e-9 * std::max(std::abs(a), std::abs(b)))
-        throw fail(count_rows[i].row, static_cast<int>(j) + 2,
-                   "count " + fmt_num(a) + " for classes " + std::to_string(i + 1) + " x " + std::to_string(j + 1) +
-                       " differs from " + fmt_num(b) + " on row " + std::to_string(count_rows[j].row) + ", column " +
-                       std::to_string(i + 2) + ": the matrix must be symmetric");
+        throw r.fail(count_rows[i].row, static_cast<int>(j) + 2,
+                     "count " + fmt_num(a) + " for classes " + std::to_string(i + 1) + " x " + std::to_string(j + 1) +
+                         " differs from " + fmt_num(b) + " on row " + std::to_string(count_rows[j].row) + ", column " +
+                         std::to_string(i + 2) + ": the matrix must be symmetric");
       if (a > 0 && (c.particles[i] == 0 || c.particles[j] == 0)) {
         const size_t e = c.particles[i] == 0 ? i : j;
-        throw fail(count_rows[i].row, static_cast<int>(j) + 2,
-                   "count " + fmt_num(a) + " for classes " + std::to_string(i + 1) + " x " + std::to_string(j + 1) +
-                       ", but class " + std::to_string(e + 1) + " has no particles (row " + std::to_string(pa.row) +
-                       ", column " + std::to_string(e + 2) + ")");
+        throw r.fail(count_rows[i].row, static_cast<int>(j) + 2,
+                     "count " + fmt_num(a) + " for classes " + std::to_string(i + 1) + " x " + std::to_string(j + 1) +
+                         ", but class " + std::to_string(e + 1) + " has no particles (row " + std::to_string(pa_row) +
+                         ", column " + std::to_string(e + 2) + ")");
       }
     }
+}
+}  // namespace
+
+CollisionCounts parse_collision_counts(const std::string& text, const std::string& path) {
+  CollisionRows rows = collision_rows(text, path);
+  CollisionCounts c;
+  c.path = path;
+  read_classes(rows, c);
+  read_counts(rows, c);
   return c;
 }
 

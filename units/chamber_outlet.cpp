@@ -62,14 +62,11 @@ class ChamberOutlet : public UnitBase<ChamberOutlet> {
     if (spec_.wet) flows(n, r, frac, c.port_array(in_, holdup_fields::water(n, 0), n, scratch), &c.x(sW_), &c.res(sW_));
     return Status::kOk;
   }
-  // res_i = x_i - r f_i h_i (f_i = 1 without a classifier): plain array loops for the flows of one field.
+  // res_i = x_i - r f_i h_i (f_i = 1 without a classifier) for the flows of one field.
   template <class T>
   static void flows(int n, const T& r, const T* frac, const T* h, const T* x, T* res) {
-    if (frac) {
-      for (int i = 0; i < n; ++i) res[i] = x[i] - r * frac[i] * h[i];
-    } else {
-      for (int i = 0; i < n; ++i) res[i] = x[i] - r * h[i];
-    }
+    outlet_flows(n, r, frac, h, res);
+    for (int i = 0; i < n; ++i) res[i] = x[i] - res[i];
   }
   template <class T>
   void init(InitCtx<T>& c) const {  // evaluated inline; these only fill a run without inlining's first guess

@@ -34,4 +34,15 @@ struct ChamberOutletSpec {
 
 std::unique_ptr<Unit> make_chamber_outlet(const std::string& owner, ChamberOutletSpec spec);
 
+// The flows out[i] = r f_i h_i of one field (dry solids or water) through an outlet (f_i = 1 without a classifier):
+// plain array loops, written once for the outlet and for the chamber's own balances.
+template <class T>
+void outlet_flows(int n, const T& r, const T* frac, const T* h, T* out) {
+  if (frac) {
+    for (int i = 0; i < n; ++i) out[i] = r * frac[i] * h[i];
+  } else {
+    for (int i = 0; i < n; ++i) out[i] = r * h[i];
+  }
+}
+
 }  // namespace granuflow::units

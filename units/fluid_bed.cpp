@@ -78,7 +78,15 @@ class FluidBed : public UnitBase<FluidBed> {
     p_betn_ = s.add_param({"bet_n", "-", def::kBetN, 1.0, 100.0, "BET n, Eq. (81)", t8});
     p_dv_ = s.add_param({"D_v", "m2/s", def::kVapourDiffusivity, 1e-7, 1e-3, "vapour diffusivity", t6});
     p_lambda_ = s.add_param({"lambda_g", "W/(m K)", def::kGasConductivity, 1e-3, 1.0, "gas thermal conductivity", t6});
+    declare_population(s, st);
+    const bool discharge = declare_states(s, st);
+    declare_ports(s, discharge);
+    declare_structure(s);
+    declare_outputs(s);
+  }
 
+ private:
+  void declare_population(UnitSpec& s, Settings& st) {
     // Aggregation, breakage (and growth) by the population engine, each kernel with its own parameter table under
     // its own names (ln_beta0, k_break ...). Paper 001: glass-transition kernel on the fixed pivot, Vogel-Peukert
     // breakage with tanh power-law fragments, aggregates beyond the grid kept in the top class (fold).
@@ -99,7 +107,10 @@ class FluidBed : public UnitBase<FluidBed> {
                           std::string(kernels::field_name(f)));
     if (pop_.needs().number)
       throw ConfigError(st.where() + ": kernels that read particle numbers are not supported in the fluid bed");
+  }
 
+  // The states; with a discharge also its parameter and rate state. Returns whether the bed discharges.
+  bool declare_states(UnitSpec& s, Settings& st) {
     // Tolerance scales of the class inventories are those of the whole bed (about 10 kg solids, 0.5 kg water):
     // an emptied class needs no more absolute accuracy than the bed it belongs to.
     sM_ = s.add_states("M", n_, StateKind::Differential, "kg", 10.0);
@@ -120,7 +131,10 @@ class FluidBed : public UnitBase<FluidBed> {
                              "discharge rate: fraction of the hold-up leaving per second", "operating input"});
       sRate_ = s.add_state("discharge_rate", StateKind::Algebraic, "1/s", 1e-3);
     }
+    return discharge;
+  }
 
+  void declare_ports(UnitSpec& s, bool discharge) {
     const std::vector<double>& d = grid_->diameter_pivots();
     wet_ = s.add_port("wetting", paper001::wetting_stream(), PortDir::In, n_, true);
     s.set_port_grid(wet_, d);
@@ -153,7 +167,9 @@ class FluidBed : public UnitBase<FluidBed> {
     }
     s.provide(probe, holdup::T(n_), sT_);
     s.provide(probe, holdup::u0(n_), sU0_);
+  }
 
+  void declare_structure(UnitSpec& s) {
     // Class structure for the Jacobian: class rows and columns M_i, W_i and the spray zone's per-class fields; the
     // bed-wide quantities read the classes through sums.
     ClassLayout layout{n_,
@@ -172,7 +188,9 @@ class FluidBed : public UnitBase<FluidBed> {
     r_feed_ = s.add_reduction("solids fed");
     r_feed_water_ = s.add_reduction("water fed");
     s.set_analytic_part();  // the population balance's terms (engine)
+  }
 
+  void declare_outputs(UnitSpec& s) {
     for (const char* o : {"d10", "d50", "d90", "d5", "d16", "d25", "d75", "d84", "d95"})
       o_quantiles_.push_back(s.add_output(o, "m"));
     o_moisture_ = s.add_output("moisture", "kg/kg");
@@ -188,6 +206,7 @@ class FluidBed : public UnitBase<FluidBed> {
     std::tie(o_psd_d_, o_psd_m_) = s.add_size_distribution(n_);
   }
 
+ public:
   std::unique_ptr<Workspace> workspace() const override {
     auto w = std::make_unique<Work>();
     w->pop = pop_.make_work();

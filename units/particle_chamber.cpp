@@ -3,17 +3,13 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
-#include <tuple>
 #include <type_traits>
 
 #include "chamber_outlet.hpp"
-#include "granuflow/errors.hpp"
 #include "granuflow/flowsheet.hpp"
 #include "granuflow/properties.hpp"
 #include "kernels/discretization/psd.hpp"
-#include "kernels/paper001_defaults.hpp"
 #include "kernels/particle_geometry.hpp"
-#include "kernels/registry.hpp"
 
 namespace granuflow::units {
 
@@ -27,9 +23,11 @@ struct ParticleChamber::Work : Workspace {
   template <class T>
   struct Scratch {
     std::vector<T> pm, spm, N, floor, dM, dW, dN, F, ones, temp, in_m, in_w, gather;
+    std::vector<T> om[kOutlets], ow[kOutlets];  // per outlet the flows of each class, solids and water (outflows())
     std::vector<int> donor;
     void resize(int n) {
       for (auto* v : {&pm, &spm, &N, &floor, &dM, &dW, &dN, &temp, &in_m, &in_w}) v->assign(n, T(0.0));
+      for (int k = 0; k < kOutlets; ++k) om[k].assign(n, T(0.0)), ow[k].assign(n, T(0.0));  // dry: ow stays 0
       F.assign(n + 1, T(0.0)), ones.assign(n + 1, T(1.0)), donor.assign(n + 1, -1);
     }
   };
@@ -69,171 +67,6 @@ constexpr double kValveSmoothing = 1e-3;  // eps = kValveSmoothing M_set / tau_c
 }  // namespace
 
 std::string ParticleChamber::type() const { return role_type(role_); }
-
-void ParticleChamber::declare(UnitSpec& s, Settings& st) {
-  const ParticleSystem& ps = particle_system(s, st);
-  pp_ = ps.params();
-  grid_ = ps.grid();
-  n_ = grid_->size();
-  const std::string p3 = "paper 003, section 7.5", op = "operating input", init = "initial state (user)";
-  spray_ = role_ != ChamberRole::kDryingZone;
-  if (role_ == ChamberRole::kGranulator)
-    spray_ = st.get_choice("spray", "layering", {"layering", "none"},
-                           "layering growth from the spray (paper 003, Eq. (7.33)) or no spray (a drying or "
-                           "residence-time segment)") == "layering";
-  wet_ = st.get_choice("drying", "none", {"none", "first_order"},
-                       "water on the particles: none (sprayed and fed water evaporates at once) or per-class water "
-                       "drying at (W - X_eq M) / tau_dry") == "first_order";
-  if (wet_) require_water(ps, st, "drying: first_order keeps per-class water on the particles");
-  if (role_ != ChamberRole::kSprayZone) {
-    const std::string d = st.get_choice("discharge", role_ == ChamberRole::kGranulator ? "unclassified" : "none",
-                                        {"none", "unclassified", "classified"},
-                                        "product discharge: none (batch), well mixed, or classified by a separation "
-                                        "curve (a sifter or counter-current discharge tube)");
-    discharge_ = d == "none" ? Discharge::kNone : d == "classified" ? Discharge::kClassified : Discharge::kUnclassified;
-    if (discharge_ != Discharge::kNone)
-      controlled_ = st.get_choice("bed_mass", "free", {"free", "controlled"},
-                                  "hold-up: free (discharge rate k_discharge per second) or held at M_set by the "
-                                  "discharge (ideal level controller)") == "controlled";
-  }
-  p_mass_ = s.add_param(
-      {"bed_mass", "kg", role_ == ChamberRole::kSprayZone ? 0.08 : 4.0, 0.0, 1e5, "initial dry solids hold-up", init});
-  p_d50_ = s.add_param({"d50_0", "m", 1.8e-3, 1e-7, 1.0, "initial mass median diameter (log-normal in mass)", init});
-  p_sigma_ = s.add_param({"sigma_0", "-", 1.15, 1.001, 10.0, "initial geometric standard deviation", init});
-  p_t_ = s.add_param({"T_bed", "K", 353.15, 250.0, 700.0, "bed temperature (held by the gas)", "paper 003, Table 7.7"});
-  p_cpl_ = s.add_param({"cp_l", "J/(kg K)", kernels::paper001::defaults::kLiquidCp, 100.0, 1e4,
-                        "heat capacity of water and spray liquid", "paper 001, Table 6"});
-  if (spray_) {
-    p_spray_ = s.add_param({"m_spray", "kg/s", 112e-3 / 60.0, 0.0, 1e3, "spray liquid mass flow",
-                            "paper 003, Table 7.7 (100 ml/min at an assumed 1.12 kg/L)"});
-    p_w_ = s.add_param(
-        {"w_spray", "kg/kg", 0.3, 0.0, 1.0, "solids mass fraction of the spray liquid", "paper 003, Table 7.7"});
-    p_tspray_ = s.add_param({"T_spray", "K", 293.15, 250.0, 400.0, "spray liquid temperature", op});
-  }
-  if (wet_) {
-    p_x0_ = s.add_param({"X0", "kg/kg", 0.0, 0.0, 10.0, "initial moisture, dry basis", init});
-    p_taudry_ = s.add_param({"tau_dry", "s", 60.0, 1e-3, 1e7, "drying time constant of the particle water", op});
-    p_xeq_ = s.add_param({"X_eq", "kg/kg", 0.0, 0.0, 1.0, "equilibrium moisture, dry basis", op});
-  }
-  if (role_ != ChamberRole::kGranulator)
-    p_tau_ = s.add_param({"tau", "s", role_ == ChamberRole::kSprayZone ? 4.0 : 196.0, 1e-3, 1e7,
-                          "mean residence time of a particle in this compartment, Eqs. (7.37)-(7.39)",
-                          "paper 003, Table 7.7"});
-  if (discharge_ != Discharge::kNone && !controlled_)
-    p_k_ = s.add_param({"k_discharge", "1/s", 1e-3, 0.0, 10.0,
-                        discharge_ == Discharge::kClassified
-                            ? "discharge rate of the particles the classifier passes: fraction per second"
-                            : "discharge rate: fraction of the hold-up leaving per second",
-                        op});
-  if (controlled_) {
-    p_mset_ = s.add_param({"M_set", "kg", 4.0, 1e-6, 1e5, "set point of the dry bed mass", op});
-    p_tauc_ = s.add_param(
-        {"tau_c", "s", 60.0, 1e-3, 1e6, "time constant of the discharge controller's correction (M - M_set)", op});
-    p_rmax_ = s.add_param({"mdot_max", "kg/s", 1e3, 1e-9, 1e6, "capacity of the discharge (valve fully open)", op});
-  }
-  if (discharge_ == Discharge::kClassified)
-    classifier_.declare(s, st, "classifier", "plitt", "class_", "separation curve of the classifying discharge", grid_,
-                        1e-3);
-
-  // Aggregation and breakage by the engine (growth is the unit's own layering); particles leaving the grid stay
-  // in the end classes.
-  kernels::PopulationOptions o;
-  o.growth = "";
-  o.outside = kernels::Outside::kFold;
-  if (wet_) o.properties = {"water"};
-  pop_.declare(s, st, grid_, o);
-  if (pop_.outside() != kernels::Outside::kFold)
-    throw ConfigError(st.where() +
-                      ".outside = remove: a chamber keeps particles leaving the grid in its end classes "
-                      "(outside: fold), so that its balances close");
-  for (int f = 0; f < kernels::kFields; ++f)
-    if (static_cast<Field>(f) != Field::kTemperature && pop_.needs().field(static_cast<Field>(f)))
-      throw ConfigError(st.where() + ": the chamber supplies its kernels the bed temperature only, not the " +
-                        std::string(kernels::field_name(static_cast<Field>(f))));
-  if (pop_.needs().number)
-    throw ConfigError(st.where() + ": kernels that read particle numbers are not supported in the chamber units");
-  if (spray_) {
-    const auto& reg = kernels::registries().growth_schemes;
-    fv_ = reg.create(st.get_choice("growth_scheme", "fv_van_albada", reg.names(),
-                                   "finite-volume scheme of the layering (fv_van_albada: smooth, for the integrator)"),
-                     st.where());
-    fv_->setup(*grid_);
-  }
-
-  sM_ = s.add_states("M", n_, StateKind::Differential, "kg", 1.0);
-  if (wet_) sW_ = s.add_states("W", n_, StateKind::Differential, "kg", 0.1);
-  sT_ = s.add_state("T", StateKind::Algebraic, "K", 300.0);
-  if (!wet_) sZero_ = s.add_state("water_out", StateKind::Algebraic, "kg/s", 1e-3);  // dry outlets carry none
-  const auto& d = grid_->diameter_pivots();
-  auto inlet = [&](const std::string& name, bool optional) {
-    const PortId p = s.add_port(name, streams::solids(), PortDir::In, n_, optional);
-    s.set_port_grid(p, d);
-    inlets_.push_back(p);
-  };
-  auto outlet = [&](const std::string& name, Outlet& o) {
-    o.rate = s.add_state(name + "_rate", StateKind::Algebraic, "1/s", 1e-3);
-    o.holdup = s.add_port(name + "_holdup", chamber_holdup(), PortDir::Out, n_);
-    s.set_port_grid(o.holdup, d);
-    for (int i = 0; i < n_; ++i) {
-      s.provide(o.holdup, holdup_fields::mass(i), sM_ + i);
-      s.provide(o.holdup, holdup_fields::water(n_, i), wet_ ? sW_ + i : sZero_);
-    }
-    s.provide(o.holdup, holdup_fields::T(n_), sT_);
-    s.provide(o.holdup, holdup_fields::rate(n_), o.rate);
-    ChamberOutletSpec spec{n_, wet_,
-                           &o == &discharge_out_ && discharge_ == Discharge::kClassified ? &classifier_ : nullptr, d};
-    s.add_companion(
-        {name, [spec](const std::string& owner) { return make_chamber_outlet(owner, spec); }, o.holdup, name});
-  };
-  if (role_ != ChamberRole::kGranulator) {
-    inlet("in", false);
-    outlet("out", exchange_);
-  }
-  if (role_ != ChamberRole::kSprayZone) inlet("feed", true);
-  if (discharge_ != Discharge::kNone) outlet("discharge", discharge_out_);
-
-  ClassLayout layout{n_, {sM_}, {}};
-  if (wet_) layout.state_blocks.push_back(sW_);
-  for (PortId p : inlets_) {
-    layout.field_blocks.push_back({p, solids::mdot(0)});
-    if (wet_) layout.field_blocks.push_back({p, solids::water(n_, 0)});
-  }
-  s.set_classes(layout);
-  if (controlled_) {
-    r_mass_ = s.add_reduction("hold-up");
-    if (discharge_ == Discharge::kClassified) r_tm_ = s.add_reduction("classifier-weighted hold-up");
-    r_in_ = s.add_reduction("solids fed");
-  }
-  if (spray_ && wet_) r_surface_ = s.add_reduction("particle surface");
-  if (spray_ || pop_.aggregation() || pop_.breakage()) s.set_analytic_part();  // layering and the engine
-
-  if (spray_) {
-    q_solids_in_ = s.add_quadrature("balance_solids_in", "kg", 1.0, OutputRole::kBalanceIn, "solids");
-    q_water_in_ = s.add_quadrature("balance_water_in", "kg", 1.0, OutputRole::kBalanceIn, "water");
-  }
-  q_water_out_ = s.add_quadrature("balance_water_out", "kg", 1.0, OutputRole::kBalanceOut, "water");
-  q_energy_in_ = s.add_quadrature("balance_energy_in", "J", 1e6, OutputRole::kBalanceIn, "energy");
-  q_energy_out_ = s.add_quadrature("balance_energy_out", "J", 1e6, OutputRole::kBalanceOut, "energy");
-  o_mass_ = s.add_output("mass", "kg");
-  if (wet_) o_moisture_ = s.add_output("moisture", "kg/kg");
-  o_d_[0] = s.add_output("d10", "m");
-  o_d_[1] = s.add_output("d50", "m");
-  o_d_[2] = s.add_output("d90", "m");
-  o_d32_ = s.add_output("d32", "m");
-  o_dmean_ = s.add_output("d_mean", "m");
-  o_sigma_ = s.add_output("sigma", "m");
-  if (spray_) o_g_ = s.add_output("G", "m/s");
-  o_particles_ = s.add_output("particles", "-");
-  if (discharge_ != Discharge::kNone) o_dis_ = s.add_output("discharge_mdot", "kg/s");
-  if (exchange_.rate) o_exch_ = s.add_output("exchange_mdot", "kg/s");
-  o_top_ = s.add_output("top_class_fraction", "-", OutputRole::kGridEnd);
-  o_heat_ = s.add_output("heat_duty", "W");
-  o_vapour_ = s.add_output("vapour_mdot", "kg/s");
-  o_hold_solids_ = s.add_output("balance_solids_hold", "kg", OutputRole::kBalanceHold, "solids");
-  o_hold_water_ = s.add_output("balance_water_hold", "kg", OutputRole::kBalanceHold, "water");
-  o_hold_energy_ = s.add_output("balance_energy_hold", "J", OutputRole::kBalanceHold, "energy");
-  std::tie(o_psd_d_, o_psd_m_) = s.add_size_distribution(n_);
-}
 
 std::unique_ptr<Workspace> ParticleChamber::workspace() const {
   auto w = std::make_unique<Work>();
@@ -344,11 +177,16 @@ const T* ParticleChamber::discharge_fractions(const Ctx<T>& c) const {
   return classifier_.fractions(c.p, c.template ws<Work>().cls);
 }
 
-// What class i carries out through outlet `o`: the flows the outlet's companion computes (chamber_outlet.cpp).
 template <class T>
-std::pair<T, T> ParticleChamber::outlet_flow(const Ctx<T>& c, const Outlet& o, const T* frac, int i) const {
-  const T r = frac ? T(c.x(o.rate) * frac[i]) : c.x(o.rate);
-  return {r * c.x(sM_ + i), wet_ ? T(r * c.x(sW_ + i)) : T(0.0)};
+void ParticleChamber::outflows(const Ctx<T>& c, const T* frac) const {
+  auto& sc = c.template ws<Work>().template scratch<T>();
+  for (int k = 0; k < kOutlets; ++k) {
+    const Outlet& o = outlet(k);
+    if (!o.rate) continue;
+    const T* f = &o == &discharge_out_ ? frac : nullptr;
+    outlet_flows(n_, c.x(o.rate), f, &c.x(sM_), sc.om[k].data());
+    if (wet_) outlet_flows(n_, c.x(o.rate), f, &c.x(sW_), sc.ow[k].data());
+  }
 }
 
 template <class T>
@@ -392,6 +230,7 @@ Status ParticleChamber::eval(const Ctx<T>& c) const {
     c.res(exchange_.rate) = c.x(exchange_.rate) - exch_rate;
   }
   const T* frac = discharge_fractions(c);
+  outflows(c, frac);
   // What the inlets bring per class, read once: the controller sums it and every class row uses it.
   inlet_flows(c, sc.in_m.data(), sc.in_w.data(), sc.gather);
   if (discharge_ != Discharge::kNone) {
@@ -418,11 +257,8 @@ Status ParticleChamber::eval(const Ctx<T>& c) const {
   for (int i = 0; i < n_; ++i) {
     const T &in_m = sc.in_m[i], &in_w = sc.in_w[i];
     T out_m(0.0), out_w(0.0);
-    for (const Outlet* o : {&exchange_, &discharge_out_}) {
-      if (!o->rate) continue;
-      const auto [m, wo] = outlet_flow(c, *o, o == &discharge_out_ ? frac : nullptr, i);
-      out_m += m, out_w += wo;
-    }
+    for (int k = 0; k < kOutlets; ++k)
+      if (outlet(k).rate) out_m += sc.om[k][i], out_w += sc.ow[k][i];
     c.res(sM_ + i) = c.xd(sM_ + i) - (sc.dM[i] + in_m - out_m);
     if (wet_) {
       // sprayed water lands in proportion to the class surface; first-order drying towards X_eq
@@ -551,18 +387,18 @@ void ParticleChamber::outputs(const Ctx<T>& c) const {
   if (spray_)  // Eq. (7.33), paper 003, with mu_2 of the class pivots
     c.out(o_g_) = any ? T(2.0 * spray_solids(c) / (pp_.envelope_density(c.shared) * kernels::kPi * mu[2])) : T(0.0);
   c.out(o_particles_) = mu[0];
-  auto outflow = [&](const Outlet& o, const T* frac) {
+  const Boundary<T> b = boundary(c);  // and the outflows, read below
+  auto outflow = [&](int k) {
     T m(0.0);
-    for (int i = 0; i < n_; ++i) m += outlet_flow(c, o, frac, i).first;
+    for (int i = 0; i < n_; ++i) m += sc.om[k][i];
     return m;
   };
-  if (discharge_out_.rate) c.out(o_dis_) = outflow(discharge_out_, discharge_fractions(c));
-  if (exchange_.rate) c.out(o_exch_) = outflow(exchange_, static_cast<const T*>(nullptr));
+  if (discharge_out_.rate) c.out(o_dis_) = outflow(1);
+  if (exchange_.rate) c.out(o_exch_) = outflow(0);
   c.out(o_top_) = mass > 0.0 ? T(M[n_ - 1] / mass) : T(0.0);
   c.out(o_hold_solids_) = mass;
   c.out(o_hold_water_) = water;
   c.out(o_hold_energy_) = (mass * c.sh(pp_.cp_s) + water * c.par(p_cpl_)) * (c.x(sT_) - props::kT0);
-  const Boundary<T> b = boundary(c);
   c.out(o_heat_) = b.energy_in - b.h_spray;
   c.out(o_vapour_) = b.vapour;
   for (int i = 0; i < n_; ++i) {
@@ -579,7 +415,8 @@ ParticleChamber::Boundary<T> ParticleChamber::boundary(const Ctx<T>& c) const {
   const T cp_s = c.sh(pp_.cp_s), cp_l = c.par(p_cpl_);
   const T& t = c.x(sT_);
   T vapour(0.0), h_in(0.0), h_out(0.0), dh(0.0), capacity(0.0);
-  const T* frac = discharge_fractions(c);
+  outflows(c, discharge_fractions(c));
+  const auto& sc = c.template ws<Work>().template scratch<T>();
   for (int i = 0; i < n_; ++i) {
     const T wi = wet_ ? c.x(sW_ + i) : T(0.0);
     capacity += c.x(sM_ + i) * cp_s + wi * cp_l;
@@ -590,11 +427,8 @@ ParticleChamber::Boundary<T> ParticleChamber::boundary(const Ctx<T>& c) const {
       h_in += (c.port(p, solids::mdot(i)) * cp_s + wf * cp_l) * (c.port(p, solids::T(n_)) - props::kT0);
       if (!wet_) vapour += wf;  // fed water evaporates at once
     }
-    for (const Outlet* o : {&exchange_, &discharge_out_}) {
-      if (!o->rate) continue;
-      const auto [m, wo] = outlet_flow(c, *o, o == &discharge_out_ ? frac : nullptr, i);
-      h_out += (m * cp_s + wo * cp_l) * (t - props::kT0);
-    }
+    for (int k = 0; k < kOutlets; ++k)
+      if (outlet(k).rate) h_out += (sc.om[k][i] * cp_s + sc.ow[k][i] * cp_l) * (t - props::kT0);
   }
   dh += capacity * c.xd(sT_);
   Boundary<T> b;

@@ -31,7 +31,6 @@
 #pragma once
 #include <memory>
 #include <string>
-#include <utility>
 #include <vector>
 
 #include "classifier.hpp"
@@ -71,17 +70,31 @@ class ParticleChamber : public UnitBase<ParticleChamber> {
     PortId holdup;  // what the outlet's companion reads: the hold-up and the rate
     StateId rate;   // 1/s: class i leaves at rate * f_i (f_i: the classifier's fractions, or 1)
   };
+  // The declarations, in their order: settings, parameters, the population engine and the growth scheme, states
+  // and ports (with the outlets' companions), the Jacobian's class structure and reductions, outputs.
+  void declare_options(const ParticleSystem& ps, Settings& st);
+  void declare_params(UnitSpec& s, Settings& st);
+  void declare_mechanisms(UnitSpec& s, Settings& st);
+  void declare_states_and_ports(UnitSpec& s);
+  void declare_structure(UnitSpec& s);
+  void declare_outputs(UnitSpec& s);
+  // The outlets in a fixed order (exchange, discharge): index k of the outflow arrays of the workspace.
+  static constexpr int kOutlets = 2;
+  const Outlet& outlet(int k) const { return k == 0 ? exchange_ : discharge_out_; }
   template <class T>
   const T* discharge_fractions(const Ctx<T>& c) const;  // nullptr unless the discharge classifies
+  // Every outlet's flows per class, solids r_i M_i and water r_i W_i (the same operations as the outlet's companion,
+  // chamber_outlet.hpp), once per evaluation into the workspace's arrays om[k], ow[k] that the balances (eval), the
+  // outputs and the boundary terms read.
   template <class T>
-  std::pair<T, T> outlet_flow(const Ctx<T>& c, const Outlet& o, const T* frac, int i) const;  // solids, water
+  void outflows(const Ctx<T>& c, const T* frac) const;
   // What crosses the flowsheet's boundary in this unit per second (quad(), outputs()).
   template <class T>
   struct Boundary {
     T water_in, vapour, h_spray, h_vapour, energy_in;
   };
   template <class T>
-  Boundary<T> boundary(const Ctx<T>& c) const;
+  Boundary<T> boundary(const Ctx<T>& c) const;  // computes the outflows (outflows()) for its caller too
   template <class T>
   T spray_solids(const Ctx<T>& c) const;
   template <class T>

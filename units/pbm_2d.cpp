@@ -108,7 +108,17 @@ class Pbm2D : public UnitBase<Pbm2D> {
                           "initial state (user); paper 002 starts dry"});
     p_rho_l_ = s.add_param(
         {"rho_l", "kg/m3", 1000.0, 100.0, 5000.0, "liquid density (masses of Eq. (14))", "binder as water (user)"});
+    declare_mechanisms(s, st);
+    Population2DOptions o;
+    pop_.declare(s, st, grid_, o);
+    declare_psd_classes(st, *solid, l_max);
+    declare_states(s, *solid, number_scale);
+    declare_outputs(s);
+  }
 
+ private:
+  // Spray and drying: their settings and parameters.
+  void declare_mechanisms(UnitSpec& s, Settings& st) {
     spray_ = st.get_choice("spray", "none", {"none", "droplets"},
                            "liquid addition: none, or droplets absorbed whole by one particle each (paper 002, "
                            "section 3.2)") == "droplets";
@@ -131,15 +141,15 @@ class Pbm2D : public UnitBase<Pbm2D> {
       p_dry_ = s.add_param({"dry_flux", "m/s", 1e-7, 0.0, 1.0,
                             "liquid volume evaporated per surface area and time (constant-rate period)",
                             "paper 000, section 2.2 (constant-rate drying); value: user"});
+  }
 
-    Population2DOptions o;
-    pop_.declare(s, st, grid_, o);
-
+  // The size classes of Eq. (14) and the class of each bin.
+  void declare_psd_classes(Settings& st, const kernels::Grid& solid, double l_max) {
     const long npsd = st.get_int("psd_classes", 20, 2, 1000, "size classes of Eq. (14), log-spaced in diameter");
-    const double dmin = st.get_real("psd_d_min", solid->diameter_edges().front(), 1e-9, 1.0,
+    const double dmin = st.get_real("psd_d_min", solid.diameter_edges().front(), 1e-9, 1.0,
                                     "lowest edge of the size classes of Eq. (14), m");
     const double dmax =
-        st.get_real("psd_d_max", diameter_of_volume(solid->edges().back() + l_max), 1e-9, 1.0,
+        st.get_real("psd_d_max", diameter_of_volume(solid.edges().back() + l_max), 1e-9, 1.0,
                     "highest edge of the size classes of Eq. (14), m (default: top solid edge plus liquid_max)");
     if (!(dmax > dmin))
       throw ConfigError(
@@ -152,14 +162,16 @@ class Pbm2D : public UnitBase<Pbm2D> {
       int k = static_cast<int>(std::upper_bound(psd_edges_.begin(), psd_edges_.end(), d) - psd_edges_.begin()) - 1;
       psd_class_[a] = std::clamp(k, 0, static_cast<int>(npsd) - 1);  // Eq. (14): end classes take the tails
     }
+  }
 
+  void declare_states(UnitSpec& s, const kernels::Grid& solid, double number_scale) {
     for (int i = 0; i < ns_; ++i)
       for (int j = 0; j < nl_; ++j) {
         const StateId id =
             s.add_state("N_" + std::to_string(i) + "_" + std::to_string(j), StateKind::Differential, "-", number_scale);
         if (i == 0 && j == 0) sN_ = id;
       }
-    const double s_mid = solid->pivot(ns_ / 2), l_mid = grid_->liquid(nl_ / 2 + 1);
+    const double s_mid = solid.pivot(ns_ / 2), l_mid = grid_->liquid(nl_ / 2 + 1);
     if (pop_.aggregation() || spray_) {
       s_out_[kOut2Number] = s.add_accumulator("number_left", "-", number_scale);
       s_out_[kOut2Solid] = s.add_accumulator("solid_left", "m3", number_scale * s_mid);
@@ -169,7 +181,9 @@ class Pbm2D : public UnitBase<Pbm2D> {
     n_states_ = static_cast<int>(s.states().size());
     s.set_analytic_part(true);
     s.set_preconditioner();
+  }
 
+  void declare_outputs(UnitSpec& s) {
     if (spray_) q_sprayed_ = s.add_quadrature("liquid_sprayed", "kg", 1e-3, OutputRole::kBalanceIn, "water");
     o_number_ = s.add_output("number", "-");
     o_davg_ = s.add_output("D_avg", "m");
@@ -201,6 +215,7 @@ class Pbm2D : public UnitBase<Pbm2D> {
     }
   }
 
+ public:
   std::unique_ptr<Workspace> workspace() const override {
     auto w = std::make_unique<Work>();
     w->pop = pop_.make_work();

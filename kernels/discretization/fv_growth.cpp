@@ -1,6 +1,8 @@
 #include "discretization/fv_growth.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <type_traits>
 #include <vector>
 
 namespace granuflow::kernels {
@@ -9,7 +11,7 @@ namespace {
 // Koren's limited slope (Koren 1993) from the downwind jump a and the upwind jump b (both scaled to the cell width):
 // the kappa = 1/3 reconstruction (2a + b)/3, third-order upwind-biased where the solution is smooth, limited to
 // min(2|a|, 2|b|) with the common sign and 0 at extrema; da, db its derivatives.
-template <class T, bool kDerivatives = true>
+template <class T>
 T koren(const T& a, const T& b, double& da, double& db) {
   da = db = 0.0;
   if (!(a * b > 0.0)) return T(0.0);
@@ -28,17 +30,50 @@ T koren(const T& a, const T& b, double& da, double& db) {
   return 2.0 * a;
 }
 
-// van Albada's slope ab (a + b) / (a^2 + b^2) from the same jumps, and its derivatives.
-template <class T, bool kDerivatives = true>
+// van Albada's slope ab (a + b) / (a^2 + b^2) from the same jumps (0 where a = b = 0), and with kDerivatives its
+// derivatives; a select, so that the loop over the faces stays a vector loop for doubles.
+template <class T, bool kDerivatives>
 T van_albada(const T& a, const T& b, double& da, double& db) {
   const double av = value_of(a), bv = value_of(b), q = av * av + bv * bv;
   da = db = 0.0;
-  if (!(q > 0.0)) return T(0.0);
-  if constexpr (!kDerivatives) return a * b * (a + b) / (a * a + b * b);
-  const double num = av * bv * (av + bv);
-  da = (bv * (2.0 * av + bv) * q - 2.0 * av * num) / (q * q);
-  db = (av * (av + 2.0 * bv) * q - 2.0 * bv * num) / (q * q);
-  return a * b * (a + b) / (a * a + b * b);
+  if constexpr (kDerivatives) {
+    if (q > 0.0) {
+      const double num = av * bv * (av + bv);
+      da = (bv * (2.0 * av + bv) * q - 2.0 * av * num) / (q * q);
+      db = (av * (av + 2.0 * bv) * q - 2.0 * bv * num) / (q * q);
+    }
+  }
+  return q > 0.0 ? T(a * b * (a + b) / (a * a + b * b)) : T(0.0);
+}
+
+// The density at a face whose donor (density nd) has neighbours on both sides (densities n_down towards the face,
+// n_up away from it): nd plus half the limiter's slope of the jumps scaled by cd and cu; nd itself without a limiter.
+// Every path of the scheme computes a face's density here, with the same operations in the same order.
+template <Limiter L, bool kDerivatives, class T>
+inline T face_density(const T& nd, const T& n_down, const T& n_up, double cd, double cu, double& da, double& db) {
+  da = db = 0.0;
+  if constexpr (L == Limiter::kNone) {
+    return nd;
+  } else {
+    const T a = (n_down - nd) * cd, b = (nd - n_up) * cu;
+    if constexpr (L == Limiter::kKoren)
+      return nd + 0.5 * koren(a, b, da, db);
+    else
+      return nd + 0.5 * van_albada<T, kDerivatives>(a, b, da, db);
+  }
+}
+
+// f(std::integral_constant<Limiter, L>) for the run-time limiter l: the scheme's paths are templates on it.
+template <class F>
+decltype(auto) with_limiter(Limiter l, F&& f) {
+  switch (l) {
+    case Limiter::kKoren:
+      return f(std::integral_constant<Limiter, Limiter::kKoren>{});
+    case Limiter::kVanAlbada:
+      return f(std::integral_constant<Limiter, Limiter::kVanAlbada>{});
+    default:
+      return f(std::integral_constant<Limiter, Limiter::kNone>{});
+  }
 }
 
 }  // namespace
@@ -56,44 +91,90 @@ void FvGrowth::setup(const Grid& g) {
     if (i > 0) cminus_[i] = width_[i] / (centre[i] - centre[i - 1]);
   }
   dx_face_.resize(n_ + 1);
-  for (int f = 0; f <= n_; ++f) dx_face_[f] = g.pivot_ext(f) - g.pivot_ext(f - 1);
+  for (int f = 0; f < n_ + 1; ++f) dx_face_[f] = g.pivot_ext(f) - g.pivot_ext(f - 1);
 }
 
-template <class T, bool kDerivatives, class Dens>
-FvGrowth::Face<T> FvGrowth::face(Dens dens, int f, bool upward) const {
-  Face<T> r{T(0.0), {-1, -1, -1}, {0, 0, 0}};
+FvGrowth::Stencil FvGrowth::stencil(int f, bool upward) const {
+  Stencil s;
   // Donor cell and the neighbours downwind (towards the face) and upwind; mirrored for downward growth.
-  const int donor = upward ? f - 1 : f;
-  if (donor < 0 || donor >= n_) return r;  // inflow through the boundary: none
-  const int down = upward ? donor + 1 : donor - 1, up = upward ? donor - 1 : donor + 1;
-  const T nd = dens(donor);
-  r.phi = nd;
-  r.cols[0] = donor;
-  r.d[0] = 1.0 / width_[donor];
-  if (limiter_ == Limiter::kNone || down < 0 || down >= n_ || up < 0 || up >= n_) return r;
-  const double cd = upward ? cplus_[donor] : cminus_[donor], cu = upward ? cminus_[donor] : cplus_[donor];
-  const T a = (dens(down) - nd) * cd, b = (nd - dens(up)) * cu;
-  double da, db;
-  r.phi += 0.5 * (limiter_ == Limiter::kKoren ? koren<T, kDerivatives>(a, b, da, db)
-                                              : van_albada<T, kDerivatives>(a, b, da, db));
-  if constexpr (!kDerivatives) return r;
-  // phi = nd + sigma(a, b)/2, a = (n_down - nd) cd, b = (nd - n_up) cu
-  r.cols[1] = down, r.cols[2] = up;
-  r.d[0] += 0.5 * (-da * cd + db * cu) / width_[donor];
-  r.d[1] = 0.5 * da * cd / width_[down];
-  r.d[2] = -0.5 * db * cu / width_[up];
+  s.donor = upward ? f - 1 : f;
+  if (s.donor < 0 || s.donor >= n_) {  // inflow through the boundary: none
+    s.donor = -1;
+    return s;
+  }
+  s.down = upward ? s.donor + 1 : s.donor - 1, s.up = upward ? s.donor - 1 : s.donor + 1;
+  s.full = limiter_ != Limiter::kNone && s.down >= 0 && s.down < n_ && s.up >= 0 && s.up < n_;
+  s.cd = upward ? cplus_[s.donor] : cminus_[s.donor], s.cu = upward ? cminus_[s.donor] : cplus_[s.donor];
+  return s;
+}
+
+// The one loop over the faces: phi_f from the cell densities rho (upwind by the sign of G_f, or all upward), the
+// donors, and with kDerivatives d phi_f / d N of the (up to) three cells (flux_jacobian). Upward, the faces whose
+// donor has neighbours on both sides (2 .. n - 1) are one vector loop without tests; the others (nothing through the
+// bottom face, first order next to the ends) go through their stencil, or, upward without derivatives, take the
+// donor's density directly (what their stencil gives).
+template <class T, Limiter L, bool kUpward, bool kDerivatives>
+void FvGrowth::face_densities(const T* rho, const T* G, T* phi, int* donor, FaceDerivatives* dphi) const {
+  const int n = n_, nf = n_ + 1;
+  auto one = [&](int f) {
+    const Stencil s = stencil(f, kUpward || !(G[f] < 0.0));
+    donor[f] = s.donor;
+    double da = 0.0, db = 0.0;
+    if (s.donor < 0)
+      phi[f] = T(0.0);
+    else if (!s.full)
+      phi[f] = rho[s.donor];
+    else
+      phi[f] = face_density<L, kDerivatives>(rho[s.donor], rho[s.down], rho[s.up], s.cd, s.cu, da, db);
+    if constexpr (kDerivatives) dphi[f] = derivatives(s, da, db);
+  };
+  const int lo = kUpward ? std::min(2, nf) : nf, hi = kUpward ? std::max(lo, n) : nf;
+  if constexpr (kUpward && !kDerivatives) {  // faces 0, 1 and n: none through the bottom, first order at the ends
+    phi[0] = T(0.0), donor[0] = -1;
+    for (int f = 1; f < lo; ++f) phi[f] = rho[f - 1], donor[f] = f - 1;
+  } else {
+    for (int f = 0; f < lo; ++f) one(f);
+  }
+  if constexpr (kUpward) {
+    const double *cp = cplus_.data(), *cm = cminus_.data();
+    for (int f = lo; f < hi; ++f) donor[f] = f - 1;
+    for (int f = lo; f < hi; ++f) {  // the vector loop
+      double da, db;
+      phi[f] = face_density<L, kDerivatives>(rho[f - 1], rho[f], rho[f - 2], cp[f - 1], cm[f - 1], da, db);
+      if constexpr (kDerivatives) dphi[f] = derivatives(stencil(f, true), da, db);
+    }
+  }
+  for (int f = hi; f < nf; ++f) {
+    if constexpr (kUpward && !kDerivatives)
+      phi[f] = rho[f - 1], donor[f] = f - 1;
+    else
+      one(f);
+  }
+}
+
+// phi = nd + sigma(a, b)/2, a = (n_down - nd) cd, b = (nd - n_up) cu, n_k = N_k / w_k
+FvGrowth::FaceDerivatives FvGrowth::derivatives(const Stencil& s, double da, double db) const {
+  FaceDerivatives r{{-1, -1, -1}, {0.0, 0.0, 0.0}};
+  if (s.donor < 0) return r;
+  r.cols[0] = s.donor;
+  r.d[0] = 1.0 / width_[s.donor];
+  if (!s.full) return r;
+  r.cols[1] = s.down, r.cols[2] = s.up;
+  r.d[0] += 0.5 * (-da * s.cd + db * s.cu) / width_[s.donor];
+  r.d[1] = 0.5 * da * s.cd / width_[s.down];
+  r.d[2] = -0.5 * db * s.cu / width_[s.up];
   return r;
 }
 
-template <class T, class Phi>
-void FvGrowth::term_scales(const GrowthTerms<T>& g, Phi phi, TermScale<T>* ts) const {
+template <class T>
+void FvGrowth::term_scales(const GrowthTerms<T>& g, const T* phi, TermScale<T>* ts) const {
   const int nf = n_ + 1;
   for (int k = 0; k < g.terms; ++k) {
     ts[k] = {T(g.amount[k]), T(0.0), true};
     if (!g.normalized) continue;
     const T* s = g.shape + size_t(k) * nf;
     T integral(0.0);
-    for (int f = 0; f < nf; ++f) integral += s[f] * phi(f) * dx_face_[f];
+    for (int f = 0; f < nf; ++f) integral += s[f] * phi[f] * dx_face_[f];
     if (!(integral > 0.0)) {  // no particles to grow on
       ts[k] = {T(0.0), T(0.0), false};
       continue;
@@ -103,131 +184,78 @@ void FvGrowth::term_scales(const GrowthTerms<T>& g, Phi phi, TermScale<T>* ts) c
   }
 }
 
+// G(d_f) = sum over the growing terms of scale_k s_k(d_f), added in the terms' order: term by term over the faces.
 template <class T>
-T FvGrowth::rate_at(const GrowthTerms<T>& g, const TermScale<T>* ts, int f) const {
+void FvGrowth::growth_rates(const GrowthTerms<T>& g, const TermScale<T>* ts, T* G) const {
   const int nf = n_ + 1;
-  T G(0.0);
-  for (int k = 0; k < g.terms; ++k)
-    if (ts[k].grows) G += ts[k].value * g.shape[size_t(k) * nf + f];
-  return G;
-}
-
-template <class T>
-void FvGrowth::growth_at_faces(const std::vector<Face<T>>& fc, const GrowthTerms<T>& g, std::vector<T>& G,
-                               std::vector<T>& inv_integral) const {
-  const int nf = n_ + 1;
-  std::vector<TermScale<T>> ts(g.terms);
-  term_scales(
-      g, [&](int f) { return fc[f].phi; }, ts.data());
-  G.resize(nf);
-  for (int f = 0; f < nf; ++f) G[f] = rate_at(g, ts.data(), f);
-  inv_integral.resize(g.terms);
-  for (int k = 0; k < g.terms; ++k) inv_integral[k] = ts[k].inv;
-}
-
-template <class T>
-void FvGrowth::faces_and_growth(const T* N, const GrowthTerms<T>& g, std::vector<Face<T>>& fc, std::vector<T>& G,
-                                std::vector<T>& inv_integral) const {
-  const int nf = n_ + 1;
-  fc.resize(nf);
-  auto dens = [this, N](int k) -> T { return N[k] / width_[k]; };
-  if (g.normalized) {
-    // Volume-normalized laws grow (a_k >= 0, s_k >= 0): upwind from below.
-    for (int f = 0; f < nf; ++f) fc[f] = face<T, true>(dens, f, true);
-    growth_at_faces(fc, g, G, inv_integral);
-  } else {
-    growth_at_faces(fc, g, G, inv_integral);  // phi is not needed for absolute laws
-    for (int f = 0; f < nf; ++f) fc[f] = face<T, true>(dens, f, !(G[f] < 0.0));
+  std::fill(G, G + nf, T(0.0));
+  for (int k = 0; k < g.terms; ++k) {
+    if (!ts[k].grows) continue;
+    const T v = ts[k].value, *s = g.shape + size_t(k) * nf;
+    for (int f = 0; f < nf; ++f) G[f] += v * s[f];
   }
 }
 
-// The residual's path: face values only (the derivatives d[] serve flux_jacobian alone) and no work arrays, F
-// holding the face densities until the growth rates are known; the same operations in the same order as
-// faces_and_growth, so both paths agree to the bit.
-template <class T>
-T FvGrowth::flux_values(const T* N, const GrowthTerms<T>& g, T* F, int* donor) const {
-  const int nf = n_ + 1;
+// The scheme, for doubles and Jets and every limiter: the cell densities, the face densities (into F) and the growth
+// rates G (normalized laws: from the face densities; absolute laws: first, as they pick the upwind side), then
+// F = G phi. With `jac` (doubles), also what flux_jacobian reads: the face densities, their derivatives and 1 / I_k.
+template <class T, Limiter L>
+T FvGrowth::flux_values(const T* N, const GrowthTerms<T>& g, T* F, int* donor, std::vector<T>& G,
+                        JacobianParts* jac) const {
+  const int n = n_, nf = n_ + 1;
+  thread_local std::vector<T> rho;
+  rho.resize(n), G.resize(nf);
+  for (int k = 0; k < n; ++k) rho[k] = N[k] / width_[k];
   constexpr int kTerms = 4;  // the terms' scales of up to this many on the stack
   TermScale<T> stack[kTerms];
   std::vector<TermScale<T>> heap(g.terms > kTerms ? g.terms : 0);
   TermScale<T>* ts = g.terms > kTerms ? heap.data() : stack;
-  if (g.normalized) {
-    // Each cell's density once, into F (nf > n); then the faces from the top down, each written over a cell that no
-    // lower face reads (face f reads cells f - 2 to f).
-    for (int k = 0; k < n_; ++k) F[k] = N[k] / width_[k];
-    for (int f = nf - 1; f >= 0; --f) {
-      const Face<T> fc = face<T, false>([F](int k) -> T { return F[k]; }, f, true);
-      F[f] = fc.phi, donor[f] = fc.cols[0];
-    }
-    term_scales(
-        g, [&](int f) { return F[f]; }, ts);
-    for (int f = 0; f < nf; ++f) F[f] = rate_at(g, ts, f) * F[f];
+  FaceDerivatives* d = nullptr;
+  if (jac) jac->dphi.resize(nf), d = jac->dphi.data();
+  auto faces = [&](auto upward) {
+    if (d)
+      face_densities<T, L, decltype(upward)::value, true>(rho.data(), G.data(), F, donor, d);
+    else
+      face_densities<T, L, decltype(upward)::value, false>(rho.data(), G.data(), F, donor, d);
+  };
+  if (g.normalized) {  // volume-normalized laws grow (a_k >= 0, s_k >= 0): upwind from below
+    faces(std::true_type{});
+    term_scales(g, F, ts);
+    growth_rates(g, ts, G.data());
   } else {
-    term_scales(
-        g, [](int) { return T(0.0); }, ts);  // absolute laws read no face density
-    for (int f = 0; f < nf; ++f) {
-      const T G = rate_at(g, ts, f);
-      const Face<T> fc = face<T, false>([this, N](int k) -> T { return N[k] / width_[k]; }, f, !(G < 0.0));
-      F[f] = G * fc.phi, donor[f] = fc.cols[0];
+    term_scales(g, static_cast<const T*>(nullptr), ts);  // absolute laws read no face density
+    growth_rates(g, ts, G.data());
+    faces(std::false_type{});
+  }
+  if constexpr (std::is_same_v<T, double>) {
+    if (jac) {
+      jac->phi.assign(F, F + nf);
+      jac->inv.resize(g.terms);
+      for (int k = 0; k < g.terms; ++k) jac->inv[k] = ts[k].inv;
     }
   }
+  for (int f = 0; f < nf; ++f) F[f] = G[f] * F[f];
   T W(0.0);
   for (int f = 0; f < nf; ++f) W += F[f] * dx_face_[f];
   return W;
 }
 
-// flux_values for doubles and a volume-normalized law with a smooth or no limiter (layering): the face densities
-// from an array of cell densities in one vector loop over the interior faces, the rates term by term over the faces.
-// Per face the same operations in the same order as flux_values (van_albada's a b (a + b) / (a^2 + b^2) with its
-// q = a^2 + b^2 test, nd + 0.5 sigma, G = 0 + the growing terms in order, F = G phi), so both paths agree to the bit.
-double FvGrowth::normalized_fluxes(const double* N, const GrowthTerms<double>& g, double* F, int* donor) const {
-  const int n = n_, nf = n_ + 1;
-  thread_local std::vector<double> rho, G;
-  rho.resize(n), G.resize(nf);
-  for (int k = 0; k < n; ++k) rho[k] = N[k] / width_[k];
-  F[0] = 0.0, donor[0] = -1;  // inflow through the bottom face: none
-  for (int f = 1; f < nf; ++f) F[f] = rho[f - 1], donor[f] = f - 1;
-  if (limiter_ == Limiter::kVanAlbada && n >= 3) {
-    const double *r = rho.data(), *cp = cplus_.data(), *cm = cminus_.data();
-    for (int f = 2; f < n; ++f) {  // faces with cells on both sides of the donor f - 1
-      const double nd = r[f - 1];
-      const double a = (r[f] - nd) * cp[f - 1], b = (nd - r[f - 2]) * cm[f - 1];
-      const double q = a * a + b * b;
-      const double sigma = q > 0.0 ? a * b * (a + b) / (a * a + b * b) : 0.0;
-      F[f] = nd + 0.5 * sigma;
-    }
-  }
-  constexpr int kTerms = 4;
-  TermScale<double> stack[kTerms];
-  std::vector<TermScale<double>> heap(g.terms > kTerms ? g.terms : 0);
-  TermScale<double>* ts = g.terms > kTerms ? heap.data() : stack;
-  term_scales(
-      g, [&](int f) { return F[f]; }, ts);
-  std::fill(G.begin(), G.end(), 0.0);
-  for (int k = 0; k < g.terms; ++k) {
-    if (!ts[k].grows) continue;
-    const double v = ts[k].value, *s = g.shape + size_t(k) * nf;
-    for (int f = 0; f < nf; ++f) G[f] += v * s[f];
-  }
-  for (int f = 0; f < nf; ++f) F[f] = G[f] * F[f];
-  double W = 0.0;
-  for (int f = 0; f < nf; ++f) W += F[f] * dx_face_[f];
-  return W;
-}
-
 double FvGrowth::fluxes(const double* N, const GrowthTerms<double>& g, double* F, int* donor) const {
-  if (g.normalized && limiter_ != Limiter::kKoren) return normalized_fluxes(N, g, F, donor);
-  return flux_values(N, g, F, donor);
+  thread_local std::vector<double> G;
+  return with_limiter(limiter_, [&](auto L) { return flux_values<double, L.value>(N, g, F, donor, G, nullptr); });
 }
 Jet FvGrowth::fluxes(const Jet* N, const GrowthTerms<Jet>& g, Jet* F, int* donor) const {
-  return flux_values(N, g, F, donor);
+  thread_local std::vector<Jet> G;
+  return with_limiter(limiter_, [&](auto L) { return flux_values<Jet, L.value>(N, g, F, donor, G, nullptr); });
 }
 
 void FvGrowth::flux_jacobian(const double* N, const GrowthTerms<double>& g, double* dF) const {
   const int n = n_, nf = n_ + 1;
-  std::vector<Face<double>> fc;
-  std::vector<double> G, inv;
-  faces_and_growth(N, g, fc, G, inv);
+  JacobianParts x;
+  std::vector<double> G, F(nf);
+  std::vector<int> donor(nf);
+  with_limiter(limiter_, [&](auto L) { flux_values<double, L.value>(N, g, F.data(), donor.data(), G, &x); });
+  const std::vector<FaceDerivatives>& fc = x.dphi;
   // dF_f/dN_l = G_f dphi_f/dN_l + phi_f dG_f/dN_l; the second term only for normalized laws, where
   // dG_f/dN_l = -sum_k a_k s_kf / I_k^2 dI_k/dN_l and dI_k/dN_l = sum_f' s_kf' dx_f' dphi_f'/dN_l.
   std::fill(dF, dF + size_t(nf) * n, 0.0);
@@ -237,15 +265,15 @@ void FvGrowth::flux_jacobian(const double* N, const GrowthTerms<double>& g, doub
   if (g.normalized) {
     std::vector<double> dI(n);
     for (int k = 0; k < g.terms; ++k) {
-      if (inv[k] == 0.0) continue;
+      if (x.inv[k] == 0.0) continue;
       const double* s = g.shape + size_t(k) * nf;
       std::fill(dI.begin(), dI.end(), 0.0);
       for (int f = 0; f < nf; ++f)
         for (int c = 0; c < 3; ++c)
           if (fc[f].cols[c] >= 0) dI[fc[f].cols[c]] += s[f] * dx_face_[f] * fc[f].d[c];
-      const double coef = -g.amount[k] * inv[k] * inv[k];
+      const double coef = -g.amount[k] * x.inv[k] * x.inv[k];
       for (int f = 0; f < nf; ++f) {
-        const double w = coef * s[f] * fc[f].phi;
+        const double w = coef * s[f] * x.phi[f];
         if (w == 0.0) continue;
         double* row = &dF[size_t(f) * n];
         for (int l = 0; l < n; ++l) row[l] += w * dI[l];

@@ -53,38 +53,41 @@ class FvGrowth {
   const std::vector<double>& face_volume_steps() const { return dx_face_; }  // x_f - x_{f-1}, virtual pivots at ends
 
  private:
-  // Face density and its derivatives with respect to the (up to) three cells around the donor.
-  template <class T>
-  struct Face {
-    T phi;
-    int cols[3];
-    double d[3];  // d phi / d N_col (double path only)
+  // A face's cells: the donor (-1: nothing crosses the boundary inward), its neighbours downwind (towards the face)
+  // and upwind, the slope normalizations towards them, and whether both neighbours exist and a limiter is used.
+  struct Stencil {
+    int donor = -1, down = -1, up = -1;
+    double cd = 0.0, cu = 0.0;
+    bool full = false;
   };
-  // dens(k): the number density N_k / w_k of cell k.
-  template <class T, bool kDerivatives, class Dens>
-  Face<T> face(Dens dens, int f, bool upward) const;
-  // Face densities (upwind by the sign of G) and the growth rates at the faces, shared by rates and Jacobian.
-  template <class T>
-  void faces_and_growth(const T* N, const GrowthTerms<T>& g, std::vector<Face<T>>& fc, std::vector<T>& G,
-                        std::vector<T>& inv_integral) const;
-  template <class T>
-  T flux_values(const T* N, const GrowthTerms<T>& g, T* F, int* donor) const;
-  double normalized_fluxes(const double* N, const GrowthTerms<double>& g, double* F, int* donor) const;
-  template <class T>
-  void growth_at_faces(const std::vector<Face<T>>& fc, const GrowthTerms<T>& g, std::vector<T>& G,
-                       std::vector<T>& inv_integral) const;
+  Stencil stencil(int f, bool upward) const;
+  // d phi_f / d N_col for the (up to) three cells of a face (flux_jacobian).
+  struct FaceDerivatives {
+    int cols[3];
+    double d[3];
+  };
+  FaceDerivatives derivatives(const Stencil& s, double da, double db) const;
+  // What flux_jacobian reads besides the fluxes: face densities, their derivatives, 1 / I_k per term.
+  struct JacobianParts {
+    std::vector<double> phi, inv;
+    std::vector<FaceDerivatives> dphi;
+  };
+  template <class T, Limiter L, bool kUpward, bool kDerivatives>
+  void face_densities(const T* rho, const T* G, T* phi, int* donor, FaceDerivatives* dphi) const;
+  // The fluxes of every path (doubles, Jets, each limiter; the Jacobian's with `jac`).
+  template <class T, Limiter L>
+  T flux_values(const T* N, const GrowthTerms<T>& g, T* F, int* donor, std::vector<T>& G, JacobianParts* jac) const;
   // Per term k of a growth law: its scale a_k / I_k (normalized laws, I_k = sum_f s_k(d_f) phi_f dx_f from the face
-  // densities phi(f), 1 / I_k kept for the Jacobian) or a_k; a normalized term with I_k <= 0 has nothing to grow on.
+  // densities phi, 1 / I_k kept for the Jacobian) or a_k; a normalized term with I_k <= 0 has nothing to grow on.
   template <class T>
   struct TermScale {
     T value, inv;
     bool grows;
   };
-  template <class T, class Phi>
-  void term_scales(const GrowthTerms<T>& g, Phi phi, TermScale<T>* ts) const;
-  // G(d_f) = sum over the growing terms of scale_k s_k(d_f), added in the terms' order.
   template <class T>
-  T rate_at(const GrowthTerms<T>& g, const TermScale<T>* ts, int f) const;
+  void term_scales(const GrowthTerms<T>& g, const T* phi, TermScale<T>* ts) const;
+  template <class T>
+  void growth_rates(const GrowthTerms<T>& g, const TermScale<T>* ts, T* G) const;
 
   Limiter limiter_;
   const Grid* grid_ = nullptr;

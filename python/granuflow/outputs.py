@@ -22,15 +22,14 @@ STANDARD_SUMMARY_KEYS = ("d10_um", "d50_um", "d90_um", "bed_moisture", "T_gas_ou
 STANDARD_SUMMARY_UNITS = {"d10_um": "um", "d50_um": "um", "d90_um": "um", "bed_moisture": "kg/kg", "T_gas_out_K": "K"}
 DEFAULT_SWEEP_OUTPUTS = ("d50_um", "bed_moisture", "bed_moisture_wet", "T_gas_out_K", "d10_um", "d90_um")
 
-# The characteristic diameters of the bed (mass-based) that calibration reads, and the observable groups of its
-# parity plots and pooled statistics.
-D_VALUES = ("bed.d5", "bed.d10", "bed.d16", "bed.d25", "bed.d50", "bed.d75", "bed.d84", "bed.d90", "bed.d95")
-OBSERVABLE_GROUPS = {"size": D_VALUES, "moisture": ("bed.moisture", "bed.moisture_wet"), "T_gas_out": ("gas.T",)}
+# The characteristic diameters (mass-based) that calibration reads of a bed, and the observable groups of its parity
+# plots and pooled statistics, with the unit each group is shown in (experiment files, calibration tables, parity
+# plots). Which unit is the bed and which variable the outlet gas temperature, the scene says itself: the standard
+# summary keys it declares (observable_groups), never a unit's name.
+D_NAMES = ("d5", "d10", "d16", "d25", "d50", "d75", "d84", "d90", "d95")
 GROUP_TITLES = {"size": "characteristic diameters d5..d95", "moisture": "bed moisture",
                 "T_gas_out": "outlet gas temperature"}
-# Units of the observables in experiment files, calibration tables and parity plots (SI unit -> shown unit).
-OBSERVABLE_DISPLAY = {**{d: "um" for d in D_VALUES}, "bed.moisture": "wt%", "bed.moisture_wet": "wt%",
-                      "gas.T": "degC"}
+GROUP_DISPLAY = {"size": "um", "moisture": "wt%", "T_gas_out": "degC"}
 
 # Readable names of the local output/state names, for legends and labels.
 _WORDS = {
@@ -54,6 +53,38 @@ _SUMMARY_DISPLAY = {
     "T_gas_out_K": ("gas outlet temperature", "K", "degC"), "T_bed_K": ("bed temperature", "K", "degC"),
     "T_out_K": ("outlet temperature", "K", "degC"),
 }
+
+
+def d_values(bed: str) -> tuple[str, ...]:
+    """The characteristic diameters d5..d95 of unit ``bed``."""
+    return tuple(f"{bed}.{d}" for d in D_NAMES)
+
+
+def observable_groups(summary_map, names) -> dict[str, tuple[str, ...]]:
+    """The observable groups of a scene from its summary declarations (``Flowsheet.summary_map``) and the names of
+    its states and outputs (``names``): the bed is the unit ``bed_moisture`` reads (else ``d50_um``); ``size``, its
+    d5..d95, and ``moisture``, its moisture on dry and wet basis, where it reports them all; ``T_gas_out``, what
+    ``T_gas_out_K`` reads. A group the scene does not have is left out."""
+    names = set(names)
+    groups: dict[str, tuple[str, ...]] = {}
+    source = summary_map.get("bed_moisture") or summary_map.get("d50_um")
+    bed = source.rpartition(".")[0] if source else ""
+    for group, members in (("size", d_values(bed)), ("moisture", (f"{bed}.moisture", f"{bed}.moisture_wet"))):
+        if bed and names.issuperset(members):
+            groups[group] = members
+    if summary_map.get("T_gas_out_K"):
+        groups["T_gas_out"] = (summary_map["T_gas_out_K"],)
+    return groups
+
+
+def group_of(name: str, groups) -> str:
+    """The group of observable ``name`` (observable_groups), or the name itself outside every group."""
+    return next((g for g, members in groups.items() if name in members), name)
+
+
+def observable_display(name: str, groups) -> str | None:
+    """The unit observable ``name`` is shown in when it belongs to a group (observable_groups), else None."""
+    return GROUP_DISPLAY.get(group_of(name, groups))
 
 
 # -- roles ----------------------------------------------------------------------------------------------------------

@@ -88,12 +88,13 @@ TEST(PbmGrowth, MassGrowthRateIsExactForTheNormalizedLaws) {
 namespace granuflow {
 namespace {
 
-// The residual's path for doubles and a volume-normalized law (FvGrowth::normalized_fluxes: face densities in one
-// vector loop) against the scheme written out here operation by operation (fv_growth.hpp: upwind donor, van Albada's
-// slope a b (a + b) / (a^2 + b^2) on the density jumps scaled to the donor's width, nothing through the bottom face,
-// first order next to the ends; G_f = sum_k a_k s_k(d_f) / I_k with I_k = sum_f s_k(d_f) phi_f dx_f): the same
+// The residual's path for doubles and a volume-normalized law (FvGrowth::flux_values: the interior faces' densities
+// in one vector loop) against the scheme written out here operation by operation (fv_growth.hpp: upwind donor, van
+// Albada's slope a b (a + b) / (a^2 + b^2) on the density jumps scaled to the donor's width, nothing through the bottom
+// face, first order next to the ends; G_f = sum_k a_k s_k(d_f) / I_k with I_k = sum_f s_k(d_f) phi_f dx_f): the same
 // fluxes, donors and volume rate to the bit, for a ragged distribution with empty classes, a flat stretch (the
-// slope's q = 0 case) and two growth terms, one without solids to deliver.
+// slope's q = 0 case) and two growth terms, one without solids to deliver. The Jets' path (the same template) agrees
+// to round-off (a Jet divides by multiplying with the inverse).
 TEST(PbmGrowth, NormalizedFluxesOfDoublesFollowTheSchemeBitForBit) {
   std::vector<double> d(23);
   for (size_t i = 0; i < d.size(); ++i) d[i] = 1e-4 * std::pow(40.0, double(i) / (d.size() - 1));
@@ -134,6 +135,14 @@ TEST(PbmGrowth, NormalizedFluxesOfDoublesFollowTheSchemeBitForBit) {
       EXPECT_EQ(F[f], want[f]) << f;
       EXPECT_EQ(donor[f], f - 1) << f;
     }
+    std::vector<Jet> Nj(n), shape_j(shape.size()), amount_j(amount.size()), Fj(nf);
+    for (int i = 0; i < n; ++i) Nj[i] = Jet(N[i]);
+    for (size_t k = 0; k < shape.size(); ++k) shape_j[k] = Jet(shape[k]);
+    for (size_t k = 0; k < amount.size(); ++k) amount_j[k] = Jet(amount[k]);
+    const Jet Wj = fv.fluxes(Nj.data(), kernels::GrowthTerms<Jet>{2, shape_j.data(), amount_j.data(), true}, Fj.data(),
+                             donor.data());
+    EXPECT_NEAR(Wj.a, W, 1e-14 * std::abs(W));
+    for (int f = 0; f < nf; ++f) EXPECT_NEAR(Fj[f].a, F[f], 1e-13 * std::abs(F[f])) << f;
   }
 }
 

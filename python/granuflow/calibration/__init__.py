@@ -64,12 +64,11 @@ Python::
     rep.fit                      # R², RMSE per output and set;  res.estimates, res.correlation, res.history
     rep.write("out/calibration") # report.json, CSV tables, parity PNGs
 """
-from ..outputs import D_VALUES, OBSERVABLE_DISPLAY, OBSERVABLE_GROUPS
 from .files import (CalibrationError, ConfigError, Experiment, ExperimentSet, FreeParameter, Observation, Stage,
                     StagePlan, check_stage_data, load_experiments, load_stages, save_experiments)
 from .fit import (CalibrationResult, best, calibrate, compare_starts, multi_start, predict, random_starts,
                   stage_bounds)
-from .paper001 import TABLE1_LEVELS, TABLE5_SIGMA
+from .paper001 import D_VALUES, OBSERVABLE_DISPLAY, OBSERVABLE_GROUPS, TABLE1_LEVELS, TABLE5_SIGMA
 from .report import CalibrationReport, fit_statistics, model_errors, report
 from .synthetic import paper001_stages, synthetic_experiments, table1_points
 

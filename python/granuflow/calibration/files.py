@@ -12,7 +12,7 @@ import numpy as np
 
 from .. import _core
 from ..flowsheet import Flowsheet, load
-from ..outputs import OBSERVABLE_DISPLAY
+from ..outputs import observable_display, observable_groups
 from ..quantity import difference_to_si, from_si, number, show, to_si
 from ..textfile import MAX_DATA_BYTES, load_yaml, read_text, short
 from .paper001 import TABLE1_LEVELS
@@ -331,13 +331,14 @@ def save_experiments(es: ExperimentSet, path: str | os.PathLike, *, csv_dir: str
     sigma: dict[str, dict] = {}
     runs = []
     fs = load(es.scene) if es.scene else None
+    groups = observable_groups(fs.summary_map, fs.state_names + fs.output_names) if fs is not None else {}
     for e in es.experiments:
         times = sorted({float(x) for o in e.observations for x in o.t})
         cols = {"t": from_si(np.array(times), time_unit, "s")}
         units = {"t": time_unit}
         for o in e.observations:
             si_unit = fs.unit_of(o.name) if fs is not None else ""
-            unit = OBSERVABLE_DISPLAY.get(o.name, "") if si_unit else ""
+            unit = (observable_display(o.name, groups) or "") if si_unit else ""
             col = np.full(len(times), math.nan)
             idx = [times.index(float(x)) for x in o.t]
             col[idx] = from_si(o.value, unit, si_unit) if unit else o.value

@@ -1,7 +1,12 @@
 """Constants of paper 001 that calibration uses (docs/paper001_decisions.md, docs/references.md)."""
 from __future__ import annotations
 
-from ..outputs import D_VALUES
+from .. import outputs
+
+# Paper 001's scene (flowsheets/stoeckl_gf25_table1.yaml): its bed is `bed`, its outlet gas temperature `gas.T`.
+D_VALUES = outputs.d_values("bed")
+OBSERVABLE_GROUPS = {"size": D_VALUES, "moisture": ("bed.moisture", "bed.moisture_wet"), "T_gas_out": ("gas.T",)}
+OBSERVABLE_DISPLAY = {m: outputs.GROUP_DISPLAY[g] for g, members in OBSERVABLE_GROUPS.items() for m in members}
 
 # Table 5: standard deviations of the measurements (moisture and gas temperature absolute, SI; sizes relative).
 TABLE5_SIGMA: dict[str, dict[str, float]] = {

@@ -12,23 +12,19 @@ import numpy as np
 
 from .. import _core, accuracy
 from ..flowsheet import Flowsheet
-from ..outputs import OBSERVABLE_GROUPS
+from ..outputs import group_of, observable_groups
 from .files import Experiment
 from .fit import CalibrationResult, predict
 
 
-def _group_of(name: str) -> str:
-    for g, members in OBSERVABLE_GROUPS.items():
-        if name in members:
-            return g
-    return name
-
-
-def fit_statistics(predictions: Sequence[dict], groups: bool = True) -> list[dict]:
-    """R² = 1 - SS_res/SS_tot and RMSE (SI) per observable, and per group (size = all d-values pooled)."""
+def fit_statistics(predictions: Sequence[dict], groups: bool = True, *,
+                   observable_groups: Mapping[str, Sequence[str]] | None = None) -> list[dict]:
+    """R² = 1 - SS_res/SS_tot and RMSE (SI) per observable, and per group of ``observable_groups``
+    (``outputs.observable_groups`` of the scene; size = all d-values pooled)."""
+    by = observable_groups or {}
     pooled: dict[str, list[tuple[np.ndarray, np.ndarray]]] = {}
     for p in predictions:
-        keys = [p["observable"]] + ([_group_of(p["observable"])] if groups else [])
+        keys = [p["observable"]] + ([group_of(p["observable"], by)] if groups else [])
         for k in dict.fromkeys(keys):
             pooled.setdefault(k, []).append((np.asarray(p["data"]), np.asarray(p["model"])))
     out = []
@@ -45,11 +41,11 @@ def fit_statistics(predictions: Sequence[dict], groups: bool = True) -> list[dic
     return out
 
 
-def _worst_model_error(predictions: Sequence[dict], output: str) -> float:
+def _worst_model_error(predictions: Sequence[dict], output: str, groups: Mapping[str, Sequence[str]]) -> float:
     """The largest |model error| / sigma over the samples of ``output`` (an observable or a group)."""
     worst = math.nan
     for p in predictions:
-        if output in (p["observable"], _group_of(p["observable"])) and "model_error" in p:
+        if output in (p["observable"], group_of(p["observable"], groups)) and "model_error" in p:
             e = np.abs(np.asarray(p["model_error"], dtype=float)) / np.asarray(p["sigma"], dtype=float)
             if e.size and np.isfinite(e).any():
                 worst = float(np.nanmax(e)) if math.isnan(worst) else max(worst, float(np.nanmax(e)))
@@ -66,6 +62,7 @@ class CalibrationReport:
     truth: dict[str, float] | None = None
     units: dict[str, str] = field(default_factory=dict)  # SI unit of every observable
     param_units: dict[str, str] = field(default_factory=dict)  # SI unit of every free parameter
+    groups: dict[str, tuple] = field(default_factory=dict)  # observable groups of the scene (outputs.observable_groups)
 
     @property
     def fit(self):
@@ -95,7 +92,7 @@ class CalibrationReport:
         """One PNG per output group (size, moisture, outlet gas temperature): model against data."""
         from ..plots.calibration import parity_plots
 
-        return parity_plots(self.predictions, self.fit_rows, out_dir, units=self.units)
+        return parity_plots(self.predictions, self.fit_rows, out_dir, units=self.units, groups=self.groups)
 
     def to_json(self) -> dict:
         out = {"result": self.result.to_json(), "warnings": list(self.result.warnings), "fit": self.fit_rows,
@@ -183,15 +180,17 @@ def report(flowsheet: Flowsheet, result: CalibrationResult, calibration: Sequenc
         for name, exps in (("calibration", calibration), ("validation", validation)):
             if name in preds:
                 model_errors(flowsheet, exps, result.parameters, preds[name], options)
+    groups = observable_groups(flowsheet.summary_map, flowsheet.state_names + flowsheet.output_names)
     rows = []
     for setname, p in preds.items():
-        for r in fit_statistics(p):
+        for r in fit_statistics(p, observable_groups=groups):
             if error_estimate:
-                r["max_model_error_over_sigma"] = _worst_model_error(p, r["output"])
+                r["max_model_error_over_sigma"] = _worst_model_error(p, r["output"], groups)
             rows.append({"set": setname, **r})
     units = {p["observable"]: flowsheet.unit_of(p["observable"]) for ps in preds.values() for p in ps}
     for r in rows:  # RMSE is in the SI unit of the observable (of the group's members for pooled rows)
-        members = OBSERVABLE_GROUPS.get(r["output"], (r["output"],))
+        members = groups.get(r["output"], (r["output"],))
         r["unit"] = next((units[m] for m in members if m in units), "")
     param_units = {e["name"]: flowsheet.spec(e["name"])["unit"] for e in result.final["estimates"]}
-    return CalibrationReport(result, preds, rows, comparison, dict(truth) if truth else None, units, param_units)
+    return CalibrationReport(result, preds, rows, comparison, dict(truth) if truth else None, units, param_units,
+                             groups)

@@ -7,10 +7,9 @@ import numpy as np
 
 from .. import _core
 from ..flowsheet import Flowsheet
-from ..outputs import D_VALUES
 from ..quantity import to_si
 from .files import Experiment, ExperimentSet, FreeParameter, Observation, Stage, StagePlan, sigma_entry
-from .paper001 import TABLE1_LEVELS, TABLE5_SIGMA
+from .paper001 import D_VALUES, TABLE1_LEVELS, TABLE5_SIGMA
 
 ConfigError = _core.ConfigError
 

@@ -11,16 +11,19 @@ from ..quantity import from_si, pretty
 from .series import figure
 
 
-def parity_plots(predictions: dict, fit_rows: list[dict], out_dir: str, *, units: dict) -> list[str]:
-    """One PNG per observable group (size, moisture, outlet gas temperature) with the data sets of ``predictions``
-    (set name -> predictions) as markers and R² from ``fit_rows`` in the legend; ``units``: SI unit per observable.
-    Observables outside those groups (another scene's, e.g. ``drying.sigma`` of paper 003's two-zone bed) get one
-    PNG each, lengths shown in µm."""
+def parity_plots(predictions: dict, fit_rows: list[dict], out_dir: str, *, units: dict,
+                 groups: dict | None = None) -> list[str]:
+    """One PNG per observable group (size, moisture, outlet gas temperature; ``groups`` from
+    ``outputs.observable_groups`` of the scene's summary declarations) with the data sets of ``predictions`` (set name
+    -> predictions) as markers and R² from ``fit_rows`` in the legend; ``units``: SI unit per observable. Observables
+    outside those groups (another scene's, e.g. ``drying.sigma`` of paper 003's two-zone bed) get one PNG each,
+    lengths shown in µm."""
     os.makedirs(out_dir, exist_ok=True)
     written = []
-    grouped = {m for members in outputs.OBSERVABLE_GROUPS.values() for m in members}
+    groups = groups or {}
+    grouped = {m for members in groups.values() for m in members}
     others = sorted({p["observable"] for preds in predictions.values() for p in preds} - grouped)
-    panels = [(g, members, outputs.GROUP_TITLES[g]) for g, members in outputs.OBSERVABLE_GROUPS.items()]
+    panels = [(g, members, outputs.GROUP_TITLES[g]) for g, members in groups.items()]
     panels += [(o, (o,), o) for o in others]
     for group, members, title in panels:
         fig, ax = figure((4.6, 4.4))
@@ -31,7 +34,8 @@ def parity_plots(predictions: dict, fit_rows: list[dict], out_dir: str, *, units
             for p in preds:
                 if p["observable"] in members:
                     si = units.get(p["observable"], "")
-                    shown = outputs.OBSERVABLE_DISPLAY.get(p["observable"], "um" if si == "m" else si) if si else ""
+                    shown = (outputs.observable_display(p["observable"], groups) or ("um" if si == "m" else si)
+                             if si else "")
                     d.append(from_si(p["data"], shown, si))
                     m.append(from_si(p["model"], shown, si))
             if not d:
