@@ -32,7 +32,8 @@
 namespace granuflow {
 
 void SteadyOptions::validate() const {
-  if (!(ftol > 0)) throw ConfigError(violation("SteadyOptions.ftol", ftol, "", "ftol > 0"));
+  if (!(t >= 0) || !std::isfinite(t)) throw ConfigError(violation("SteadyOptions.t", t, "s", "t >= 0, finite"));
+  if (!(ftol > 0) || !std::isfinite(ftol)) throw ConfigError(violation("SteadyOptions.ftol", ftol, "", "ftol > 0"));
   if (max_iterations < 1)
     throw ConfigError(violation("SteadyOptions.max_iterations", double(max_iterations), "", "max_iterations >= 1"));
   if (max_pseudo_steps < 0)

@@ -256,6 +256,13 @@ void register_flowsheet(py::module_& m) {
             o.max_iterations = max_iterations;
             o.max_pseudo_steps = max_pseudo_steps;
             o.stability = stability;
+            try {  // named as the keywords of steady_state(), not as the C++ struct
+              o.validate();
+            } catch (const ConfigError& e) {
+              std::string m = e.what();
+              if (m.rfind("SteadyOptions.", 0) == 0) m = "steady_state(): " + m.substr(14);
+              throw ConfigError(m);
+            }
             SteadyResult r;
             {
               py::gil_scoped_release release;

@@ -132,6 +132,9 @@ def main(argv=None) -> int:
     c.add_argument("--no-progress", action="store_true", help="no progress bar (default: only on a terminal)")
     c.add_argument("--quiet", action="store_true", help="no output but errors (and no progress bar)")
     c.set_defaults(func=_cmd("calibrate", "cmd_calibrate"))
+    argv = sys.argv[1:] if argv is None else [str(a) for a in argv]
+    if not argv:
+        p.error(f"no command given; the commands are {', '.join(sub.choices)} (granuflow COMMAND --help for each)")
     args = p.parse_args(argv)
 
     from .. import _core

@@ -21,7 +21,7 @@ def cmd_bench(args) -> int:
 def _bench(args) -> int:
     from .. import bench
 
-    check_at_least("--repeats", args.repeats, 1)
+    check_at_least("--repeats", args.repeats, 1, 10000)
     progress = progress_bars.wanted(progress_option(args)) and not args.json
     if args.what == "sweep":  # design-space throughput
         kw = {"n": 9, "repeats": 1, "dask": False} if args.quick else {"repeats": args.repeats}

@@ -18,7 +18,7 @@ def cmd_calibrate(args) -> int:
         raise cal.ConfigError(f"{args.experiments}: no run has `use: calibration`")
     options = dict(plan.options)
     check_workers(args.workers)
-    check_at_least("--starts", args.starts, 1)
+    check_at_least("--starts", args.starts, 1, 10000)
     check_at_least("--spread", args.spread, 0)
     check_out_dir(args.out)
     cal.check_stage_data(plan, exps.calibration, args.stages, args.experiments)

@@ -41,13 +41,18 @@ def parse_sets(items) -> dict:
     return overrides
 
 
-def check_at_least(option: str, value, lower) -> None:
+def check_at_least(option: str, value, lower, upper=None) -> None:
+    """A number from the command line within [lower, upper]: a count beyond any sane run (repeats, starts, workers)
+    is a typo, refused before anything runs rather than run without end."""
     if value is not None and not value >= lower:
-        raise ConfigError(f"{option} = {value}: expected a number >= {lower}")
+        raise ConfigError(f"{option} = {value}: expected a number >= {lower}" +
+                          (f" and <= {upper}" if upper is not None else ""))
+    if value is not None and upper is not None and not value <= upper:
+        raise ConfigError(f"{option} = {value}: expected a number <= {upper}")
 
 
 def check_workers(workers) -> None:
-    check_at_least("--workers", workers, 1)
+    check_at_least("--workers", workers, 1, 1024)
 
 
 def check_out_dir(out: str, option: str = "--out") -> None:
