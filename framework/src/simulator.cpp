@@ -24,6 +24,10 @@ void SimOptions::validate(bool scene_keys) const {
   auto fail = [&](const std::string& field, const std::string& key, double v, const std::string& unit,
                   const std::string& rule) { throw ConfigError(violation(name(field, key), v, unit, rule)); };
   if (!(t_end > 0) || !std::isfinite(t_end)) fail("t_end", "t_end", t_end, scene_keys ? "s" : "", "t_end > 0");
+  // Below this the integrators' step control breaks down (IDAS takes a stop time of 1e-300 s as behind t = 0).
+  if (t_end < kMinEndTime)
+    fail("t_end", "t_end", t_end, scene_keys ? "s" : "",
+         "t_end >= " + fmt_num(kMinEndTime) + " s (a shorter run is below what the integrators resolve)");
   if (!(rtol > 0 && rtol < 1)) fail("rtol", "solver.rtol", rtol, "", "0 < rtol < 1");
   if (!(atol > 0)) fail("atol", "solver.atol", atol, "", "atol > 0");
   if (max_steps < 1) fail("max_steps", "solver.max_steps", double(max_steps), "", "max_steps >= 1");

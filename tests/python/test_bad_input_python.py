@@ -263,6 +263,7 @@ CLI_CASES = {
     "run_t_end_zero": (scene_case("run", "--t-end", "0"), ["--t-end = '0'", "t_end = 0 s violates t_end > 0"]),
     "run_t_end_negative": (scene_case("run", "--t-end", "-5 min"), ["--t-end = '-5 min'", "t_end = -300 s"]),
     "run_t_end_nan": (scene_case("run", "--t-end", "nan"), ["--t-end = 'nan'", "t_end > 0"]),
+    "run_t_end_1e-300": (scene_case("run", "--t-end", "1e-300"), ["t_end = 1e-300 s", "t_end >= 1e-09 s"]),
     "run_t_end_word": (scene_case("run", "--t-end", "soon"), ["--t-end = 'soon'", "expected seconds"]),
     "run_out_unwritable": (lambda tmp_path: (["run", SCENE, "--out", UNWRITABLE], [SCENE], None),
                            ["--out = '/sys/granuflow-out'", "cannot write there", "Permission denied"]),

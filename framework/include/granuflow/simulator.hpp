@@ -15,6 +15,8 @@ namespace granuflow {
 
 // Output times per run (output.n, the length of output.times): validate() refuses more.
 inline constexpr int kMaxOutputTimes = 100000;
+// The shortest run: a nanosecond, far below any time scale of these processes.
+inline constexpr double kMinEndTime = 1e-9;  // s
 
 // The integrator (solver.method): ida (IDAS, BDF: any flowsheet); bdf or adams (CVODES) and erk (ARKODE,
 // Dormand-Prince 5(4)) for flowsheets that are ODEs (every state differential once explicit units are inlined); auto:
