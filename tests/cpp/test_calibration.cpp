@@ -352,6 +352,24 @@ TEST(Calibrate, RejectsBadConfigurationWithTheRule) {
   auto bad = exps;
   bad[0].settings.push_back({"wall.k_wall", 10.0});
   EXPECT_THROW(calibrate(s, units::builtin(), bad, {st}, ok), ConfigError);
+  // a negative measured size (a sign slipped into the data): refused naming the sample, as is an absolute
+  // temperature of 0 K; NaN (not measured) passes
+  for (const auto& [name, value] : std::vector<std::pair<std::string, double>>{{"bed.d50", -4e-4}, {"gas.T", 0.0}}) {
+    auto sizes = experiments({name});
+    sizes[1].observations[0].value[2] = value;
+    sizes[1].observations[0].value[0] = std::nan("");
+    try {
+      check_experiments(*s.flowsheet, sizes);
+      FAIL() << name;
+    } catch (const ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find("experiment 'run1': observation " + name + ".value[2] at t = 900 s"),
+                std::string::npos)
+          << e.what();
+      EXPECT_NE(std::string(e.what()).find("value > 0"), std::string::npos) << e.what();
+    }
+    sizes[1].observations[0].value[2] = 1.0;
+    EXPECT_NO_THROW(check_experiments(*s.flowsheet, sizes)) << name;
+  }
   // an unknown observable
   auto unknown = exps;
   unknown[0].observations[0].name = "bed.d55";

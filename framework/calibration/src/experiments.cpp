@@ -109,6 +109,25 @@ void validate_experiments(const std::vector<Experiment>& exps) {
 
 }  // namespace calib
 
+namespace {
+
+// A measured size or absolute temperature is positive and a measured mass is not negative: a sign slipped into a
+// data file would otherwise be fitted as data.
+void check_sign(const std::string& w, const Observation& o, const std::string& unit) {
+  const bool positive = unit == "m" || unit == "K";
+  if (!positive && unit != "kg") return;
+  for (size_t i = 0; i < o.value.size(); ++i) {
+    const double v = o.value[i];
+    if (std::isnan(v) || (positive ? v > 0 : v >= 0)) continue;
+    throw ConfigError(violation(
+        w + ".value[" + std::to_string(i) + "] at t = " + fmt_num(o.t[i]) + " s", v, unit,
+        positive ? "value > 0 (a measured " + std::string(unit == "m" ? "size" : "temperature") + "; NaN: not measured)"
+                 : std::string("value >= 0 (a measured mass; NaN: not measured)")));
+  }
+}
+
+}  // namespace
+
 void check_experiments(const Flowsheet& fs, const std::vector<Experiment>& exps) {
   calib::validate_experiments(exps);
   std::set<std::string> names;
@@ -135,11 +154,13 @@ void check_experiments(const Flowsheet& fs, const std::vector<Experiment>& exps)
             violation(w + ": setting " + k, v, spec.unit, fmt_num(lo) + " <= " + spec.name + " <= " + fmt_num(hi)));
     }
     for (const auto& o : e.observations) {
+      std::string unit;
       try {
-        observable_unit(fs, o.name);
+        unit = observable_unit(fs, o.name);
       } catch (const ConfigError& x) {
         throw ConfigError(w + ": observation " + x.what());
       }
+      check_sign(w + ": observation " + o.name, o, unit);
     }
   }
 }
