@@ -128,7 +128,7 @@ void check_sign(const std::string& w, const Observation& o, const std::string& u
 
 }  // namespace
 
-void check_experiments(const Flowsheet& fs, const std::vector<Experiment>& exps) {
+void check_experiments(const Flowsheet& fs, const std::vector<Experiment>& exps, bool measured) {
   calib::validate_experiments(exps);
   std::set<std::string> names;
   for (const auto& e : exps) {
@@ -160,7 +160,7 @@ void check_experiments(const Flowsheet& fs, const std::vector<Experiment>& exps)
       } catch (const ConfigError& x) {
         throw ConfigError(w + ": observation " + x.what());
       }
-      check_sign(w + ": observation " + o.name, o, unit);
+      if (measured) check_sign(w + ": observation " + o.name, o, unit);
     }
   }
 }

@@ -16,7 +16,7 @@ using calib::parallel_for;
 std::vector<Prediction> predict(const Scene& scene, const Registry<Unit>& reg, const std::vector<Experiment>& exps,
                                 const std::map<std::string, double>& params, const CalibrationOptions& opt) {
   opt.validate();
-  check_experiments(*scene.flowsheet, exps);
+  check_experiments(*scene.flowsheet, exps, false);  // the values are placeholders here
   std::vector<std::vector<Prediction>> per(exps.size());
   parallel_for(static_cast<int>(exps.size()), opt.num_threads, [&](int i) {
     const Experiment& e = exps[i];

@@ -215,7 +215,9 @@ std::string observable_unit(const Flowsheet& fs, const std::string& name);
 // unique names, settings that name constant parameters of `fs` (not inputs, not link targets) within their
 // bounds, observations that name a state or reported output. Throws ConfigError naming the experiment, the key
 // and the value. calibrate() calls it.
-void check_experiments(const Flowsheet& fs, const std::vector<Experiment>& experiments);
+// `measured`: the observations' values are data to fit, so a size or absolute temperature must be positive and a mass
+// not negative (false for predictions, whose values are placeholders).
+void check_experiments(const Flowsheet& fs, const std::vector<Experiment>& experiments, bool measured = true);
 
 // Runs the stages in order on clones of `scene`; each starts from the estimates of the previous one and the
 // first from the scene's current parameter values (override them with `start`). `registry` builds the clones.
