@@ -86,7 +86,7 @@ struct CollisionRows {
     errno = 0;
     const double v = f.empty() ? NAN : std::strtod(f.c_str(), &end);
     if (f.empty() || *end != '\0' || errno == ERANGE || !std::isfinite(v))
-      throw fail(l.row, static_cast<int>(k) + 1, "'" + f + "' is not a finite number");
+      throw fail(l.row, static_cast<int>(k) + 1, "'" + shown(f) + "' is not a finite number");
     return v;
   }
 };
@@ -94,7 +94,9 @@ struct CollisionRows {
 CollisionRows collision_rows(const std::string& text, const std::string& path) {
   CollisionRows r;
   r.path = path;
-  std::istringstream in(text);
+  // A byte-order mark (as spreadsheet programs write UTF-8 CSV) is no part of the first key.
+  const bool bom = text.compare(0, 3, "\xEF\xBB\xBF") == 0;
+  std::istringstream in(bom ? text.substr(3) : text);
   std::string raw;
   int row = 0;
   while (std::getline(in, raw)) {
@@ -114,7 +116,7 @@ CollisionRows collision_rows(const std::string& text, const std::string& path) {
         throw r.fail(row, 1, "'" + key + "' given twice (first on row " + std::to_string(r.single[key].row) + ")");
       r.single[key] = std::move(line);
     } else {
-      throw r.fail(row, 1, "unknown key '" + key + "' (expected one of " + kCollisionKeys + ")");
+      throw r.fail(row, 1, "unknown key '" + shown(key) + "' (expected one of " + kCollisionKeys + ")");
     }
   }
   for (const char* key : {"dt_s", "edges_m", "particles"})

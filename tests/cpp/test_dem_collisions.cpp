@@ -74,6 +74,24 @@ TEST(DemCollisionFile, EveryProblemNamesTheFileRowAndColumn) {
   EXPECT_THROW(read_collision_counts("/nonexistent/counts.csv"), ConfigError);
 }
 
+// Spreadsheet programs write UTF-8 CSV with a byte-order mark: it is no part of the first key. Binary garbage is
+// named by an escaped excerpt of what stood where a key should (a NUL in the message cut it short before).
+TEST(DemCollisionFile, AByteOrderMarkIsSkippedAndGarbageIsShownEscaped) {
+  const std::string text = "dt_s,0.5\nedges_m,1e-3,2e-3,3e-3\nparticles,100,50\ncounts,10,4\ncounts,4,2\n";
+  const CollisionCounts plain = parse_collision_counts(text, "my.csv");
+  const CollisionCounts marked = parse_collision_counts("\xEF\xBB\xBF" + text, "my.csv");
+  EXPECT_EQ(marked.counts, plain.counts);
+  EXPECT_EQ(marked.dt, plain.dt);
+  try {
+    parse_collision_counts(std::string("\x01\x00\x7f\xfe,1\n", 7), "junk.csv");
+    FAIL();
+  } catch (const ConfigError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("junk.csv: row 1, column 1: unknown key '\\x01\\x00\\x7f"), std::string::npos) << msg;
+    EXPECT_EQ(msg.find('\0'), std::string::npos);
+  }
+}
+
 // ------------------------------------------------------------------ the DEM kernel
 
 std::unique_ptr<AggregationKernel> dem_kernel(std::map<std::string, std::string> settings) {

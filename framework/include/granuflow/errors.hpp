@@ -43,6 +43,9 @@ inline std::string fmt_num(double v) {
 }
 
 // Message template "where = value unit: violates rule" (Ceres OPTION_GE style).
+// User text inside a message: one line, control bytes escaped, at most 60 characters shown (yaml_text.cpp).
+std::string shown(const std::string& text);
+
 inline std::string violation(const std::string& where, double value, const std::string& unit, const std::string& rule) {
   std::ostringstream os;
   os.precision(12);
