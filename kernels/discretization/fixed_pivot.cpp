@@ -59,6 +59,42 @@ void FixedPivotAggregation::setup(const Grid& g) {
     }
     diagonals_.push_back(g);
   }
+  build_run_layout(*this, g, layout_);
+}
+
+// The aggregate's share on each target (Kumar & Ramkrishna 1996, Eq. (9)): number w times the event rate, property
+// f times what the partners carry, both linear in the rate and in the partners' per-particle properties.
+void FixedPivotAggregation::jacobian_event(Tables&, const PopulationJacobian& J, const PairEvent& e) const {
+  const int n = J.n, P = J.P, j = e.j, k = e.k;
+  const double* pi = J.pi;
+  const Target& t = target(e.pr);
+  struct Dest {
+    int cls;  // -1: above
+    double w, f;
+  };
+  const Dest dests[2] = {{t.lo, t.w_lo, t.f_lo}, {t.hi, t.w_hi, t.f_hi}};
+  for (const Dest& d : dests) {
+    if (d.w == 0.0 && d.f == 0.0) continue;
+    for (const PairEvent::Input* in = e.begin; in != e.end; ++in) {
+      if (d.cls >= 0) {
+        J.add(J.rowN(d.cls), in->col, d.w * in->d);
+      } else {
+        J.add(J.rowO(kOutNumberAbove), in->col, d.w * in->d);
+        J.add(J.rowO(kOutVolumeAbove), in->col, d.f * volume(e.pr) * in->d);
+      }
+      for (int p = 0; p < P; ++p) {
+        const double carried = pi[size_t(p) * n + j] + pi[size_t(p) * n + k];
+        J.add(d.cls >= 0 ? J.rowQ(p, d.cls) : J.rowO(out_property_above(p)), in->col, d.f * carried * in->d);
+      }
+    }
+    for (int p = 0; p < P; ++p) {
+      const size_t row = d.cls >= 0 ? J.rowQ(p, d.cls) : J.rowO(out_property_above(p));
+      for (int i : {j, k}) {
+        J.add(row, i, d.f * e.rate * J.dpi_dN[size_t(p) * n + i]);
+        J.add(row, J.colQ(p, i), d.f * e.rate * J.dpi_dq[size_t(p) * n + i]);
+      }
+    }
+  }
 }
 
 }  // namespace granuflow::kernels
