@@ -165,32 +165,13 @@ void Population::refresh(Work& w, const double* p) const {
     agg_scheme_->refresh(*w.agg, {grid_.get(), properties(), &w.K, &w.Kh, agg_.kernel.get(), &cs, p + agg_.first});
   }
   if (sel_.kernel && brk) {
-    w.A.resize(size_t(n_ + kOutsideRows) * n_);
-    fragment_matrix(p + frag_.first, w.A);
+    brk_scheme_->matrix(*grid_, *frag_.kernel, p + frag_.first, frag_.count, w.A);
     if (!sel_.kernel->state_dependent()) {
       w.S.resize(n_);
       sel_.kernel->evaluate(cs, p + sel_.first, w.S.data());
       breakage_tables(*grid_, w.A.data(), w.S.data(), w.BN, w.BQ);
     }
   }
-}
-
-// The fragment matrix depends on the fragment law's parameters only and costs O(n^2) quadratures: the last one
-// built is kept (runs of a sweep or a calibration rarely change it).
-void Population::fragment_matrix(const double* p, std::vector<double>& A) const {
-  std::vector<double> key(p, p + frag_.count);
-  {
-    std::lock_guard<std::mutex> lock(frag_cache_->mutex);
-    if (frag_cache_->valid && frag_cache_->key == key) {
-      A = frag_cache_->A;
-      return;
-    }
-  }
-  brk_scheme_->build(*grid_, *frag_.kernel, p, A.data());
-  std::lock_guard<std::mutex> lock(frag_cache_->mutex);
-  frag_cache_->key = std::move(key);
-  frag_cache_->A = A;
-  frag_cache_->valid = true;
 }
 
 int Population::input_cols() const { return n_ * (1 + properties() + static_cast<int>(field_index_.size())); }

@@ -13,6 +13,13 @@
 // (fixed_pivot, cell_average), breakage selection rate, fragment distribution and scheme (fixed_pivot, cell_average,
 // cell_mass), growth law and scheme (fv_koren, fv_upwind). A mechanism not named has no parameters and no cost. The
 // kernels' parameters are declared in the unit (one table per kernel, with the kernel's SI units, bounds and source).
+// The engine knows the schemes only through their interfaces: an aggregation scheme forms the events from the
+// engine's pair coefficients and places them (discretization/aggregation_scheme.hpp), with its grid-only tables built
+// once in declare() and its tables of the kernel's values in the run's Work; a breakage scheme builds (and keeps) the
+// fragment matrix. A kernel-parameter change rebuilds only the tables of the mechanism that owns the parameter.
+//
+// Files: population.cpp (declare, configure, refresh), population_rates.cpp (the rates, aggregation's and growth's
+// parts), population_breakage.cpp, population_jacobian.cpp (analytic and AD Jacobians), population_work.hpp (Work).
 //
 // Leaving the grid, the one way for every unit: aggregates beyond the top pivot, fragments below the first and
 // particles grown past either end are counted in the outside rates (number/volume above, volume below, and each
@@ -25,7 +32,6 @@
 // exists (a kernel that reads N).
 #pragma once
 #include <memory>
-#include <mutex>
 #include <string>
 #include <vector>
 
@@ -171,7 +177,6 @@ class Population {
   void growth_jacobian(Work& w, const State<double>& s, const PopulationJacobian& J) const;
   void ad_jacobian(Work& w, const State<double>& s, std::vector<double>& D) const;
   void fold_rows(double* D, int cols) const;
-  void fragment_matrix(const double* p, std::vector<double>& A) const;
   int input_cols() const;  // N, q, fields read
   int jacobian_rows() const { return n_ * (1 + properties()) + outside_rows() + 1; }
 
@@ -189,12 +194,6 @@ class Population {
   Plugin<GrowthLaw> growth_;
   std::unique_ptr<FvGrowth> growth_scheme_;
   std::vector<int> kernel_params_;  // indices of every kernel parameter (the refresh snapshot)
-  struct FragmentCache {
-    std::mutex mutex;
-    bool valid = false;
-    std::vector<double> key, A;
-  };
-  std::shared_ptr<FragmentCache> frag_cache_ = std::make_shared<FragmentCache>();
 };
 
 }  // namespace granuflow::kernels

@@ -125,6 +125,7 @@ void Population::aggregation_jacobian(Work& w, const State<double>& s, const Pop
   const int n = n_, P = properties(), nfr = static_cast<int>(field_index_.size());
   const double* kp = s.p + agg_.first;
   const double* N = s.N;
+  // J's layout under short names, as the terms below are written
   const double *pi = J.pi, *dpi_dN = J.dpi_dN, *dpi_dq = J.dpi_dq;
   auto rowN = [&](int i) { return J.rowN(i); };
   auto rowQ = [&](int p, int i) { return J.rowQ(p, i); };
@@ -189,6 +190,7 @@ void Population::aggregation_jacobian(Work& w, const State<double>& s, const Pop
 void Population::growth_jacobian(Work& w, const State<double>& s, const PopulationJacobian& J) const {
   const int n = n_, P = properties();
   const double* N = s.N;
+  // J's layout under short names, as the terms below are written
   const double *pi = J.pi, *dpi_dN = J.dpi_dN, *dpi_dq = J.dpi_dq;
   auto rowN = [&](int i) { return J.rowN(i); };
   auto rowQ = [&](int p, int i) { return J.rowQ(p, i); };
