@@ -225,41 +225,40 @@ void print(const Record& r, bool json, int repeats, const std::string& meta) {
 // 40 classes from 50 to 1000 um) changing ln beta0, and the constant kernel on 100 classes (25 doublings, q = 4) for
 // both aggregation schemes changing beta0. Compare builds by running them alternately.
 int refresh_bench(int repeats) {
+  // The mechanisms as a unit's settings name them (the headline bed's choices, units/fluid_bed.cpp), and the
+  // properties carried.
   struct Setup {
     std::string label;
     std::shared_ptr<const kernels::Grid> grid;
-    kernels::PopulationOptions options;
     std::map<std::string, std::string> settings;
+    std::vector<std::string> properties;
   };
   auto headline = [](int n) {
     std::vector<double> d(n);
     for (int i = 0; i < n; ++i) d[i] = 50e-6 * std::pow(1000.0 / 50.0, double(i) / (n - 1));
-    Setup s{"headline glass_transition+breakage n=" + std::to_string(n),
-            std::make_shared<const kernels::Grid>(kernels::Grid::from_diameter_pivots(d)),
-            {},
-            {}};
-    kernels::PopulationOptions& o = s.options;
-    o.aggregation = "glass_transition", o.aggregation_scheme = "fixed_pivot";
-    o.breakage = "vogel_peukert", o.fragments = "tanh_power_law", o.breakage_scheme = "fixed_pivot";
-    o.outside = kernels::Outside::kFold;
-    o.agg_prefix = o.sel_prefix = o.frag_prefix = o.growth_prefix = "";
-    o.agg_settings = o.frag_settings = o.growth_settings = "";
-    o.sel_settings = "breakage_";
-    o.properties = {"water"};
-    return s;
+    return Setup{"headline glass_transition+breakage n=" + std::to_string(n),
+                 std::make_shared<const kernels::Grid>(kernels::Grid::from_diameter_pivots(d)),
+                 {{"aggregation", "glass_transition"},
+                  {"aggregation_scheme", "fixed_pivot"},
+                  {"breakage", "vogel_peukert"},
+                  {"fragments", "tanh_power_law"},
+                  {"breakage_scheme", "fixed_pivot"},
+                  {"outside", "fold"}},
+                 {"water"}};
   };
   auto constant = [](const std::string& scheme) {
-    Setup s{"constant " + scheme + " n=100",
-            std::make_shared<const kernels::Grid>(kernels::Grid::geometric(std::exp2(-12.0), 4, 100)),
-            {},
-            {{"aggregation", "constant"}, {"aggregation_scheme", scheme}}};
-    return s;
+    return Setup{"constant " + scheme + " n=100",
+                 std::make_shared<const kernels::Grid>(kernels::Grid::geometric(std::exp2(-12.0), 4, 100)),
+                 {{"aggregation", "constant"}, {"aggregation_scheme", scheme}},
+                 {}};
   };
   for (const Setup& c : {headline(10), headline(40), constant("fixed_pivot"), constant("cell_average")}) {
     UnitSpec spec;
     Settings st("bench", c.settings);
+    kernels::PopulationOptions options;
+    options.properties = c.properties;
     kernels::Population pop;
-    pop.declare(spec, st, c.grid, c.options);
+    pop.declare(spec, st, c.grid, options);
     std::vector<double> p;
     for (const auto& ps : spec.params()) p.push_back(ps.value);
     auto w = pop.make_work();
@@ -267,7 +266,7 @@ int refresh_bench(int repeats) {
     const double p0 = p[0];
     // An evaluation at an empty state (every class 0, fields at mid-range values): its cost with the parameter moved
     // less its cost without is what a change costs inside a run (rates() refreshes the tables itself).
-    const int n = c.grid->size(), P = static_cast<int>(c.options.properties.size());
+    const int n = c.grid->size(), P = static_cast<int>(c.properties.size());
     std::vector<double> zeros(n, 0.0), floor(n, 1e-9), fields[kernels::kFields], out(size_t(n) * (1 + P) + 64, 0.0);
     const double field_values[kernels::kFields] = {0.01, 0.1, 320.0, 0.01, 0.5};
     kernels::Population::State<double> es;
