@@ -4,6 +4,7 @@
 //   granuflow_bench_pbm [--json] [--repeats R] [--quick] [--case constant|sum|product|growth|breakage]
 //                       [--integrators auto,ida,bdf,adams,erk] [--q Q] [--rtol R] [--scheme NAME]
 //   granuflow_bench_pbm --refresh [--repeats R]   the cost of a kernel-parameter change (below)
+//   granuflow_bench_pbm --jacobian [--repeats R]  the cost of a Jacobian and a residual (below)
 //   (wired as `granuflow bench pbm --json`; baseline: /usr/bin/python3 tests/bench/scipy_fixed_pivot.py --json)
 //
 // One record per (case, method, integrator, q, rtol) with keys case, method (the scheme), integrator (solver.method
@@ -302,6 +303,37 @@ int refresh_bench(int repeats) {
   return 0;
 }
 
+// --jacobian: the Jacobian and the residual of pbm_batch (aggregation only, q = 4 on the verification grid) at a state
+// of the constant kernel's run, best and median of R rounds of 20 calls, in microseconds per call.
+int jacobian_bench(int repeats) {
+  for (const char* kernel : {"constant", "sum"})
+    for (const char* scheme : {"fixed_pivot", "cell_average"}) {
+      auto s = pbm_test::grid_settings(4, 27);
+      s["aggregation"] = kernel, s["aggregation_scheme"] = scheme;
+      auto fs = pbm_test::flowsheet(s);
+      DaeSystem sys(*fs);
+      const int n = sys.size();
+      std::vector<double> y(n), yp(n, 0.0), r(n), J(size_t(n) * n);
+      sys.initial_values(y);
+      for (int i = 0; i < n; ++i) y[i] = std::abs(y[i]) * (0.5 + 0.5 * std::sin(0.7 * i) * std::sin(0.7 * i)) + 1e-6;
+      auto best_median = [&](auto&& call) {
+        std::vector<double> rounds;
+        for (int k = 0; k < repeats; ++k) {
+          const auto t0 = clk::now();
+          for (int c = 0; c < 20; ++c) call();
+          rounds.push_back(ms_since(t0) * 1e3 / 20);
+        }
+        std::sort(rounds.begin(), rounds.end());
+        return std::make_pair(rounds.front(), rounds[rounds.size() / 2]);
+      };
+      const auto jac = best_median([&] { sys.jacobian(0, y.data(), yp.data(), 10.0, J.data(), nullptr); });
+      const auto res = best_median([&] { sys.residual(0, y.data(), yp.data(), r.data()); });
+      std::printf("%-9s %-13s n=%3d  jacobian best %9.2f median %9.2f us   residual best %7.2f median %7.2f us\n",
+                  kernel, scheme, n, jac.first, jac.second, res.first, res.second);
+    }
+  return 0;
+}
+
 }  // namespace
 }  // namespace granuflow
 
@@ -313,6 +345,11 @@ int main(int argc, char** argv) {
       for (int k = 1; k + 1 < argc; ++k)
         if (std::string(argv[k]) == "--repeats") r = std::max(1, std::atoi(argv[k + 1]));
       return refresh_bench(r);
+    } else if (std::string(argv[i]) == "--jacobian") {
+      int r = 30;
+      for (int k = 1; k + 1 < argc; ++k)
+        if (std::string(argv[k]) == "--repeats") r = std::max(1, std::atoi(argv[k + 1]));
+      return jacobian_bench(r);
     }
   bool json = false, quick = false;
   int repeats = 5;
