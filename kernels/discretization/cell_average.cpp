@@ -46,25 +46,30 @@ void CellAverageAggregation::jacobian_start(Tables& tables, const PopulationJaco
   t.jB.assign(n + 1, 0.0), t.jV.assign(n + 1, 0.0), t.jQ.assign(size_t(P) * (n + 1), 0.0);
 }
 
-void CellAverageAggregation::jacobian_event(Tables& tables, const PopulationJacobian& J, const PairEvent& e) const {
+void CellAverageAggregation::jacobian_row(Tables& tables, const PopulationJacobian& J, const PairEvent* events,
+                                          int count) const {
   auto& t = static_cast<RunTables&>(tables);
   const int n = J.n, P = J.P, C = J.C;
   const double* pi = J.pi;
-  const int c = cell(e.pr);
-  const double v = volume(e.pr), rate = e.rate;
-  t.jB[c] += rate;
-  t.jV[c] += v * rate;
-  double* db = &t.dB[size_t(c) * C];
-  double* dv = &t.dV[size_t(c) * C];
-  for (const PairEvent::Input* in = e.begin; in != e.end; ++in) db[in->col] += in->d, dv[in->col] += v * in->d;
-  for (int p = 0; p < P; ++p) {
-    const double carried = pi[size_t(p) * n + e.j] + pi[size_t(p) * n + e.k];
-    t.jQ[size_t(p) * (n + 1) + c] += rate * carried;
-    double* dqc = &t.dQ[(size_t(p) * (n + 1) + c) * C];
-    for (const PairEvent::Input* in = e.begin; in != e.end; ++in) dqc[in->col] += carried * in->d;
-    for (int i : {e.j, e.k}) {
-      dqc[i] += rate * J.dpi_dN[size_t(p) * n + i];
-      dqc[J.colQ(p, i)] += rate * J.dpi_dq[size_t(p) * n + i];
+  for (const PairEvent* ev = events; ev != events + count; ++ev) {
+    const PairEvent& e = *ev;
+    J.deaths(e);
+    const int c = cell(e.pr);
+    const double v = volume(e.pr), rate = e.rate;
+    t.jB[c] += rate;
+    t.jV[c] += v * rate;
+    double* db = &t.dB[size_t(c) * C];
+    double* dv = &t.dV[size_t(c) * C];
+    e.for_inputs([&](const PairEvent::Input& in) { db[in.col] += in.d, dv[in.col] += v * in.d; });
+    for (int p = 0; p < P; ++p) {
+      const double carried = pi[size_t(p) * n + e.j] + pi[size_t(p) * n + e.k];
+      t.jQ[size_t(p) * (n + 1) + c] += rate * carried;
+      double* dqc = &t.dQ[(size_t(p) * (n + 1) + c) * C];
+      e.for_inputs([&](const PairEvent::Input& in) { dqc[in.col] += carried * in.d; });
+      for (int i : {e.j, e.k}) {
+        dqc[i] += rate * J.dpi_dN[size_t(p) * n + i];
+        dqc[J.colQ(p, i)] += rate * J.dpi_dq[size_t(p) * n + i];
+      }
     }
   }
 }

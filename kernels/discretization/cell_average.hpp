@@ -16,7 +16,7 @@ class CellAverageAggregation : public RunScheme<CellAverageAggregation> {
   std::string name() const override { return "cell_average"; }
   void setup(const Grid& g) override;
   void jacobian_start(Tables& t, const PopulationJacobian& J) const override;
-  void jacobian_event(Tables& t, const PopulationJacobian& J, const PairEvent& e) const override;
+  void jacobian_row(Tables& t, const PopulationJacobian& J, const PairEvent* events, int count) const override;
   void jacobian_finish(Tables& t, const PopulationJacobian& J) const override;
   int cell(size_t pair) const { return cell_[pair]; }  // n: beyond the top edge
   double volume(size_t pair) const { return vsum_[pair]; }

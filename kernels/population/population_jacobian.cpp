@@ -120,33 +120,29 @@ void Population::feature_gradients(Work& w, const State<double>& s, std::vector<
 }
 
 // Aggregation: per pair, the event rate's derivatives against the inputs it reads (N_j, N_k and the fields of both
-// partners through the efficiency), the partners' deaths with their properties; the births by the scheme.
+// partners through the efficiency); the scheme adds the partners' deaths (PopulationJacobian::deaths) and the births.
 void Population::aggregation_jacobian(Work& w, const State<double>& s, const PopulationJacobian& J) const {
   const int n = n_, P = properties(), nfr = static_cast<int>(field_index_.size());
   const double* kp = s.p + agg_.first;
   const double* N = s.N;
-  // J's layout under short names, as the terms below are written
-  const double *pi = J.pi, *dpi_dN = J.dpi_dN, *dpi_dq = J.dpi_dq;
-  auto rowN = [&](int i) { return J.rowN(i); };
-  auto rowQ = [&](int p, int i) { return J.rowQ(p, i); };
-  auto colQ = [&](int p, int i) { return J.colQ(p, i); };
   auto colF = [&](int fi, int i) { return n * (1 + P) + fi * n + i; };
-  auto add = [&](size_t r, int c, double v) { J.add(r, c, v); };
   const int mf = agg_.kernel->n_features();
   std::vector<double> phi(size_t(n) * mf), G(size_t(n) * mf * std::max(nfr, 1), 0.0);
   if (mf > 0) feature_gradients(w, s, phi, G);
   agg_scheme_->jacobian_start(*w.agg, J);
-  // The event's inputs: N_j, N_k and the fields of both partners.
-  using In = PairEvent::Input;
-  In ev_buf[2 + 2 * kFields];
-  int nev = 0;
   if (mf > 0) {
     const size_t pairs = size_t(n) * (n + 1) / 2;
     w.eff.resize(pairs), w.eff_da.resize(pairs * mf), w.eff_db.resize(pairs * mf);
     agg_.kernel->efficiency_gradients(phi.data(), n, kp, agg_.count, w.eff.data(), w.eff_da.data(), w.eff_db.data());
   }
+  // Per row of the pair triangle, each event's inputs: N_j, N_k and the fields of both partners.
+  using In = PairEvent::Input;
+  w.inputs.resize(size_t(n) * (2 + 2 * nfr));
+  w.events.resize(n);
   size_t pr = 0;
-  for (int j = 0; j < n; ++j)
+  for (int j = 0; j < n; ++j) {
+    In* in = w.inputs.data();
+    int count = 0;
     for (int k = j; k < n; ++k, ++pr) {
       const double Kh = w.Kh[pr];
       double E = 1.0;
@@ -154,9 +150,10 @@ void Population::aggregation_jacobian(Work& w, const State<double>& s, const Pop
       const double* dEb = mf > 0 ? &w.eff_db[pr * mf] : nullptr;
       if (mf > 0) E = w.eff[pr];
       const double beta = Kh * E, rate = beta * N[j] * N[k];
-      nev = 0;
-      ev_buf[nev++] = {j, beta * N[k]};
-      ev_buf[nev++] = {k, beta * N[j]};
+      In* ev_buf = in;
+      ev_buf[0] = {j, beta * N[k]};
+      ev_buf[1] = {k, beta * N[j]};
+      int nev = 2;
       for (int fi = 0; fi < nfr && mf > 0; ++fi) {
         double dj = 0, dk = 0;
         for (int c = 0; c < mf; ++c) {
@@ -166,23 +163,11 @@ void Population::aggregation_jacobian(Work& w, const State<double>& s, const Pop
         ev_buf[nev++] = {colF(fi, j), Kh * N[j] * N[k] * dj};
         ev_buf[nev++] = {colF(fi, k), Kh * N[j] * N[k] * dk};
       }
-      const In* ev_end = ev_buf + nev;
-      // deaths of the partners, with their properties
-      for (const In* e = ev_buf; e != ev_end; ++e) {
-        add(rowN(j), e->col, -e->d);
-        add(rowN(k), e->col, -e->d);
-        for (int p = 0; p < P; ++p) {
-          add(rowQ(p, j), e->col, -e->d * pi[size_t(p) * n + j]);
-          add(rowQ(p, k), e->col, -e->d * pi[size_t(p) * n + k]);
-        }
-      }
-      for (int p = 0; p < P; ++p)
-        for (int i : {j, k}) {
-          add(rowQ(p, i), i, -rate * dpi_dN[size_t(p) * n + i]);
-          add(rowQ(p, i), colQ(p, i), -rate * dpi_dq[size_t(p) * n + i]);
-        }
-      agg_scheme_->jacobian_event(*w.agg, J, PairEvent{pr, j, k, rate, ev_buf, ev_end});
+      in += nev;
+      w.events[count++] = PairEvent{pr, j, k, rate, ev_buf, in};
     }
+    agg_scheme_->jacobian_row(*w.agg, J, w.events.data(), count);  // deaths and births, pair by pair
+  }
   agg_scheme_->jacobian_finish(*w.agg, J);
 }
 

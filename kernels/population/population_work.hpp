@@ -56,6 +56,8 @@ struct Population::Work {
   std::vector<int> map_rows, map_cols;
   std::vector<Jet> jp, jN, jq, jf, jphi;
   std::vector<double> eff, eff_da, eff_db;  // analytic Jacobian: E and dE/dphi of every pair
+  std::vector<PairEvent> events;            // the events of one row of the pair triangle, and their inputs
+  std::vector<PairEvent::Input> inputs;
 };
 
 // h K per pair, row-major upper triangle.

@@ -87,8 +87,16 @@ void TwoPointSplit::rates_t(const kernels::AggregationArgs<T>& a) const {
 void TwoPointSplit::rates(Tables&, const kernels::AggregationArgs<double>& a) const { rates_t(a); }
 void TwoPointSplit::rates(Tables&, const kernels::AggregationArgs<Jet>& a) const { rates_t(a); }
 
+void TwoPointSplit::jacobian_row(Tables&, const kernels::PopulationJacobian& J, const kernels::PairEvent* events,
+                                 int count) const {
+  for (int i = 0; i < count; ++i) {
+    J.deaths(events[i]);
+    births_jacobian(J, events[i]);
+  }
+}
+
 // The births are linear in the event rate (number and volume shares) and in rate times the partners' properties.
-void TwoPointSplit::jacobian_event(Tables&, const kernels::PopulationJacobian& J, const kernels::PairEvent& e) const {
+void TwoPointSplit::births_jacobian(const kernels::PopulationJacobian& J, const kernels::PairEvent& e) const {
   const int n = J.n, P = J.P;
   const Destination& d = dest_[e.pr];
   for (int s = 0; s < d.count; ++s) {

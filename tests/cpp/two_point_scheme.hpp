@@ -30,7 +30,8 @@ class TwoPointSplit : public kernels::AggregationScheme {
   void refresh(Tables& t, const kernels::AggregationTableInputs& in) const override;
   void rates(Tables& t, const kernels::AggregationArgs<double>& a) const override;
   void rates(Tables& t, const kernels::AggregationArgs<Jet>& a) const override;
-  void jacobian_event(Tables& t, const kernels::PopulationJacobian& J, const kernels::PairEvent& e) const override;
+  void jacobian_row(Tables& t, const kernels::PopulationJacobian& J, const kernels::PairEvent* events,
+                    int count) const override;
 
   // Where the aggregate of one pair goes: two shares (the second may leave the grid) or the whole (leaves).
   struct Share {
@@ -47,6 +48,7 @@ class TwoPointSplit : public kernels::AggregationScheme {
  private:
   template <class T>
   void rates_t(const kernels::AggregationArgs<T>& a) const;
+  void births_jacobian(const kernels::PopulationJacobian& J, const kernels::PairEvent& e) const;
   std::vector<Destination> dest_;
 };
 
