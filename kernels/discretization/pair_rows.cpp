@@ -238,37 +238,6 @@ void split_packets(const CellAverageAggregation& ca, RunTables::Scratch<T>& sc, 
 
 }  // namespace
 
-template <class S, class T>
-void place_pair(const S& s, RunTables::Scratch<T>& sc, const AggregationArgs<T>& a, size_t pr, int j, int k,
-                const T& rate) {
-  const int n = a.n, P = a.P;
-  const T* pi = a.pi;
-  if constexpr (kFixedPivot<S>) {
-    T *dN = a.dN, *dq = a.dq, *out = a.out;
-    const FixedPivotAggregation::Target& t = s.target(pr);
-    if (t.lo >= 0) dN[t.lo] += t.w_lo * rate;
-    if (t.hi >= 0) {
-      dN[t.hi] += t.w_hi * rate;
-    } else {
-      out[kOutNumberAbove] += t.w_hi * rate;
-      out[kOutVolumeAbove] += t.f_hi * s.volume(pr) * rate;
-    }
-    for (int p = 0; p < P; ++p) {
-      const T carried = rate * (pi[size_t(p) * n + j] + pi[size_t(p) * n + k]);
-      if (t.lo >= 0) dq[size_t(p) * n + t.lo] += t.f_lo * carried;
-      if (t.hi >= 0)
-        dq[size_t(p) * n + t.hi] += t.f_hi * carried;
-      else
-        out[out_property_above(p)] += t.f_hi * carried;
-    }
-  } else {
-    const int c = s.cell(pr);
-    sc.B[c] += rate;
-    sc.V[c] += s.volume(pr) * rate;
-    for (int p = 0; p < P; ++p) sc.Q[size_t(p) * (n + 1) + c] += rate * (pi[size_t(p) * n + j] + pi[size_t(p) * n + k]);
-  }
-}
-
 // With doubles, the pairs along the scheme's diagonals (near-equal partners) are stored by diagonal and summed after
 // the rows as vector loops (aggregate_diagonals), not placed one by one; fixed pivot rows in doubles are fused
 // (fixed_pivot_row).
@@ -344,10 +313,8 @@ void run_rates(const S& s, RunTables& t, const AggregationArgs<T>& a) {
   if constexpr (!kFixedPivot<S>) split_packets(s, sc, a);
 }
 
-#define GRANUFLOW_RUN_SCHEME(S, T)                                                                              \
-  template void place_pair<S, T>(const S&, RunTables::Scratch<T>&, const AggregationArgs<T>&, size_t, int, int, \
-                                 const T&);                                                                     \
-  template void aggregate_rows<S, T>(const S&, RunTables&, const AggregationArgs<T>&);                          \
+#define GRANUFLOW_RUN_SCHEME(S, T)                                                     \
+  template void aggregate_rows<S, T>(const S&, RunTables&, const AggregationArgs<T>&); \
   template void run_rates<S, T>(const S&, RunTables&, const AggregationArgs<T>&);
 GRANUFLOW_RUN_SCHEME(FixedPivotAggregation, double)
 GRANUFLOW_RUN_SCHEME(FixedPivotAggregation, Jet)

@@ -114,7 +114,34 @@ class RunScheme : public AggregationScheme {
 // One aggregate event of the pair pr = (j, k) at `rate`, placed through the scheme's pair table (the pairs off the
 // runs and diagonals): fixed pivot on its targets, cell average into its cell's packet.
 template <class S, class T>
-void place_pair(const S& s, RunTables::Scratch<T>& sc, const AggregationArgs<T>& a, size_t pr, int j, int k,
-                const T& rate);
+inline void place_pair(const S& s, RunTables::Scratch<T>& sc, const AggregationArgs<T>& a, size_t pr, int j, int k,
+                       const T& rate) {
+  const int n = a.n, P = a.P;
+  const T* pi = a.pi;
+  if constexpr (kFixedPivot<S>) {
+    T *dN = a.dN, *dq = a.dq, *out = a.out;
+    const auto& t = s.target(pr);
+    if (t.lo >= 0) dN[t.lo] += t.w_lo * rate;
+    if (t.hi >= 0) {
+      dN[t.hi] += t.w_hi * rate;
+    } else {
+      out[kOutNumberAbove] += t.w_hi * rate;
+      out[kOutVolumeAbove] += t.f_hi * s.volume(pr) * rate;
+    }
+    for (int p = 0; p < P; ++p) {
+      const T carried = rate * (pi[size_t(p) * n + j] + pi[size_t(p) * n + k]);
+      if (t.lo >= 0) dq[size_t(p) * n + t.lo] += t.f_lo * carried;
+      if (t.hi >= 0)
+        dq[size_t(p) * n + t.hi] += t.f_hi * carried;
+      else
+        out[out_property_above(p)] += t.f_hi * carried;
+    }
+  } else {
+    const int c = s.cell(pr);
+    sc.B[c] += rate;
+    sc.V[c] += s.volume(pr) * rate;
+    for (int p = 0; p < P; ++p) sc.Q[size_t(p) * (n + 1) + c] += rate * (pi[size_t(p) * n + j] + pi[size_t(p) * n + k]);
+  }
+}
 
 }  // namespace granuflow::kernels
