@@ -51,6 +51,24 @@ void build_matrix(const Grid& g, const FragmentDistribution& f, const T* p, T* A
 
 }  // namespace
 
+void BreakageScheme::matrix(const Grid& g, const FragmentDistribution& f, const double* p, int count,
+                            std::vector<double>& A) const {
+  std::vector<double> key(p, p + count);
+  A.resize(size_t(g.size() + kOutsideRows) * g.size());
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (valid_ && key_ == key) {
+      A = A_;
+      return;
+    }
+  }
+  build(g, f, p, A.data());
+  std::lock_guard<std::mutex> lock(mutex_);
+  key_ = std::move(key);
+  A_ = A;
+  valid_ = true;
+}
+
 void CellMassBreakage::build(const Grid& g, const FragmentDistribution& f, const double* p, double* A) const {
   build_matrix(g, f, p, A, Segments::kCellMass);
 }

@@ -6,7 +6,11 @@
 //                            Kumar et al. 2008 (cell average for breakage) for cell_average).
 // Volume is conserved to round-off for any fragment law: the fragment volumes are differences of the
 // cumulative volume fraction B(v|u) divided by B(u|u), which telescope to the parent volume.
+//
+// The scheme owns its matrix: matrix() keeps the last one built (it depends on the grid and the fragment law's
+// parameters only, and costs O(n^2) quadratures; runs of a sweep or a calibration rarely change it).
 #pragma once
+#include <mutex>
 #include <vector>
 
 #include "breakage/fragment_distribution.hpp"
@@ -20,6 +24,13 @@ class BreakageScheme {
   virtual ~BreakageScheme() = default;
   virtual void build(const Grid& g, const FragmentDistribution& f, const double* p, double* A) const = 0;
   virtual void build(const Grid& g, const FragmentDistribution& f, const Jet* p, Jet* A) const = 0;
+  // A ((n + kOutsideRows) x n) for the fragment law's parameters p[0, count), from the last one built if they match.
+  void matrix(const Grid& g, const FragmentDistribution& f, const double* p, int count, std::vector<double>& A) const;
+
+ private:
+  mutable std::mutex mutex_;  // evaluations of one population may run in parallel (a run's Work each)
+  mutable bool valid_ = false;
+  mutable std::vector<double> key_, A_;
 };
 
 // Fragments between neighbouring pivots, split linearly (fixed pivot).

@@ -3,16 +3,21 @@
 // pivot of its cell and the neighbouring pivot on the side of its mean volume V_c / B_c, keeping number and volume.
 // Unlike the fixed pivot, the split follows the actual mean of the new particles, which makes the scheme accurate
 // for the large classes (less over-prediction of the second moment). The split is linear in (B, V) for a given side
-// (redistribution.hpp), so the engine differentiates it exactly.
+// (redistribution.hpp), so the scheme differentiates it exactly. The sums over the pairs are those shared with the
+// fixed pivot (pair_runs.hpp).
 #pragma once
 #include "discretization/aggregation_scheme.hpp"
+#include "discretization/pair_runs.hpp"
 
 namespace granuflow::kernels {
 
-class CellAverageAggregation : public AggregationScheme {
+class CellAverageAggregation : public RunScheme<CellAverageAggregation> {
  public:
   std::string name() const override { return "cell_average"; }
   void setup(const Grid& g) override;
+  void jacobian_start(Tables& t, const PopulationJacobian& J) const override;
+  void jacobian_row(Tables& t, const PopulationJacobian& J, const PairEvent* events, int count) const override;
+  void jacobian_finish(Tables& t, const PopulationJacobian& J) const override;
   int cell(size_t pair) const { return cell_[pair]; }  // n: beyond the top edge
   double volume(size_t pair) const { return vsum_[pair]; }
   const double* volumes() const { return vsum_.data(); }

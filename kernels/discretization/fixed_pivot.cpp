@@ -59,6 +59,53 @@ void FixedPivotAggregation::setup(const Grid& g) {
     }
     diagonals_.push_back(g);
   }
+  build_run_layout(*this, g, layout_);
+}
+
+// The aggregate's share on each target (Kumar & Ramkrishna 1996, Eq. (9)): number w times the event rate, property
+// f times what the partners carry, both linear in the rate and in the partners' per-particle properties.
+
+void FixedPivotAggregation::jacobian_row(Tables&, const PopulationJacobian& J, const PairEvent* events,
+                                         int count) const {
+  // J and its fields as locals: invariant across the pairs and the stores into D.
+  const PopulationJacobian L = J;
+  const int n = L.n, P = L.P;
+  double* const D = L.D;
+  const size_t R = L.R;
+  const double *pi = L.pi, *dpi_dN = L.dpi_dN, *dpi_dq = L.dpi_dq;
+  auto add = [D, R](size_t r, int c, double v) { D[size_t(c) * R + r] += v; };
+  struct Dest {
+    int cls;  // -1: above
+    double w, f;
+  };
+  for (const PairEvent* e = events; e != events + count; ++e) {
+    L.deaths(*e);
+    const int j = e->j, k = e->k;
+    const Target& t = target(e->pr);
+    const Dest dests[2] = {{t.lo, t.w_lo, t.f_lo}, {t.hi, t.w_hi, t.f_hi}};
+    for (const Dest& d : dests) {
+      if (d.w == 0.0 && d.f == 0.0) continue;
+      e->for_inputs([&](const PairEvent::Input& in) {
+        if (d.cls >= 0) {
+          add(L.rowN(d.cls), in.col, d.w * in.d);
+        } else {
+          add(L.rowO(kOutNumberAbove), in.col, d.w * in.d);
+          add(L.rowO(kOutVolumeAbove), in.col, d.f * volume(e->pr) * in.d);
+        }
+        for (int p = 0; p < P; ++p) {
+          const double carried = pi[size_t(p) * n + j] + pi[size_t(p) * n + k];
+          add(d.cls >= 0 ? L.rowQ(p, d.cls) : L.rowO(out_property_above(p)), in.col, d.f * carried * in.d);
+        }
+      });
+      for (int p = 0; p < P; ++p) {
+        const size_t row = d.cls >= 0 ? L.rowQ(p, d.cls) : L.rowO(out_property_above(p));
+        for (int i : {j, k}) {
+          add(row, i, d.f * e->rate * dpi_dN[size_t(p) * n + i]);
+          add(row, L.colQ(p, i), d.f * e->rate * dpi_dq[size_t(p) * n + i]);
+        }
+      }
+    }
+  }
 }
 
 }  // namespace granuflow::kernels

@@ -2,13 +2,14 @@
 // aggregate of volume v = x_j + x_k is split between the two pivots around it so that number and volume are kept.
 // The split depends on the grid only, so it is tabulated once per pair. An aggregate beyond the top pivot splits
 // between x_{n-1} and the virtual pivot x_hi, the part at x_hi leaving the grid ("above"); beyond x_hi it leaves
-// whole.
+// whole. The engine's sums over the pairs are those shared with the cell average (pair_runs.hpp).
 #pragma once
 #include "discretization/aggregation_scheme.hpp"
+#include "discretization/pair_runs.hpp"
 
 namespace granuflow::kernels {
 
-class FixedPivotAggregation : public AggregationScheme {
+class FixedPivotAggregation : public RunScheme<FixedPivotAggregation> {
  public:
   struct Target {
     int lo;       // lower class, or -1
@@ -20,6 +21,7 @@ class FixedPivotAggregation : public AggregationScheme {
   };
   std::string name() const override { return "fixed_pivot"; }
   void setup(const Grid& g) override;
+  void jacobian_row(Tables& t, const PopulationJacobian& J, const PairEvent* events, int count) const override;
   const Target& target(size_t pair) const { return targets_[pair]; }
   double volume(size_t pair) const { return vsum_[pair]; }
   // For the engine's vectorized pair loop: the partners k of class j in [run_first(j), run_last(j)] (possibly empty)

@@ -13,6 +13,13 @@
 // (fixed_pivot, cell_average), breakage selection rate, fragment distribution and scheme (fixed_pivot, cell_average,
 // cell_mass), growth law and scheme (fv_koren, fv_upwind). A mechanism not named has no parameters and no cost. The
 // kernels' parameters are declared in the unit (one table per kernel, with the kernel's SI units, bounds and source).
+// The engine knows the schemes only through their interfaces: an aggregation scheme forms the events from the
+// engine's pair coefficients and places them (discretization/aggregation_scheme.hpp), with its grid-only tables built
+// once in declare() and its tables of the kernel's values in the run's Work; a breakage scheme builds (and keeps) the
+// fragment matrix. A kernel-parameter change rebuilds only the tables of the mechanism that owns the parameter.
+//
+// Files: population.cpp (declare, configure, refresh), population_rates.cpp (the rates, aggregation's and growth's
+// parts), population_breakage.cpp, population_jacobian.cpp (analytic and AD Jacobians), population_work.hpp (Work).
 //
 // Leaving the grid, the one way for every unit: aggregates beyond the top pivot, fragments below the first and
 // particles grown past either end are counted in the outside rates (number/volume above, volume below, and each
@@ -25,7 +32,6 @@
 // exists (a kernel that reads N).
 #pragma once
 #include <memory>
-#include <mutex>
 #include <string>
 #include <vector>
 
@@ -46,8 +52,6 @@ class Settings;
 
 namespace granuflow::kernels {
 
-class FixedPivotAggregation;
-class CellAverageAggregation;
 enum class Outside { kFold, kRemove };
 inline constexpr int kMaxProperties = 8;  // extensive properties a population carries per class
 
@@ -63,10 +67,7 @@ struct PopulationOptions {
   std::vector<std::string> properties;  // names of the carried properties (water, ...)
 };
 
-// Rows of the outside rates: number/volume above the top, volume below the bottom, then property p above and below.
-inline constexpr int kOutNumberAbove = 0, kOutVolumeAbove = 1, kOutVolumeBelow = 2;
-inline int out_property_above(int p) { return 3 + 2 * p; }
-inline int out_property_below(int p) { return 4 + 2 * p; }
+// The rows of the outside rates (kOutNumberAbove ..., out_property_above/below): discretization/aggregation_scheme.hpp.
 
 class Population {
  public:
@@ -151,19 +152,31 @@ class Population {
                    const std::string& param_prefix, const std::string& setting_prefix);
   template <class T>
   void rates_t(Work& w, const State<T>& s, const Rates<T>& r, bool fold) const;
+  // The mechanisms' rates into the work rows dN (n), dq (P x n) and out (outside rows), in the order rates_t adds
+  // them; growth returns the volume it creates.
+  template <class T>
+  void aggregation_rates(Work& w, const State<T>& s, const ClassState<T>& cs, T* dN, T* dq, T* out) const;
+  template <class T>
+  void breakage_rates(Work& w, const State<T>& s, const ClassState<T>& cs, T* dN, T* dq, T* out) const;
+  template <class T>
+  T growth_rates(Work& w, const State<T>& s, T* dN, T* dq, T* out) const;
+  // The growth law's terms at the scheme's faces (in the scratch of T), the fluxes' arrays sized.
+  template <class T>
+  GrowthTerms<T> growth_terms(Work& w, const T* p) const;
   template <class T>
   ClassState<T> class_state(const State<T>& s) const;
   template <class T>
   bool fresh_tables(const Work& w, const T* p, int first, int count) const;
   void refresh(Work& w, const double* p) const;
-  void pair_matrices(Work& w, const ClassState<double>& cs, const double* p) const;
-  bool separable_tables(Work& w, const FixedPivotAggregation* fp, const CellAverageAggregation* ca) const;
   // The engine's Jacobian D (jacobian_rows() x input_cols(), column-major): rates of the class numbers, the
   // properties, the outside rows and the volume growth creates, against N, q and the fields read.
   void analytic_jacobian(Work& w, const State<double>& s, std::vector<double>& D) const;
+  void aggregation_jacobian(Work& w, const State<double>& s, const PopulationJacobian& J) const;
+  void feature_gradients(Work& w, const State<double>& s, std::vector<double>& phi, std::vector<double>& G) const;
+  void breakage_jacobian(const Work& w, const PopulationJacobian& J) const;
+  void growth_jacobian(Work& w, const State<double>& s, const PopulationJacobian& J) const;
   void ad_jacobian(Work& w, const State<double>& s, std::vector<double>& D) const;
   void fold_rows(double* D, int cols) const;
-  void fragment_matrix(const double* p, std::vector<double>& A) const;
   int input_cols() const;  // N, q, fields read
   int jacobian_rows() const { return n_ * (1 + properties()) + outside_rows() + 1; }
 
@@ -181,12 +194,6 @@ class Population {
   Plugin<GrowthLaw> growth_;
   std::unique_ptr<FvGrowth> growth_scheme_;
   std::vector<int> kernel_params_;  // indices of every kernel parameter (the refresh snapshot)
-  struct FragmentCache {
-    std::mutex mutex;
-    bool valid = false;
-    std::vector<double> key, A;
-  };
-  std::shared_ptr<FragmentCache> frag_cache_ = std::make_shared<FragmentCache>();
 };
 
 }  // namespace granuflow::kernels

@@ -3,6 +3,8 @@
 //
 //   granuflow_bench_pbm [--json] [--repeats R] [--quick] [--case constant|sum|product|growth|breakage]
 //                       [--integrators auto,ida,bdf,adams,erk] [--q Q] [--rtol R] [--scheme NAME]
+//   granuflow_bench_pbm --refresh [--repeats R]   the cost of a kernel-parameter change (below)
+//   granuflow_bench_pbm --jacobian [--repeats R]  the cost of a Jacobian and a residual (below)
 //   (wired as `granuflow bench pbm --json`; baseline: /usr/bin/python3 tests/bench/scipy_fixed_pivot.py --json)
 //
 // One record per (case, method, integrator, q, rtol) with keys case, method (the scheme), integrator (solver.method
@@ -24,9 +26,13 @@
 #include <cstring>
 #include <ctime>
 #include <fstream>
+#include <map>
+#include <memory>
 #include <string>
 
 #include "granuflow/dae_system.hpp"
+#include "granuflow/flowsheet.hpp"
+#include "kernels/population/population.hpp"
 #include "pbm_analytic.hpp"
 #include "pbm_test_helpers.hpp"
 
@@ -213,11 +219,138 @@ void print(const Record& r, bool json, int repeats, const std::string& meta) {
   std::fflush(stdout);
 }
 
+// --refresh: what one kernel-parameter change costs a population (Population::configure with the parameter moved,
+// which rebuilds every table), and inside a run (rates() after the change, less rates() without), best and median of
+// R rounds of 200 changes each, in microseconds per change, three times over.
+// Populations: the headline bed's (glass-transition aggregation, Vogel-Peukert breakage, water carried, folded; 10 and
+// 40 classes from 50 to 1000 um) changing ln beta0, and the constant kernel on 100 classes (25 doublings, q = 4) for
+// both aggregation schemes changing beta0. Compare builds by running them alternately.
+int refresh_bench(int repeats) {
+  // The mechanisms as a unit's settings name them (the headline bed's choices, units/fluid_bed.cpp), and the
+  // properties carried.
+  struct Setup {
+    std::string label;
+    std::shared_ptr<const kernels::Grid> grid;
+    std::map<std::string, std::string> settings;
+    std::vector<std::string> properties;
+  };
+  auto headline = [](int n) {
+    std::vector<double> d(n);
+    for (int i = 0; i < n; ++i) d[i] = 50e-6 * std::pow(1000.0 / 50.0, double(i) / (n - 1));
+    return Setup{"headline glass_transition+breakage n=" + std::to_string(n),
+                 std::make_shared<const kernels::Grid>(kernels::Grid::from_diameter_pivots(d)),
+                 {{"aggregation", "glass_transition"},
+                  {"aggregation_scheme", "fixed_pivot"},
+                  {"breakage", "vogel_peukert"},
+                  {"fragments", "tanh_power_law"},
+                  {"breakage_scheme", "fixed_pivot"},
+                  {"outside", "fold"}},
+                 {"water"}};
+  };
+  auto constant = [](const std::string& scheme) {
+    return Setup{"constant " + scheme + " n=100",
+                 std::make_shared<const kernels::Grid>(kernels::Grid::geometric(std::exp2(-12.0), 4, 100)),
+                 {{"aggregation", "constant"}, {"aggregation_scheme", scheme}},
+                 {}};
+  };
+  for (const Setup& c : {headline(10), headline(40), constant("fixed_pivot"), constant("cell_average")}) {
+    UnitSpec spec;
+    Settings st("bench", c.settings);
+    kernels::PopulationOptions options;
+    options.properties = c.properties;
+    kernels::Population pop;
+    pop.declare(spec, st, c.grid, options);
+    std::vector<double> p;
+    for (const auto& ps : spec.params()) p.push_back(ps.value);
+    auto w = pop.make_work();
+    pop.configure(*w, p.data(), "bench");
+    const double p0 = p[0];
+    // An evaluation at an empty state (every class 0, fields at mid-range values): its cost with the parameter moved
+    // less its cost without is what a change costs inside a run (rates() refreshes the tables itself).
+    const int n = c.grid->size(), P = static_cast<int>(c.properties.size());
+    std::vector<double> zeros(n, 0.0), floor(n, 1e-9), fields[kernels::kFields], out(size_t(n) * (1 + P) + 64, 0.0);
+    const double field_values[kernels::kFields] = {0.01, 0.1, 320.0, 0.01, 0.5};
+    kernels::Population::State<double> es;
+    kernels::Population::Rates<double> rt;
+    es.N = zeros.data(), es.floor = floor.data(), es.p = p.data(), rt.dN = out.data(), rt.outside = out.data() + n;
+    for (int f = 0; f < kernels::kFields; ++f) fields[f].assign(n, field_values[f]), es.fields[f] = fields[f].data();
+    for (int k = 0; k < P; ++k) es.q[k] = zeros.data(), rt.dq[k] = out.data() + size_t(n) * (1 + k);
+    rt.outside = out.data() + size_t(n) * (1 + P);
+    constexpr int kChanges = 200;
+    auto per_change = [&](auto&& step) {  // best and median of `repeats` rounds, us per step
+      std::vector<double> rounds;
+      for (int r = 0; r < repeats; ++r) {
+        const auto t0 = clk::now();
+        for (int k = 0; k < kChanges; ++k) step(k);
+        rounds.push_back(ms_since(t0) * 1e3 / kChanges);
+      }
+      std::sort(rounds.begin(), rounds.end());
+      return std::make_pair(rounds.front(), rounds[rounds.size() / 2]);
+    };
+    auto move = [&](int k) { p[0] = k % 2 ? p0 : p0 * 1.001 + 1e-3; };  // the aggregation kernel's first parameter
+    for (int round = 0; round < 3; ++round) {
+      const auto conf = per_change([&](int k) { move(k), pop.configure(*w, p.data(), "bench"); });
+      const auto changed = per_change([&](int k) { move(k), pop.rates(*w, es, rt); });
+      p[0] = p0;
+      const auto same = per_change([&](int) { pop.rates(*w, es, rt); });
+      std::printf(
+          "%-44s %-9s configure best %8.3f median %8.3f us | rates after a change %8.3f (%8.3f), without "
+          "%8.3f (%8.3f): change %8.3f us\n",
+          c.label.c_str(), pop.aggregation_evaluation(*w).c_str(), conf.first, conf.second, changed.first,
+          changed.second, same.first, same.second, changed.first - same.first);
+    }
+  }
+  return 0;
+}
+
+// --jacobian: the Jacobian and the residual of pbm_batch (aggregation only, q = 4 on the verification grid) at a state
+// of the constant kernel's run, best and median of R rounds of 20 calls, in microseconds per call.
+int jacobian_bench(int repeats) {
+  for (const char* kernel : {"constant", "sum"})
+    for (const char* scheme : {"fixed_pivot", "cell_average"}) {
+      auto s = pbm_test::grid_settings(4, 27);
+      s["aggregation"] = kernel, s["aggregation_scheme"] = scheme;
+      auto fs = pbm_test::flowsheet(s);
+      DaeSystem sys(*fs);
+      const int n = sys.size();
+      std::vector<double> y(n), yp(n, 0.0), r(n), J(size_t(n) * n);
+      sys.initial_values(y);
+      for (int i = 0; i < n; ++i) y[i] = std::abs(y[i]) * (0.5 + 0.5 * std::sin(0.7 * i) * std::sin(0.7 * i)) + 1e-6;
+      auto best_median = [&](auto&& call) {
+        std::vector<double> rounds;
+        for (int k = 0; k < repeats; ++k) {
+          const auto t0 = clk::now();
+          for (int c = 0; c < 20; ++c) call();
+          rounds.push_back(ms_since(t0) * 1e3 / 20);
+        }
+        std::sort(rounds.begin(), rounds.end());
+        return std::make_pair(rounds.front(), rounds[rounds.size() / 2]);
+      };
+      const auto jac = best_median([&] { sys.jacobian(0, y.data(), yp.data(), 10.0, J.data(), nullptr); });
+      const auto res = best_median([&] { sys.residual(0, y.data(), yp.data(), r.data()); });
+      std::printf("%-9s %-13s n=%3d  jacobian best %9.2f median %9.2f us   residual best %7.2f median %7.2f us\n",
+                  kernel, scheme, n, jac.first, jac.second, res.first, res.second);
+    }
+  return 0;
+}
+
 }  // namespace
 }  // namespace granuflow
 
 int main(int argc, char** argv) {
   using namespace granuflow;
+  for (int i = 1; i < argc; ++i)
+    if (std::string(argv[i]) == "--refresh") {
+      int r = 50;
+      for (int k = 1; k + 1 < argc; ++k)
+        if (std::string(argv[k]) == "--repeats") r = std::max(1, std::atoi(argv[k + 1]));
+      return refresh_bench(r);
+    } else if (std::string(argv[i]) == "--jacobian") {
+      int r = 30;
+      for (int k = 1; k + 1 < argc; ++k)
+        if (std::string(argv[k]) == "--repeats") r = std::max(1, std::atoi(argv[k + 1]));
+      return jacobian_bench(r);
+    }
   bool json = false, quick = false;
   int repeats = 5;
   std::string only, scheme;

@@ -1,0 +1,286 @@
+// The population engine's Jacobian: analytic for everything built in (the kernels' derivatives from small forward-AD
+// evaluations per class and per pair; the aggregation scheme places the births, discretization/aggregation_scheme.hpp),
+// forward AD over the engine's inputs where no analytic path exists; folded, then mapped to the unit's rows and
+// columns.
+#include <algorithm>
+
+#include "population/population_work.hpp"
+
+namespace granuflow::kernels {
+
+void Population::fold_rows(double* D, int cols) const {
+  if (outside_ != Outside::kFold) return;
+  const int n = n_, P = properties();
+  const auto& x = grid_->pivots();
+  const size_t out0 = size_t(n) * (1 + P), R = jacobian_rows();
+  for (int c = 0; c < cols; ++c) {
+    double* col = D + size_t(c) * R;
+    col[0] += col[out0 + kOutVolumeBelow] / x[0];
+    col[n - 1] += col[out0 + kOutVolumeAbove] / x[n - 1];
+    for (int p = 0; p < P; ++p) {
+      col[size_t(n) * (1 + p)] += col[out0 + out_property_below(p)];
+      col[size_t(n) * (1 + p) + n - 1] += col[out0 + out_property_above(p)];
+    }
+  }
+}
+
+void Population::jacobian(Work& w, const State<double>& s, const Map& m, JacobianSink& sink) const {
+  const FlushDenormals ftz;
+  refresh(w, s.p);
+  const int n = n_, P = properties(), no = outside_rows(), C = input_cols(), R = jacobian_rows();
+  w.D.assign(size_t(R) * C, 0.0);
+  if (needs_.number || (sel_.kernel && sel_.kernel->state_dependent()))
+    ad_jacobian(w, s, w.D);
+  else
+    analytic_jacobian(w, s, w.D);
+  fold_rows(w.D.data(), C);
+  // Map the engine's rows and inputs to the unit's (row, factor) and (column, scale).
+  std::vector<int>& rows = w.map_rows;
+  std::vector<int>& cols = w.map_cols;
+  std::vector<double>& factors = w.map_factors;
+  std::vector<double>& scales = w.map_scales;
+  rows.assign(R, -1), factors.assign(R, 0.0), cols.assign(C, -1), scales.assign(C, 1.0);
+  for (int i = 0; i < n; ++i) rows[i] = m.N_row[i], factors[i] = m.N_factor[i];
+  for (int p = 0; p < P; ++p)
+    for (int i = 0; i < n; ++i) rows[n * (1 + p) + i] = m.q_row[p][i], factors[n * (1 + p) + i] = m.q_factor;
+  for (int k = 0; k < no && k < static_cast<int>(m.outside_row.size()); ++k)
+    rows[n * (1 + P) + k] = m.outside_row[k], factors[n * (1 + P) + k] = -1.0;
+  rows[R - 1] = m.grown_row, factors[R - 1] = -1.0;
+  for (int i = 0; i < n; ++i) cols[i] = m.N_col[i], scales[i] = m.N_scale[i];
+  for (int p = 0; p < P; ++p)
+    for (int i = 0; i < n; ++i) cols[n * (1 + p) + i] = m.q_col[p][i];
+  for (size_t fi = 0; fi < field_index_.size(); ++fi) {
+    const std::vector<int>& fc = m.field_col[field_index_[fi]];
+    for (int i = 0; i < n && !fc.empty(); ++i) cols[n * (1 + P) + static_cast<int>(fi) * n + i] = fc[i];
+  }
+  // Column by column (D is column-major), so that a dense sink's column (the unit's rows, mostly consecutive) is
+  // written in order. Each sink entry receives its terms in the same order as row by row (several engine columns can
+  // map to one sink column: the temperature field).
+  for (int c = 0; c < C; ++c) {
+    if (cols[c] < 0) continue;
+    const double* d = &w.D[size_t(c) * R];
+    const double sc = scales[c];
+    if (double* col = sink.dense_column(cols[c])) {
+      for (int r = 0; r < R; ++r)
+        if (d[r] != 0.0 && rows[r] >= 0) col[rows[r]] += factors[r] * d[r] * sc;
+    } else {
+      for (int r = 0; r < R; ++r)
+        if (d[r] != 0.0 && rows[r] >= 0) sink.add(rows[r], cols[c], factors[r] * d[r] * sc);
+    }
+  }
+}
+
+// d(rates)/d(N, q, fields) of the built-in mechanisms into D (rows: class numbers, properties, outside; columns: N,
+// q, the fields read), before folding.
+void Population::analytic_jacobian(Work& w, const State<double>& s, std::vector<double>& Dv) const {
+  const int n = n_, P = properties();
+  const double* N = s.N;
+  // Per-particle properties and their derivatives.
+  std::vector<double> pi(size_t(P) * n), dpi_dN(size_t(P) * n), dpi_dq(size_t(P) * n);
+  for (int p = 0; p < P; ++p)
+    for (int i = 0; i < n; ++i) {
+      const double den = N[i] + (s.floor ? s.floor[i] : 0.0);
+      pi[size_t(p) * n + i] = s.q[p][i] / den;
+      dpi_dq[size_t(p) * n + i] = 1.0 / den;
+      dpi_dN[size_t(p) * n + i] = -pi[size_t(p) * n + i] / den;
+    }
+  const PopulationJacobian J{
+      grid_.get(), n, P, input_cols(), size_t(jacobian_rows()), Dv.data(), pi.data(), dpi_dN.data(), dpi_dq.data()};
+  if (agg_.kernel) aggregation_jacobian(w, s, J);
+  if (sel_.kernel) breakage_jacobian(w, J);
+  if (growth_.kernel) growth_jacobian(w, s, J);
+}
+
+// The features phi_i of the aggregation kernel and dphi_i/dfield_i (G, n x mf x fields read): every class's field f
+// seeded in direction f at once (phi_i reads class i only).
+void Population::feature_gradients(Work& w, const State<double>& s, std::vector<double>& phi,
+                                   std::vector<double>& G) const {
+  const int n = n_, mf = agg_.kernel->n_features(), nfr = static_cast<int>(field_index_.size());
+  const double* kp = s.p + agg_.first;
+  w.jf.resize(size_t(kFields) * n);
+  ClassState<Jet> cj;
+  cj.n = n, cj.volume = grid_->pivots().data(), cj.diameter = grid_->diameter_pivots().data();
+  for (int fi = 0; fi < nfr; ++fi) {
+    const int f = field_index_[fi];
+    for (int i = 0; i < n; ++i) {
+      w.jf[size_t(f) * n + i] = Jet(s.fields[f][i]);
+      w.jf[size_t(f) * n + i].v[fi] = 1.0;
+    }
+    cj.fields[f] = &w.jf[size_t(f) * n];
+  }
+  w.jp.resize(agg_.count);
+  for (int k = 0; k < agg_.count; ++k) w.jp[k] = Jet(kp[k]);
+  w.jphi.resize(size_t(n) * mf);
+  agg_.kernel->features(cj, w.jp.data(), w.jphi.data());
+  for (int i = 0; i < n; ++i)
+    for (int a = 0; a < mf; ++a) {
+      phi[size_t(i) * mf + a] = w.jphi[size_t(i) * mf + a].a;
+      for (int fi = 0; fi < nfr; ++fi) G[(size_t(i) * mf + a) * nfr + fi] = w.jphi[size_t(i) * mf + a].v[fi];
+    }
+}
+
+// Aggregation: per pair, the event rate's derivatives against the inputs it reads (N_j, N_k and the fields of both
+// partners through the efficiency); the scheme adds the partners' deaths (PopulationJacobian::deaths) and the births.
+void Population::aggregation_jacobian(Work& w, const State<double>& s, const PopulationJacobian& J) const {
+  const int n = n_, P = properties(), nfr = static_cast<int>(field_index_.size());
+  const double* kp = s.p + agg_.first;
+  const double* N = s.N;
+  auto colF = [&](int fi, int i) { return n * (1 + P) + fi * n + i; };
+  const int mf = agg_.kernel->n_features();
+  std::vector<double> phi(size_t(n) * mf), G(size_t(n) * mf * std::max(nfr, 1), 0.0);
+  if (mf > 0) feature_gradients(w, s, phi, G);
+  agg_scheme_->jacobian_start(*w.agg, J);
+  if (mf > 0) {
+    const size_t pairs = size_t(n) * (n + 1) / 2;
+    w.eff.resize(pairs), w.eff_da.resize(pairs * mf), w.eff_db.resize(pairs * mf);
+    agg_.kernel->efficiency_gradients(phi.data(), n, kp, agg_.count, w.eff.data(), w.eff_da.data(), w.eff_db.data());
+  }
+  // Per row of the pair triangle, each event's inputs: N_j, N_k and the fields of both partners.
+  using In = PairEvent::Input;
+  w.inputs.resize(size_t(n) * (2 + 2 * nfr));
+  w.events.resize(n);
+  size_t pr = 0;
+  for (int j = 0; j < n; ++j) {
+    In* in = w.inputs.data();
+    int count = 0;
+    for (int k = j; k < n; ++k, ++pr) {
+      const double Kh = w.Kh[pr];
+      double E = 1.0;
+      const double* dEa = mf > 0 ? &w.eff_da[pr * mf] : nullptr;
+      const double* dEb = mf > 0 ? &w.eff_db[pr * mf] : nullptr;
+      if (mf > 0) E = w.eff[pr];
+      const double beta = Kh * E, rate = beta * N[j] * N[k];
+      In* ev_buf = in;
+      ev_buf[0] = {j, beta * N[k]};
+      ev_buf[1] = {k, beta * N[j]};
+      int nev = 2;
+      for (int fi = 0; fi < nfr && mf > 0; ++fi) {
+        double dj = 0, dk = 0;
+        for (int c = 0; c < mf; ++c) {
+          dj += dEa[c] * G[(size_t(j) * mf + c) * nfr + fi];
+          dk += dEb[c] * G[(size_t(k) * mf + c) * nfr + fi];
+        }
+        ev_buf[nev++] = {colF(fi, j), Kh * N[j] * N[k] * dj};
+        ev_buf[nev++] = {colF(fi, k), Kh * N[j] * N[k] * dk};
+      }
+      in += nev;
+      w.events[count++] = PairEvent{pr, j, k, rate, ev_buf, in};
+    }
+    agg_scheme_->jacobian_row(*w.agg, J, w.events.data(), count);  // deaths and births, pair by pair
+  }
+  agg_scheme_->jacobian_finish(*w.agg, J);
+}
+
+// Growth: the growth scheme's flux Jacobian; properties with the donor cell's particles.
+void Population::growth_jacobian(Work& w, const State<double>& s, const PopulationJacobian& J) const {
+  const int n = n_, P = properties();
+  const double* N = s.N;
+  // J's layout under short names, as the terms below are written
+  const double *pi = J.pi, *dpi_dN = J.dpi_dN, *dpi_dq = J.dpi_dq;
+  auto rowN = [&](int i) { return J.rowN(i); };
+  auto rowQ = [&](int p, int i) { return J.rowQ(p, i); };
+  auto rowO = [&](int k) { return J.rowO(k); };
+  auto colQ = [&](int p, int i) { return J.colQ(p, i); };
+  auto add = [&](size_t r, int c, double v) { J.add(r, c, v); };
+  const size_t out0 = size_t(n) * (1 + P);
+  const int nf = n + 1;
+  auto& sc = w.sd;
+  const GrowthTerms<double> g = growth_terms(w, s.p);
+  growth_scheme_->fluxes(N, g, sc.F.data(), sc.donor.data());
+  w.dF.resize(size_t(nf) * n);
+  growth_scheme_->flux_jacobian(N, g, w.dF.data());
+  const size_t grown = out0 + outside_rows();
+  const auto& dx = growth_scheme_->face_volume_steps();
+  for (int f = 0; f < nf; ++f) {
+    const double* dF = &w.dF[size_t(f) * n];
+    for (int l = 0; l < n; ++l) {
+      if (dF[l] == 0.0) continue;
+      add(grown, l, dF[l] * dx[f]);
+      if (f > 0)
+        add(rowN(f - 1), l, -dF[l]);
+      else
+        add(rowO(kOutVolumeBelow), l, -dF[l] * grid_->lower_virtual());
+      if (f < n) {
+        add(rowN(f), l, dF[l]);
+      } else {
+        add(rowO(kOutNumberAbove), l, dF[l]);
+        add(rowO(kOutVolumeAbove), l, dF[l] * grid_->upper_virtual());
+      }
+    }
+    const int d = sc.donor[f];
+    if (d < 0) continue;
+    for (int p = 0; p < P; ++p) {
+      const size_t from = f > 0 ? rowQ(p, f - 1) : rowO(out_property_below(p));
+      const size_t to = f < n ? rowQ(p, f) : rowO(out_property_above(p));
+      const double pid = pi[size_t(p) * n + d];
+      // Fq = F pi_d: dFq/dN_l = dF/dN_l pi_d + F dpi_d/dN_d [l = d], dFq/dq_d = F dpi_d/dq_d
+      for (int l = 0; l < n; ++l) {
+        double v = dF[l] * pid;
+        if (l == d) v += sc.F[f] * dpi_dN[size_t(p) * n + d];
+        if (v == 0.0) continue;
+        add(from, l, -v);
+        add(to, l, v);
+      }
+      const double vq = sc.F[f] * dpi_dq[size_t(p) * n + d];
+      add(from, colQ(p, d), -vq);
+      add(to, colQ(p, d), vq);
+    }
+  }
+}
+
+// Forward AD over the engine's inputs (N, q, fields), kAdChunk at a time: for kernels that read N.
+void Population::ad_jacobian(Work& w, const State<double>& s, std::vector<double>& D) const {
+  make_jets(w);
+  const int n = n_, P = properties(), no = outside_rows(), C = input_cols(),
+            nfr = static_cast<int>(field_index_.size()), R = jacobian_rows();
+  int np = 0;
+  for (int k : kernel_params_) np = std::max(np, k + 1);
+  w.jp.resize(np);
+  for (int k : kernel_params_) w.jp[k] = Jet(s.p[k]);
+  w.jN.resize(n), w.jq.resize(size_t(P) * n), w.jf.resize(size_t(kFields) * n);
+  std::vector<Jet> jfloor(n), dN(n), dq(size_t(P) * n), out(no);
+  Jet grown;
+  for (int i = 0; i < n; ++i) jfloor[i] = Jet(s.floor ? s.floor[i] : 0.0);
+  State<Jet> js;
+  js.N = w.jN.data();
+  js.floor = jfloor.data();
+  js.p = w.jp.data();
+  for (int p = 0; p < P; ++p) js.q[p] = &w.jq[size_t(p) * n];
+  for (int fi = 0; fi < nfr; ++fi) js.fields[field_index_[fi]] = &w.jf[size_t(field_index_[fi]) * n];
+  Rates<Jet> jr;
+  jr.dN = dN.data();
+  for (int p = 0; p < P; ++p) jr.dq[p] = &dq[size_t(p) * n];
+  jr.outside = out.data();
+  jr.grown = &grown;
+  for (int c0 = 0; c0 < C; c0 += kAdChunk) {
+    const int c1 = std::min(C, c0 + kAdChunk);
+    for (int i = 0; i < n; ++i) w.jN[i] = Jet(s.N[i]);
+    for (int p = 0; p < P; ++p)
+      for (int i = 0; i < n; ++i) w.jq[size_t(p) * n + i] = Jet(s.q[p][i]);
+    for (int fi = 0; fi < nfr; ++fi)
+      for (int i = 0; i < n; ++i) w.jf[size_t(field_index_[fi]) * n + i] = Jet(s.fields[field_index_[fi]][i]);
+    for (int c = c0; c < c1; ++c) {
+      if (c < n)
+        w.jN[c].v[c - c0] = 1.0;
+      else if (c < n * (1 + P))
+        w.jq[c - n].v[c - c0] = 1.0;
+      else
+        w.jf[size_t(field_index_[(c - n * (1 + P)) / n]) * n + (c - n * (1 + P)) % n].v[c - c0] = 1.0;
+    }
+    std::fill(dN.begin(), dN.end(), Jet(0.0));
+    std::fill(dq.begin(), dq.end(), Jet(0.0));
+    std::fill(out.begin(), out.end(), Jet(0.0));
+    grown = Jet(0.0);
+    rates_t(w, js, jr, false);  // folding is applied to D afterwards
+    for (int c = c0; c < c1; ++c) {
+      double* col = D.data() + size_t(c) * R;
+      for (int i = 0; i < n; ++i) col[i] = dN[i].v[c - c0];
+      for (int p = 0; p < P; ++p)
+        for (int i = 0; i < n; ++i) col[size_t(n) * (1 + p) + i] = dq[size_t(p) * n + i].v[c - c0];
+      for (int k = 0; k < no; ++k) col[size_t(n) * (1 + P) + k] = out[k].v[c - c0];
+      col[size_t(n) * (1 + P) + no] = grown.v[c - c0];
+    }
+  }
+}
+
+}  // namespace granuflow::kernels
