@@ -1,4 +1,6 @@
-"""The command line without a command lists the commands; counts beyond any sane run are refused at once."""
+"""The command line without a command lists the commands; counts beyond any sane run are refused at once; a docs
+folder that cannot be written is one line naming --write."""
+import os
 import time
 
 import pytest
@@ -35,3 +37,19 @@ def test_bench_repeats_beyond_any_sane_run_are_refused_at_once(capsys, repeats):
 def test_bench_repeats_below_one_name_both_bounds(capsys):
     code, err, _ = _main(capsys, ["bench", "core", "--repeats", "0"])
     assert code == 2 and "--repeats = 0: expected a number >= 1 and <= 10000" in err, err
+
+
+@pytest.mark.parametrize("target", ["loop", "file"])
+def test_docs_into_a_link_loop_or_onto_a_file_is_one_line_naming_write(tmp_path, capsys, target):
+    if target == "loop":
+        os.symlink(tmp_path / "b", tmp_path / "a")
+        os.symlink(tmp_path / "a", tmp_path / "b")
+        where, reason = tmp_path / "a", "symbolic links"
+    else:
+        (tmp_path / "a").write_text("not a folder\n")
+        where, reason = tmp_path / "a", "Not a directory"
+    code, err, _ = _main(capsys, ["docs", "--write", str(where), "--quiet"])
+    assert code == 2, err
+    assert len(err.strip().splitlines()) == 1, err
+    assert f"--write {where}: cannot write" in err and reason in err, err
+    assert "Traceback" not in err

@@ -82,16 +82,21 @@ def cmd_docs(args) -> int:
     from .. import reference
 
     stale = []
-    for rel, text in reference.pages().items():
-        path = os.path.join(args.dir, rel)
-        old = open(path).read() if os.path.exists(path) else None
-        if old == text:
-            continue
-        stale.append(rel)
-        if not args.check:
-            os.makedirs(os.path.dirname(path), exist_ok=True)
-            with open(path, "w") as f:
-                f.write(text)
+    try:
+        for rel, text in reference.pages().items():
+            path = os.path.join(args.dir, rel)
+            old = open(path).read() if os.path.exists(path) else None
+            if old == text:
+                continue
+            stale.append(rel)
+            if not args.check:
+                os.makedirs(os.path.dirname(path), exist_ok=True)
+                with open(path, "w") as f:
+                    f.write(text)
+    except OSError as e:  # a link loop, a file where a folder should be, no permission: named, never a traceback
+        raise ConfigError(f"{'--check' if args.check else '--write'} {args.dir}: cannot "
+                          f"{'read' if args.check else 'write'} {e.filename or args.dir}: "
+                          f"{e.strerror or type(e).__name__}") from None
     if args.check and stale:
         raise ConfigError(f"{args.dir}: {len(stale)} generated pages are out of date ({', '.join(stale)}); "
                           "run granuflow docs --write DIR")
