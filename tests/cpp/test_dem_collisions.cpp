@@ -101,6 +101,20 @@ std::unique_ptr<AggregationKernel> dem_kernel(std::map<std::string, std::string>
   return k;
 }
 
+// Without a collision file and with no table loaded, the kernel names the setting that is missing (it reported an
+// unknown data table '(none loaded)').
+TEST(DemCollisionKernel, WithoutAFileOrATableTheMissingSettingIsNamed) {
+  if (!table_names().empty()) GTEST_SKIP() << "a table was loaded earlier in this process";
+  try {
+    dem_kernel({});
+    FAIL() << "a DEM kernel without collision frequencies was declared";
+  } catch (const ConfigError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("test.agg_collisions_file: not given"), std::string::npos) << msg;
+    EXPECT_EQ(msg.find("none loaded"), std::string::npos) << msg;
+  }
+}
+
 TEST(DemCollisionKernel, GridClassesTakeTheFrequencyOfTheirDemClass) {
   auto k = dem_kernel({{"agg_collisions_file", repo_path(kExample)}});
   const auto g = Grid::from_diameter_pivots({2e-3, 2.6e-3, 3.2e-3, 6e-3});
