@@ -228,14 +228,18 @@ CollisionCounts read_collision_counts(const std::string& path) {
 std::string resolve_data_path(const std::string& where, const std::string& file) {
   if (file.empty() || file.front() == '/') return file;
   const auto colon = where.find(": ");
-  if (colon != std::string::npos) {
-    const std::string label = where.substr(0, colon);
+  if (colon == std::string::npos) return file;
+  // A label may carry a note after the scene's path ("scene.yaml (grid refined 2x)", a refined copy for the error
+  // estimate): the file is the part before it, so the copy reads the data the scene reads from any working folder.
+  for (std::string label = where.substr(0, colon);;) {
     if (is_file(label)) {
       const auto slash = label.find_last_of('/');
       return (slash == std::string::npos ? std::string(".") : label.substr(0, slash)) + "/" + file;
     }
+    const auto note = label.rfind(" (");
+    if (note == std::string::npos) return file;
+    label.erase(note);
   }
-  return file;
 }
 
 }  // namespace granuflow::kernels

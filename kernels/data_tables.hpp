@@ -46,8 +46,8 @@ CollisionCounts parse_collision_counts(const std::string& text, const std::strin
 CollisionCounts read_collision_counts(const std::string& path);
 
 // A data file named in a unit setting: absolute paths as given, relative ones from the folder of the scene file
-// the setting came from (the label before ": " in Settings::where(), when that is a file), else from the working
-// folder.
+// the setting came from (the label before ": " in Settings::where(), when that is a file, or its part before a note
+// in parentheses), else from the working folder.
 std::string resolve_data_path(const std::string& settings_where, const std::string& file);
 
 }  // namespace granuflow::kernels
