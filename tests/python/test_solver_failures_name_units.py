@@ -22,4 +22,3 @@ def test_a_two_dimensional_population_of_1e_300_particles_fails_naming_its_unit(
     assert 0 < err.t < 2.0, str(err)
     assert "unit 'granulator'" in str(err) and "worst weighted residual" in str(err)
     assert err.worst_residual > 0 and not math.isnan(err.worst_residual)
-
