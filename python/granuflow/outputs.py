@@ -13,6 +13,7 @@ in the name (``d50_um``, ``T_gas_out_K``).
 from __future__ import annotations
 
 import re
+from typing import Mapping
 
 _SIZE = re.compile(r"^(?:.*\.)?(d\d+)$")  # characteristic diameters: d10, d50, ...
 
@@ -53,6 +54,30 @@ _SUMMARY_DISPLAY = {
     "T_gas_out_K": ("gas outlet temperature", "K", "degC"), "T_bed_K": ("bed temperature", "K", "degC"),
     "T_out_K": ("outlet temperature", "K", "degC"),
 }
+
+
+def grid_end_warnings(ends: Mapping[str, Mapping], when: str = "at the end of the run") -> list[str]:
+    """The warnings of an end class of a size grid holding more than GRID_END_WARNING of the mass, from grid ends as
+    :meth:`granuflow.Result.grid_ends` gives them (``initial``, ``final``, ``max``, ``d_um`` per end): at the start
+    (the initial distribution lies outside the grid) or later (the grid clips the product); ``when`` says where the
+    final value stands ("at the end of the run", "at the steady state")."""
+    out = []
+    lim = GRID_END_WARNING
+    for name, e in ends.items():
+        unit, _, end = name.rpartition(".")
+        where = {"top_class": "top size class", "bottom_class": "bottom size class"}.get(end, name)
+        at = f" ({e['d_um']:.4g} um)" if e["d_um"] is not None else ""
+        side = "d_min" if end == "bottom_class" else "d_max"
+        if e["initial"] > lim:
+            out.append(f"{unit}: the initial size distribution lies outside the grid: "
+                       f"{100 * e['initial']:.3g} % of the initial mass is in the {where}{at}; check the initial "
+                       "distribution against the grid (particles: settings: d_min, d_max)")
+        elif e["max"] > lim:
+            peak = f" (up to {100 * e['max']:.3g} % during it)" if e["max"] > 1.01 * e["final"] else ""
+            out.append(f"{unit}: {100 * e['final']:.3g} % of the mass is in the {where}{at} {when}{peak}: the grid "
+                       f"clips the distribution (more than {100 * lim:g} %), so the sizes near that end are the "
+                       f"grid's, not the product's; widen the grid (particles: settings: {side})")
+    return out
 
 
 def d_values(bed: str) -> tuple[str, ...]:

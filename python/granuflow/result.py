@@ -209,24 +209,7 @@ class Result:
         """What a user must know before trusting the numbers (summary.json ``warnings``): an end class of a size
         grid holding more than ``outputs.GRID_END_WARNING`` of the mass, at the start (the initial distribution
         lies outside the grid) or at any later output time (the grid clips the product)."""
-        out = []
-        lim = outputs.GRID_END_WARNING
-        for name, e in self.grid_ends().items():
-            unit, _, end = name.rpartition(".")
-            where = {"top_class": "top size class", "bottom_class": "bottom size class"}.get(end, name)
-            at = f" ({e['d_um']:.4g} um)" if e["d_um"] is not None else ""
-            side = "d_min" if end == "bottom_class" else "d_max"
-            if e["initial"] > lim:
-                out.append(f"{unit}: the initial size distribution lies outside the grid: "
-                           f"{100 * e['initial']:.3g} % of the initial mass is in the {where}{at}; check the initial "
-                           "distribution against the grid (particles: settings: d_min, d_max)")
-            elif e["max"] > lim:
-                peak = f" (up to {100 * e['max']:.3g} % during it)" if e["max"] > 1.01 * e["final"] else ""
-                out.append(f"{unit}: {100 * e['final']:.3g} % of the mass is in the {where}{at} at the end of the "
-                           f"run{peak}: the grid clips the distribution (more than {100 * lim:g} %), so the sizes "
-                           f"near that end are the grid's, not the product's; widen the grid (particles: settings: "
-                           f"{side})")
-        return out
+        return outputs.grid_end_warnings(self.grid_ends())
 
     # -- summary --------------------------------------------------------------------------------
     def balance_closure(self) -> dict:

@@ -82,12 +82,15 @@ def steady_report(fs: Flowsheet, *, t: float = 0.0, stability: bool = True, ftol
     flowsheet's boundary, per second, and ``rel`` = |in - out| / max), ``stability`` (the eigenvalue of the
     linearized dynamics with the largest real part: ``stable``, ``oscillation_period_s``; None for sparse systems),
     ``solver`` (``method``, ``iterations``, ``pseudo_steps``, ``residual_norm``, ``wall_time_s``, ``conserved``,
-    ``warnings``) and ``units``."""
+    ``warnings``), ``warnings`` (an end class of a size grid holding more than GRID_END_WARNING of the mass, as a run
+    warns) and ``units``."""
     raw = fs.steady_state(t=float(t), ftol=ftol, stability=stability)
     values, units = _summary(fs, raw)
     rep = {"scene": fs.name, "t_s": float(t), **values, "balance": boundary_balance(raw), "stability": _stability(raw),
            "solver": {k: raw[k] for k in ("method", "iterations", "pseudo_steps", "residual_norm", "wall_time_s",
                                           "conserved", "warnings")}}
+    # every check a run makes on its grids, on the steady state too
+    rep["warnings"] = outputs_mod.grid_end_warnings(steady_grid_ends(fs, raw), "at the steady state")
     rep["units"] = {"t_s": "s", **units, "balance": "kg/s (solids, water), W (energy); rel: -",
                     "stability": "1/s, s", "solver": "wall_time_s: s"}
     rep["_raw"] = raw
@@ -105,6 +108,27 @@ def steady_values(fs: Flowsheet, names: Sequence[str], *, t: float = 0.0) -> dic
             out[n] = float(from_si(_value(raw, smap[n]), outputs_mod.summary_unit(n, si), si))
         else:
             out[n] = float(_value(raw, n))
+    return out
+
+
+def steady_grid_ends(fs: Flowsheet, raw: Mapping) -> dict[str, dict]:
+    """The mass fraction in the end classes of each size grid at the steady state, as
+    :meth:`granuflow.Result.grid_ends` gives it for a run (``initial`` 0: a steady state has no start of its own)."""
+    roles, names = fs.output_roles, fs.output_names
+    out: dict[str, dict] = {}
+    units = outputs_mod.psd_units(roles)
+    for unit in units:
+        dcols, mcols = outputs_mod.psd_columns(roles, unit)
+        m = np.array([raw["outputs"][names[j]] for j in mcols])
+        total = m.sum()
+        for end, k in (("bottom_class", 0), ("top_class", -1)):
+            f = float(m[k] / total) if total > 0 else 0.0
+            out[f"{unit}.{end}"] = {"initial": 0.0, "final": f, "max": f,
+                                    "d_um": float(from_si(raw["outputs"][names[dcols[k]]], "um", "m"))}
+    for j, name in outputs_mod.grid_end_columns(roles, names):
+        if roles[j][3] not in units:
+            v = float(raw["outputs"][name])
+            out[name] = {"initial": 0.0, "final": v, "max": v, "d_um": None}
     return out
 
 

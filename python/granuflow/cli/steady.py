@@ -6,6 +6,7 @@ from __future__ import annotations
 import csv
 import json
 import os
+import sys
 
 from ..flowsheet import load
 from ..steady import steady_psd_rows, steady_report
@@ -40,6 +41,8 @@ def cmd_steady(args) -> int:
                 w.writerow([r["unit"], r["class"], f"{r['d_um']:.6g}", f"{r['mass_kg']:.9g}",
                             f"{r['mass_fraction']:.9g}"])
         written.append("steady_psd.csv")
+    for w in rep["warnings"]:
+        print(f"granuflow: warning: {w}", file=sys.stderr)
     if not args.quiet:
         s = rep["solver"]
         stab = rep["stability"]

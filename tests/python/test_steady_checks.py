@@ -1,0 +1,31 @@
+"""Every check a run makes also runs on a steady state: the ends of the size grids (a sieve that passes everything
+put 100 % of the loop's mass in the top class without a word) and the balance closure, which is |in - out| / max
+where something flows and 0 with a note where nothing does (in = 0 against out = 6.8e-37 gave a closure of 1.0)."""
+import os
+
+import granuflow as gf
+from granuflow.steady import NO_FLOW, boundary_balance, steady_report
+
+LOOP = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))), "flowsheets",
+                    "continuous_layering_sieve_mill.yaml")
+
+
+def test_zero_flows_close_with_a_note_and_real_flows_by_their_difference():
+    raw = {"boundary_flows": {"solids": {"in": 0.0, "out": 6.8e-37}, "water": {"in": 2.0e-3, "out": 1.9e-3},
+                              "energy": {"in": 1.0e4, "out": 1.0e4}}}
+    bal = boundary_balance(raw)
+    assert bal["solids"]["rel"] == 0.0 and "nothing flows" in bal["solids"]["note"]
+    assert abs(bal["water"]["rel"] - 0.05) < 1e-12 and "note" not in bal["water"]
+    assert bal["energy"]["rel"] == 0.0 and "note" not in bal["energy"]
+    # just above the floor a mismatch counts in full
+    tiny = {"boundary_flows": {"solids": {"in": 0.0, "out": 10 * NO_FLOW}}}
+    assert boundary_balance(tiny)["solids"]["rel"] == 1.0
+
+
+def test_a_steady_state_piled_in_the_top_class_warns_as_a_run_does():
+    fs = gf.load(LOOP)
+    assert steady_report(fs, stability=False)["warnings"] == []
+    fs.set("sieve.upper_d_cut", 1.0)  # 1 m: nothing goes to the mill, the granules grow into the top class
+    rep = steady_report(fs, stability=False)
+    assert any("top size class" in w and "at the steady state" in w and "d_max" in w for w in rep["warnings"]), \
+        rep["warnings"]
