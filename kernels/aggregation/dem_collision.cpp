@@ -27,13 +27,15 @@ void DemCollisionKernel::declare(Settings& s, const std::string& prefix) {
     frequency_ = owned_.get();
   } else {
     auto names = table_names();
-    if (names.empty())  // nothing to choose from: the setting that is missing is the file
-      throw ConfigError(s.where() + "." + prefix +
-                        "collisions_file: not given, and no table of collision frequencies is loaded; name the DEM "
-                        "collision-count file (CSV: dt_s, edges_m, particles, counts; docs/dem_collisions.md)");
+    const bool none = names.empty();
+    if (none) names.push_back("(none loaded)");
     const std::string t = s.get_choice(prefix + "collisions", names.front(), names,
                                        "data table of DEM collision frequencies C_ij, 1/s (paper 002, Eq. (12)); "
                                        "used when no collisions_file is given");
+    if (none)  // nothing to choose from: the setting that is missing is the file
+      throw ConfigError(s.where() + "." + prefix +
+                        "collisions_file: not given, and no table of collision frequencies is loaded; name the DEM "
+                        "collision-count file (CSV: dt_s, edges_m, particles, counts; docs/dem_collisions.md)");
     frequency_ = &table(t);
   }
 }
