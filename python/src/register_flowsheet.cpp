@@ -60,6 +60,19 @@ py::list output_roles(const Flowsheet& fs) {
   return out;
 }
 
+// Options checked by the core, the message naming the Python function's keywords instead of the C++ struct's fields
+// ("simulate(): t_end = 0 s ..." for "SimOptions.t_end = 0 s ...").
+template <class Options>
+void validate_as(const Options& o, const std::string& field_prefix, const std::string& call_prefix) {
+  try {
+    o.validate();
+  } catch (const ConfigError& e) {
+    std::string m = e.what();
+    if (m.rfind(field_prefix, 0) == 0) m = call_prefix + m.substr(field_prefix.size());
+    throw ConfigError(m);
+  }
+}
+
 py::dict simulate(Scene& s, std::optional<double> t_end, std::optional<std::vector<double>> t_out,
                   std::optional<int> n_out, std::optional<double> rtol, std::optional<double> atol,
                   std::vector<std::string> sensitivities, std::optional<std::string> linear_solver,
@@ -80,13 +93,7 @@ py::dict simulate(Scene& s, std::optional<double> t_end, std::optional<std::vect
   if (max_steps) o.max_steps = *max_steps;
   if (method) o.method = parse_method(*method, "simulate(): method");
   o.sensitivities = std::move(sensitivities);
-  try {  // named as the keywords of simulate(), not as the C++ struct
-    o.validate();
-  } catch (const ConfigError& e) {
-    std::string m = e.what();
-    if (m.rfind("SimOptions.", 0) == 0) m = "simulate(): " + m.substr(11);
-    throw ConfigError(m);
-  }
+  validate_as(o, "SimOptions.", "simulate(): ");
   SimResult r;
   try {
     py::gil_scoped_release release;
@@ -256,13 +263,7 @@ void register_flowsheet(py::module_& m) {
             o.max_iterations = max_iterations;
             o.max_pseudo_steps = max_pseudo_steps;
             o.stability = stability;
-            try {  // named as the keywords of steady_state(), not as the C++ struct
-              o.validate();
-            } catch (const ConfigError& e) {
-              std::string m = e.what();
-              if (m.rfind("SteadyOptions.", 0) == 0) m = "steady_state(): " + m.substr(14);
-              throw ConfigError(m);
-            }
+            validate_as(o, "SteadyOptions.", "steady_state(): ");
             SteadyResult r;
             {
               py::gil_scoped_release release;
