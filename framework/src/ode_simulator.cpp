@@ -81,8 +81,7 @@ class OdeStepper : public Stepper {
  public:
   OdeStepper(DaeSystem& sys, const SimOptions& opt, OdeUser& user, const std::vector<int>& sens_ids, Method method,
              bool may_switch, long budget, std::string reason, LinearSolverKind kind)
-      : sys_(sys),
-        opt_(opt),
+      : opt_(opt),
         user_(user),
         method_(method),
         first_(method),
@@ -198,7 +197,6 @@ class OdeStepper : public Stepper {
     cur_->set_stop(t1_);
   }
 
-  DaeSystem& sys_;
   const SimOptions& opt_;
   OdeUser& user_;
   Method method_, first_;
