@@ -126,8 +126,9 @@ class Mill : public UnitBase<Mill> {
     for (int i = 0; i < n_; ++i) in[i] = c.port(in_, solids::mdot(i)), out[i] = c.x(sM_ + i), m += out[i];
     c.out(o_m_) = m;
     const auto& de = grid_->diameter_edges();
-    c.out(o_d50_in_) = m > 0.0 ? kernels::characteristic_diameter_of_mass(de, in.data(), 0.5) : T(0.0);
-    c.out(o_d50_out_) = m > 0.0 ? kernels::characteristic_diameter_of_mass(de, out.data(), 0.5) : T(0.0);
+    // undefined (not 0) while nothing flows
+    c.out(o_d50_in_) = kernels::characteristic_diameter_of_mass(de, in.data(), 0.5);
+    c.out(o_d50_out_) = kernels::characteristic_diameter_of_mass(de, out.data(), 0.5);
   }
 
  private:

@@ -90,7 +90,15 @@ void ParticleChamber::configure(const UnitSpec&, const double* p, const double* 
   w.mapped = false;
 }
 
-void ParticleChamber::check(const UnitSpec&, const double*) const {}
+// The spray lands on the particles' surface (paper 003, Eq. (7.33)); the model has no nucleation from the spray, so
+// on an empty bed what is sprayed has nowhere to go and would vanish from the balances (issue 29).
+void ParticleChamber::check(const UnitSpec&, const double* p) const {
+  if (spray_ && p[p_mass_.i] == 0.0 && p[p_spray_.i] > 0.0 && (wet_ || p[p_w_.i] > 0.0))
+    throw ConfigError(violation("bed_mass", 0.0, "kg",
+                                "bed_mass > 0 while the spray is on (m_spray = " + fmt_num(p[p_spray_.i]) +
+                                    " kg/s): the spray layers onto the bed's particles and an empty bed has none; "
+                                    "start with particles (bed_mass > 0) or with the spray off"));
+}
 
 // Particle masses, surfaces per mass and number floors for this evaluation: cached for doubles; Jets recompute them,
 // so that sensitivities to the particle system's density carry through.
@@ -374,16 +382,17 @@ void ParticleChamber::outputs(const Ctx<T>& c) const {
   c.out(o_mass_) = mass;
   if (wet_) c.out(o_moisture_) = water / (mass + kMassFloor);
   const double q[3] = {0.1, 0.5, 0.9};
-  T dq[3] = {T(0.0), T(0.0), T(0.0)};
-  if (mass > 0.0) kernels::characteristic_diameters_of_mass(grid_->diameter_edges(), M, q, 3, dq);
+  T dq[3];  // undefined for an empty bed
+  kernels::characteristic_diameters_of_mass(grid_->diameter_edges(), M, q, 3, dq);
   for (int k = 0; k < 3; ++k) c.out(o_d_[k]) = dq[k];
   const bool any = mu[0] > 0.0;
-  c.out(o_d32_) = any ? T(mu[3] / mu[2]) : T(0.0);
-  const T mean = any ? T(mu[1] / mu[0]) : T(0.0);
+  const T none = kernels::undefined_size<T>();  // an empty bed has no size
+  c.out(o_d32_) = any ? T(mu[3] / mu[2]) : none;
+  const T mean = any ? T(mu[1] / mu[0]) : none;
   c.out(o_dmean_) = mean;
   using std::sqrt;
-  const T var = any ? T(mu[2] / mu[0] - mean * mean) : T(0.0);
-  c.out(o_sigma_) = var > 0.0 ? T(sqrt(var)) : T(0.0);
+  const T var = any ? T(mu[2] / mu[0] - mean * mean) : none;
+  c.out(o_sigma_) = !any ? none : var > 0.0 ? T(sqrt(var)) : T(0.0);
   if (spray_)  // Eq. (7.33), paper 003, with mu_2 of the class pivots
     c.out(o_g_) = any ? T(2.0 * spray_solids(c) / (pp_.envelope_density(c.shared) * kernels::kPi * mu[2])) : T(0.0);
   c.out(o_particles_) = mu[0];

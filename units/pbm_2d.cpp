@@ -339,8 +339,9 @@ class Pbm2D : public UnitBase<Pbm2D> {
     }
     auto acc = [&](int k) { return s_out_[k] ? T(c.x(s_out_[k])) : T(0.0); };
     c.out(o_number_) = number;
-    c.out(o_davg_) = number > 0.0 ? T(dsum / number) : T(0.0);
-    c.out(o_xavg_) = number > 0.0 ? T(xsum / number) : T(0.0);
+    const T none = kernels::undefined_size<T>();  // the means of no particles are undefined, not 0
+    c.out(o_davg_) = number > 0.0 ? T(dsum / number) : none;
+    c.out(o_xavg_) = number > 0.0 ? T(xsum / number) : none;
     c.out(o_d50_) = characteristic_diameter_of_mass(psd_edges_, psd.data(), 0.5);
     c.out(o_vs_) = vs;
     c.out(o_vl_) = vl;

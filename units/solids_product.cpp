@@ -49,8 +49,8 @@ class SolidsProduct : public UnitBase<SolidsProduct> {
     for (int i = 0; i < n_; ++i) m[i] = c.port(in_, solids::mdot(i)), total += m[i];
     c.out(o_mdot_) = total;
     const double q[3] = {0.1, 0.5, 0.9};
-    T dq[3] = {T(0.0), T(0.0), T(0.0)};
-    if (total > 0.0) kernels::characteristic_diameters_of_mass(grid_->diameter_edges(), m.data(), q, 3, dq);
+    T dq[3];  // undefined while nothing arrives
+    kernels::characteristic_diameters_of_mass(grid_->diameter_edges(), m.data(), q, 3, dq);
     for (int k = 0; k < 3; ++k) c.out(o_d_[k]) = dq[k];
   }
 

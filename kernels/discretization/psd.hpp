@@ -23,6 +23,12 @@ void volume_density(const Grid& g, const double* N, double* out);
 void mass_density(const Grid& g, const double* N, double rho, double* out);
 // Mass-based characteristic diameter d_{x,3}, m; NaN for an empty population.
 double characteristic_diameter(const Grid& g, const double* N, double x);
+// A size statistic (d_x, mean, Sauter diameter, standard deviation) of an empty population or stream: undefined,
+// never 0, which reads as a size (issue 29). NaN in the time series; summaries show null and say why.
+template <class T>
+T undefined_size() {
+  return T(std::nan(""));
+}
 // The same from the mass (or volume) of each of the n cells between the n + 1 diameter edges (m); negative
 // amounts count as empty. A template, so that sensitivities of d_x to the class masses are exact (Jets).
 template <class T>
@@ -45,7 +51,7 @@ void characteristic_diameters_of_mass(const std::vector<double>& d, const T* mas
   for (int i = 0; i < n; ++i) q[i + 1] = q[i] + (mass[i] > 0.0 ? mass[i] : T(0.0));
   const T total = q[n];
   if (!(total > 0.0)) {
-    for (int k = 0; k < count; ++k) out[k] = T(std::nan(""));
+    for (int k = 0; k < count; ++k) out[k] = undefined_size<T>();
     return;
   }
   for (int i = 0; i <= n; ++i) q[i] = q[i] / total;
