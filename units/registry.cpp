@@ -1,5 +1,7 @@
 #include "registry.hpp"
 
+#include <cstdlib>
+
 #include "chamber_gas.hpp"
 #include "droplet_evaporation.hpp"
 #include "drying_compartment.hpp"
@@ -56,10 +58,17 @@ void register_all(Registry<Unit>& r) {
   register_solids_splitter(r);
 }
 
+#ifdef GRANUFLOW_TEST_UNITS
+void register_test_units(Registry<Unit>& r);  // tests/cpp/leaky_pipe.cpp, built with the tests
+#endif
+
 const Registry<Unit>& builtin() {
   static const Registry<Unit> r = [] {
     Registry<Unit> reg("unit type");
     register_all(reg);
+#ifdef GRANUFLOW_TEST_UNITS
+    if (std::getenv("GRANUFLOW_TEST_UNITS")) register_test_units(reg);  // never in a scene users run
+#endif
     return reg;
   }();
   return r;

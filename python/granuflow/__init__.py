@@ -18,9 +18,9 @@ from ._core import CalibrationError, ConfigError, SolverError
 from .flowsheet import Flowsheet, load, load_text
 from .kernels import aggregation_kernels, register_kernel
 from .reference import kernel_reference, unit_reference, unit_types
-from .result import GridWarning, Result
+from .result import BalanceError, BalanceWarning, GridWarning, Result
 
 __version__ = "0.2.0"
-__all__ = ["load", "load_text", "Flowsheet", "Result", "GridWarning", "ConfigError", "SolverError",
-           "CalibrationError", "unit_types", "unit_reference", "kernel_reference", "register_kernel",
+__all__ = ["load", "load_text", "Flowsheet", "Result", "GridWarning", "BalanceWarning", "ConfigError", "SolverError",
+           "BalanceError", "CalibrationError", "unit_types", "unit_reference", "kernel_reference", "register_kernel",
            "aggregation_kernels", "__version__"]

@@ -10,7 +10,7 @@ import numpy as np
 
 from . import _core, accuracy, outputs
 from .quantity import is_number, parse_time
-from .result import GridWarning, Layout, Result
+from .result import BalanceWarning, GridWarning, Layout, Result
 from .textfile import check_regular, check_yaml, short
 
 ConfigError = _core.ConfigError
@@ -247,8 +247,11 @@ class Flowsheet:
         ``["method_reason"]`` say what ran and why.
 
         Raises ``SolverError`` (with ``.t``, ``.unit``, ``.worst_residual``) if the integrator fails and
-        ``ConfigError`` for invalid options. ``Result.warnings`` says when a size grid clips the distribution (at
-        the start or later); with ``warn`` (default) each is also issued as a :class:`GridWarning`.
+        ``ConfigError`` for invalid options; ``BalanceError`` (a SolverError, with ``.balance``, ``.value`` and
+        ``.result``) when a balance closure is far above its limit (a unit loses or creates mass or energy).
+        ``Result.warnings`` says when a size grid clips the distribution (at the start or later) or a balance closes
+        worse than the tolerance explains; with ``warn`` (default) each is also issued as a :class:`GridWarning` or
+        :class:`BalanceWarning`.
         ``error_estimate``: re-solve at a 100 times tighter tolerance and on size grids refined twice and four
         times, and attach the estimated numerical error of every summary output and time series as
         ``Result.error_estimate`` (:mod:`granuflow.accuracy`; also in ``Result.summary`` and the plots).
@@ -279,12 +282,14 @@ class Flowsheet:
             layout = self._layout = Layout(raw, self.units())
             self._summary_map = dict(self._scene.summary_map)
         res = Result(raw, scene_name=self.name, summary_map=self._summary_map, layout=layout)
+        res.check_balance()  # a unit that loses mass is an error, not a number in a file
         if error_estimate:
             res.error_estimate = self._error_estimate(res, linear_solver=linear_solver, max_steps=max_steps,
                                                       method=method)
         if warn:
             for w in res.warnings:
-                warnings.warn(f"{self.path or self.name}: {w}", GridWarning, stacklevel=2)
+                kind = BalanceWarning if w.startswith("balance:") else GridWarning
+                warnings.warn(f"{self.path or self.name}: {w}", kind, stacklevel=2)
         return res
 
     def _error_estimate(self, res: Result, **solver) -> "accuracy.ErrorEstimate":

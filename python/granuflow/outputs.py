@@ -45,6 +45,65 @@ _WORDS = {
 # a result warns (summary.json `warnings`, stderr, Python warnings): with 5 % in the top class d95 and above are the
 # grid's edge, not the product, and growth is held back; in the bottom class the same for d5 and below.
 GRID_END_WARNING = 0.05
+# The balance guard (docs/accuracy.md, "Balance closures"): a closure is the relative error of a conserved quantity
+# over the run (or across the boundary at a steady state). The integrator's error control keeps it well below its
+# relative tolerance (the shipped scenes close to 1e-7 or better at rtol 1e-6), so a closure above
+# max(BALANCE_WARN_MIN, BALANCE_WARN_FACTOR * rtol), capped at BALANCE_WARN_MAX, is worth a warning; above
+# BALANCE_FAIL (1 % of the quantity gone or made) no tolerance explains it: a unit loses or creates mass or energy.
+BALANCE_WARN_MIN = 1e-6
+BALANCE_WARN_FACTOR = 100.0
+BALANCE_WARN_MAX = 1e-3
+BALANCE_FAIL = 1e-2
+
+
+def balance_limits(rtol: float | None) -> tuple[float, float]:
+    """(warning limit, failure limit) of a balance closure for a solve at relative tolerance ``rtol`` (None: the
+    warning limit at its floor)."""
+    warn = BALANCE_WARN_MIN if rtol is None else max(BALANCE_WARN_MIN, BALANCE_WARN_FACTOR * float(rtol))
+    return min(warn, BALANCE_WARN_MAX), BALANCE_FAIL
+
+
+def balance_closures(balance: Mapping) -> dict[str, float]:
+    """The closures of a ``balance`` map as ``{name: value}``, whatever it nests: every finite number whose key is
+    ``rel`` or ends in ``_rel`` (a run's ``solids_rel``, a steady state's ``{"solids": {"rel": ...}}``, per component
+    ``{"solids": {"NaBz": {"rel": ...}}}``), named by its path (``solids``, ``solids.NaBz``); null closures (a
+    quantity the scene does not track) are left out."""
+    out: dict[str, float] = {}
+
+    def walk(m: Mapping, path: tuple[str, ...]):
+        for k, v in m.items():
+            if isinstance(v, Mapping):
+                walk(v, path + (str(k),))
+            elif (k == "rel" or str(k).endswith("_rel")) and isinstance(v, (int, float)) and v == v:
+                name = path + (() if k == "rel" else (str(k)[:-4],))
+                out[".".join(name)] = float(v)
+    walk(balance, ())
+    return out
+
+
+def balance_findings(balance: Mapping, rtol: float | None,
+                     when: str = "at the end of the run") -> tuple[list[str], list[str]]:
+    """(warnings, failures) of the balance guard: a closure above the warning limit (:func:`balance_limits`) warns;
+    above BALANCE_FAIL it is a failure (a unit loses or creates the quantity), listed in both; the worst first."""
+    warn_at, fail_at = balance_limits(rtol)
+    warns, fails = [], []
+    for name, v in sorted(balance_closures(balance).items(), key=lambda kv: -kv[1]):
+        if v <= warn_at:
+            continue
+        quantity = name.split(".")[0]
+        what = "energy" if quantity == "energy" else "mass"
+        tol = f"rtol {rtol:g}" if rtol is not None else "the solve's tolerance"
+        if v > fail_at:
+            msg = (f"balance: the {name} balance does not close {when}: closure {v:.3g} (more than "
+                   f"{fail_at:g}): a unit loses or creates {what}; no solver tolerance explains it")
+            fails.append(msg)
+        else:
+            msg = (f"balance: the {name} balance closes only to {v:.3g} {when} (more than {warn_at:g} for "
+                   f"{tol}): tighten the solver's tolerances (solver: rtol, atol) or check the units")
+        warns.append(msg)
+    return warns, fails
+
+
 # Summary keys in plots: (readable name, unit of the summary value, unit shown).
 _SUMMARY_DISPLAY = {
     "d10_um": ("d10 (mass-based)", "um", "um"), "d50_um": ("d50 (mass-based)", "um", "um"),
@@ -78,6 +137,16 @@ def grid_end_warnings(ends: Mapping[str, Mapping], when: str = "at the end of th
                        f"clips the distribution (more than {100 * lim:g} %), so the sizes near that end are the "
                        f"grid's, not the product's; widen the grid (particles: settings: {side})")
     return out
+
+
+def null_reason(source: str, si_unit: str, when: str = "at the end of the run") -> str:
+    """Why the summary value read from output ``source`` is null (summary.json ``null_reasons``): a size (unit m)
+    is undefined where its population or stream is empty (the units report NaN, never 0); anything else that is
+    not a finite number says so."""
+    if si_unit == "m":
+        return (f"{source} is undefined {when}: the population or stream it describes holds no particles (nothing "
+                "discharged, an empty bed), and a size of nothing is not a number")
+    return f"{source} is not a finite number {when}"
 
 
 def d_values(bed: str) -> tuple[str, ...]:

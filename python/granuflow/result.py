@@ -16,6 +16,24 @@ class GridWarning(UserWarning):
     """A result whose size grid clips the distribution (:attr:`Result.warnings`)."""
 
 
+class BalanceWarning(UserWarning):
+    """A result whose water, solids or energy balance closes worse than its solver tolerance explains
+    (:attr:`Result.warnings`; the limits: :func:`granuflow.outputs.balance_limits`)."""
+
+
+class BalanceError(_core.SolverError):
+    """A run or steady state whose balance does not close (closure above ``outputs.BALANCE_FAIL``): a unit loses or
+    creates mass or energy. ``balance`` names the closure, ``value`` is it; ``result`` holds the run's
+    :class:`Result` (or ``report``, a steady state's report) so that its files can still be written; ``t`` is the
+    time of the check."""
+
+    def __init__(self, message: str, balance: str, value: float, t: float, result=None, report=None):
+        super().__init__(message)
+        self.balance, self.value, self.t = balance, value, t
+        self.unit, self.worst_residual = None, None
+        self.result, self.report = result, report
+
+
 class Layout:
     """What the results of one flowsheet share: state and output names, output roles, units and the name index.
     Built from a raw result that carries the names; a flowsheet keeps one and passes it to every later result."""
@@ -208,8 +226,21 @@ class Result:
     def warnings(self) -> list[str]:
         """What a user must know before trusting the numbers (summary.json ``warnings``): an end class of a size
         grid holding more than ``outputs.GRID_END_WARNING`` of the mass, at the start (the initial distribution
-        lies outside the grid) or at any later output time (the grid clips the product)."""
-        return outputs.grid_end_warnings(self.grid_ends())
+        lies outside the grid) or at any later output time (the grid clips the product); a balance closure above its
+        limit (:func:`granuflow.outputs.balance_findings`)."""
+        return outputs.grid_end_warnings(self.grid_ends()) + self.balance_findings()[0]
+
+    def balance_findings(self) -> tuple[list[str], list[str]]:
+        """(warnings, failures) of the balance guard on :meth:`balance_closure` at this run's tolerance."""
+        return outputs.balance_findings(self.balance_closure(), self.rtol)
+
+    def check_balance(self) -> None:
+        """Raise :class:`BalanceError` when a balance closure is far above its limit (a unit loses or creates mass
+        or energy); :meth:`granuflow.Flowsheet.simulate` calls it on every result."""
+        fails = self.balance_findings()[1]
+        if fails:
+            name, value = _worst(self.balance_closure())
+            raise BalanceError(f"{self.scene_name}: {fails[0]}", name, value, float(self.t[-1]), result=self)
 
     # -- summary --------------------------------------------------------------------------------
     def balance_closure(self) -> dict:
@@ -240,12 +271,15 @@ class Result:
         s = {"scene": self.scene_name, "t_end_s": float(self.t[-1])}
         for key in outputs.STANDARD_SUMMARY_KEYS:
             s[key] = None
-        units = {}
+        units, reasons = {}, {}
         for key, src in self.summary_map.items():
             si = self.unit(src)
             shown = outputs.summary_unit(key, si)
             s[key] = _finite(float(from_si(self[src][-1], shown, si)))
             units[key] = shown
+            if s[key] is None:
+                reasons[key] = outputs.null_reason(src, si)
+        s["null_reasons"] = reasons  # why a value the scene declares is null (an empty stream has no size)
         s["balance"] = self.balance_closure()
         # Where a model left the paper's literal equations (floors, caps, regularizations): the largest count of
         # classes or instances affected at any output time, per unit (docs/paper001_decisions.md asks for this).
@@ -264,13 +298,18 @@ class Result:
             if st.get(k):
                 s["solver"][k] = st[k]
         s["units"] = {"t_end_s": "s", **outputs.STANDARD_SUMMARY_UNITS, **units,
-                      "balance": "-", "regularizations": "classes or instances",
+                      "balance": "-", "regularizations": "classes or instances", "null_reasons": "",
                       "grid_end": "mass fraction (d_um: um)", "wall_time_s": "s"}
         return s
 
     def __repr__(self) -> str:
         return (f"<granuflow.Result {self.scene_name!r}: {len(self.t)} times to {self.t[-1]:g} s, "
                 f"{len(self.state_names)} states, {self.stats['steps']} steps, {self.wall_time_s * 1e3:.1f} ms>")
+
+
+def _worst(balance) -> tuple[str, float]:
+    """The largest closure of a balance map: (name, value)."""
+    return max(outputs.balance_closures(balance).items(), key=lambda kv: kv[1])
 
 
 def _finite(v):

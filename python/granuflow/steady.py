@@ -26,6 +26,7 @@ import numpy as np
 from . import outputs as outputs_mod
 from .flowsheet import Flowsheet
 from .quantity import from_si
+from .result import BalanceError
 
 
 def _finite(v):
@@ -38,14 +39,16 @@ def _value(raw: dict, name: str) -> float:
     return raw["y"][name]
 
 
-def _summary(fs: Flowsheet, raw: dict) -> tuple[dict, dict]:
-    values, units = {}, {}
+def _summary(fs: Flowsheet, raw: dict) -> tuple[dict, dict, dict]:
+    values, units, reasons = {}, {}, {}
     for key, src in fs.summary_map.items():
         si = fs.unit_of(src)
         shown = outputs_mod.summary_unit(key, si)
         values[key] = _finite(float(from_si(_value(raw, src), shown, si)))
         units[key] = shown
-    return values, units
+        if values[key] is None:
+            reasons[key] = outputs_mod.null_reason(src, si, "at the steady state")
+    return values, units, reasons
 
 
 # Flows below this (kg/s, W) are round-off of a steady state with nothing flowing, not a flow to close a balance on.
@@ -83,17 +86,26 @@ def steady_report(fs: Flowsheet, *, t: float = 0.0, stability: bool = True, ftol
     linearized dynamics with the largest real part: ``stable``, ``oscillation_period_s``; None for sparse systems),
     ``solver`` (``method``, ``iterations``, ``pseudo_steps``, ``residual_norm``, ``wall_time_s``, ``conserved``,
     ``warnings``), ``warnings`` (an end class of a size grid holding more than GRID_END_WARNING of the mass, as a run
-    warns) and ``units``."""
+    warns; a boundary balance closing worse than outputs.balance_limits allows) and ``units``. Raises
+    :class:`~granuflow.result.BalanceError` (with the report as ``.report``) when a closure is above
+    outputs.BALANCE_FAIL."""
     raw = fs.steady_state(t=float(t), ftol=ftol, stability=stability)
-    values, units = _summary(fs, raw)
-    rep = {"scene": fs.name, "t_s": float(t), **values, "balance": boundary_balance(raw), "stability": _stability(raw),
+    values, units, reasons = _summary(fs, raw)
+    rep = {"scene": fs.name, "t_s": float(t), **values, "null_reasons": reasons, "balance": boundary_balance(raw),
+           "stability": _stability(raw),
            "solver": {k: raw[k] for k in ("method", "iterations", "pseudo_steps", "residual_norm", "wall_time_s",
                                           "conserved", "warnings")}}
     # every check a run makes on its grids, on the steady state too
     rep["warnings"] = outputs_mod.grid_end_warnings(steady_grid_ends(fs, raw), "at the steady state")
+    # and the balance guard: a steady state whose boundary flows do not close loses or makes mass (BalanceError)
+    warns, fails = outputs_mod.balance_findings(rep["balance"], None, "at the steady state")
+    rep["warnings"] += warns
     rep["units"] = {"t_s": "s", **units, "balance": "kg/s (solids, water), W (energy); rel: -",
                     "stability": "1/s, s", "solver": "wall_time_s: s"}
     rep["_raw"] = raw
+    if fails:
+        name, value = max(outputs_mod.balance_closures(rep["balance"]).items(), key=lambda kv: kv[1])
+        raise BalanceError(f"{fs.name}: {fails[0]}", name, value, float(t), report=rep)
     return rep
 
 

@@ -153,7 +153,8 @@ def main(argv=None) -> int:
         print("granuflow: bad input: an input nested too deeply to read (YAML files allow 64 levels)", file=sys.stderr)
         return EXIT_BAD_INPUT
     except (_core.SolverError, _core.CalibrationError) as e:
-        print(f"granuflow: solver failure: {one_line(e)}", file=sys.stderr)
+        what = "balance failure" if hasattr(e, "balance") else "solver failure"  # result.BalanceError
+        print(f"granuflow: {what}: {one_line(e)}", file=sys.stderr)
         return EXIT_SOLVER
     except BrokenPipeError:
         # the reader went away (`granuflow describe SCENE | head`): stop quietly, and keep Python from

@@ -10,6 +10,7 @@ import sys
 
 from ..flowsheet import load
 from ..plots.spec import plot_specs
+from ..result import BalanceError
 from .common import check_out_dir, parse_seconds, parse_sets
 
 
@@ -46,9 +47,14 @@ def cmd_run(args) -> int:
     if args.t_end is not None:
         fs.set_t_end(parse_seconds(args.t_end))
     check_out_dir(args.out)
-    res = fs.simulate(warn=False, error_estimate=args.error_estimate)
-    for w in res.warnings:  # also in summary.json; exit 0: the run is what was asked for
-        print(f"granuflow: warning: {w}", file=sys.stderr)
+    failure = None
+    try:
+        res = fs.simulate(warn=False, error_estimate=args.error_estimate)
+    except BalanceError as e:  # a unit lost mass: write what happened, then exit 3 naming the balance
+        res, failure = e.result, e
+    for w in res.warnings:  # also in summary.json; exit 0 (but for a failed balance): the run is what was asked for
+        if failure is None or w not in str(failure):  # the failure itself is the last line
+            print(f"granuflow: warning: {w}", file=sys.stderr)
     os.makedirs(args.out, exist_ok=True)
     summary = res.summary
     with open(os.path.join(args.out, "summary.json"), "w") as f:
@@ -68,4 +74,6 @@ def cmd_run(args) -> int:
                   f"{ee.wall_time_s:.2f} s of re-solves):")
             for line in ee.lines():
                 print("  " + line)
+    if failure is not None:
+        raise failure
     return 0

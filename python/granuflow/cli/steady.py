@@ -9,6 +9,7 @@ import os
 import sys
 
 from ..flowsheet import load
+from ..result import BalanceError
 from ..steady import steady_psd_rows, steady_report
 from .common import check_out_dir, json_value, parse_seconds, parse_sets
 
@@ -26,7 +27,11 @@ def cmd_steady(args) -> int:
     fs.update(parse_sets(args.set))
     t = parse_seconds(args.t, "--t") if args.t else 0.0
     check_out_dir(args.out)
-    rep = steady_report(fs, t=t, stability=not args.no_stability)
+    failure = None
+    try:
+        rep = steady_report(fs, t=t, stability=not args.no_stability)
+    except BalanceError as e:  # write steady.json, then exit 3 naming the balance
+        rep, failure = e.report, e
     raw = rep.pop("_raw")
     os.makedirs(args.out, exist_ok=True)
     with open(os.path.join(args.out, "steady.json"), "w") as f:
@@ -42,7 +47,8 @@ def cmd_steady(args) -> int:
                             f"{r['mass_fraction']:.9g}"])
         written.append("steady_psd.csv")
     for w in rep["warnings"]:
-        print(f"granuflow: warning: {w}", file=sys.stderr)
+        if failure is None or w not in str(failure):  # the failure itself is the last line
+            print(f"granuflow: warning: {w}", file=sys.stderr)
     if not args.quiet:
         s = rep["solver"]
         stab = rep["stability"]
@@ -54,4 +60,6 @@ def cmd_steady(args) -> int:
               + f", {s['wall_time_s'] * 1e3:.1f} ms{how}; wrote {', '.join(written)} to {args.out}")
         keys = [k for k in fs.summary_map]
         print(json.dumps({k: _clean(rep[k]) for k in keys}))
+    if failure is not None:
+        raise failure
     return 0
