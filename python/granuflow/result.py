@@ -56,6 +56,7 @@ class Result:
         self.rtol = raw.get("rtol")
         self.atol = raw.get("atol")
         self.error_estimate = None  # granuflow.accuracy.ErrorEstimate with simulate(error_estimate=True)
+        self.material = None  # Flowsheet.material: the solid's catalogue entry and what it did not give
         self.t_end = raw.get("t_end", float(self.t[-1]))
         self.scene_name = scene_name
         self.summary_map = dict(summary_map or {})
@@ -247,6 +248,8 @@ class Result:
             s[key] = _finite(float(from_si(self[src][-1], shown, si)))
             units[key] = shown
         s["balance"] = self.balance_closure()
+        if self.material is not None:
+            s["material"] = self.material
         # Where a model left the paper's literal equations (floors, caps, regularizations): the largest count of
         # classes or instances affected at any output time, per unit (docs/paper001_decisions.md asks for this).
         s["regularizations"] = {n: _finite(np.max(self.outputs[:, j]))
