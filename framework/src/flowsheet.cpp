@@ -375,6 +375,12 @@ void Flowsheet::store_param(int id, double v) {
 double Flowsheet::param(const std::string& qualified) const { return param_value(param_id(qualified)); }
 void Flowsheet::set_param(const std::string& qualified, double v) { set_param_value(param_id(qualified), v); }
 
+void Flowsheet::set_param_default(int id, double v, const std::string& source) {
+  set_param_value(id, v);
+  auto [u, k] = param_location(id);
+  units_[u].spec.rebase_param(k, v, source);
+}
+
 void Flowsheet::set_input(const std::string& qualified, PiecewiseLinear input) {
   const int id = param_id(qualified);
   auto [u, k] = param_location(id);

@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "granuflow/errors.hpp"
+#include "granuflow/materials.hpp"
 #include "granuflow/quantity.hpp"
 #include "yaml_text.hpp"
 
@@ -59,11 +60,23 @@ class Loader {
     } catch (const ConfigError& e) {
       fail("connections", e.what());
     }
+    const std::vector<std::string> unsupplied = material_.empty() ? std::vector<std::string>{} : apply_material_(fs);
     for (const auto& [unit, node] : params)
       load_params((unit == "particles" && root["particles"] ? "" : "units.") + unit + ".params", unit, node, fs, given);
     if (root["inputs"]) load_inputs(root["inputs"], fs, given);
     if (root["links"]) load_links(root["links"], fs, given);
     check_across_parameters(fs, given);
+    // What the material does not give keeps the unit's built-in value (paper 001's maltodextrin), said where the
+    // value is shown (describe's source, the run's summary and a note), unless the scene sets it.
+    for (const std::string& q : unsupplied)
+      if (!given.count(q)) {
+        const int id = fs.param_id(q);
+        fs.set_param_default(
+            id, fs.param_value(id),
+            "not given by material " + material_ + "; built-in value from " + fs.param_spec(id).source);
+        s.material_unsupplied.push_back(q);
+      }
+    s.material = material_;
     s.options.t_end = quantity(required(root, "t_end", ""), "t_end", "s");
     if (root["output"]) load_output(root["output"], s.options);
     if (root["solver"]) load_solver(root["solver"], s.options);
@@ -110,7 +123,15 @@ class Loader {
     if (implied.empty())
       check_keys(u, at, {"type", "settings", "params"});
     else
-      check_keys(u, at, {"settings", "params"});
+      check_keys(u, at, {"settings", "params", "material"});
+    if (u["material"]) {
+      material_ = scalar(u["material"], at + ".material");
+      try {
+        find_material(material_);
+      } catch (const ConfigError& e) {
+        fail(at + ".material", e.what());
+      }
+    }
     const std::string type = implied.empty() ? scalar(required(u, "type", at), at + ".type") : implied;
     std::map<std::string, std::string> settings;
     if (u["settings"]) {
@@ -127,6 +148,17 @@ class Loader {
       rethrow(e);
     }
     if (u["params"]) params.emplace_back(name, u["params"]);
+  }
+
+  // The named material's values become the defaults of the parameters it describes (materials.hpp); returns those
+  // it does not give, which the scene must.
+  std::vector<std::string> apply_material_(Flowsheet& fs) const {
+    try {
+      return apply_material(fs, find_material(material_), "");
+    } catch (const ConfigError& e) {
+      fail("particles.material", e.what());
+    }
+    return {};
   }
 
   void load_connections(const YAML::Node& c, Flowsheet& fs) const {
@@ -361,6 +393,7 @@ class Loader {
 
   std::string label_;
   const Registry<Unit>& units_;
+  mutable std::string material_;  // particles.material, "" when the scene names none
 };
 
 }  // namespace

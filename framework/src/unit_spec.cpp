@@ -137,6 +137,12 @@ int UnitSpec::param_index(const std::string& name) const {
   return -1;
 }
 
+void UnitSpec::rebase_param(int index, double value, std::string source) {
+  ParamSpec& p = params_.at(static_cast<size_t>(index));
+  p.value = value;
+  p.source = std::move(source);
+}
+
 std::string to_string(PortDir d) { return d == PortDir::In ? "in" : d == PortDir::Out ? "out" : "probe"; }
 
 void append_class_fields(std::vector<FieldSpec>& f, const std::string& name, int classes, const std::string& unit) {

@@ -92,6 +92,22 @@ class Flowsheet:
             return outputs.STANDARD_SUMMARY_UNITS[name]
         return self.unit_of(name)
 
+    @property
+    def material(self) -> dict | None:
+        """The solid the scene names (``particles: material:``, docs/materials.md): ``name`` (None when the scene
+        names none: the units' built-in values, paper 001's maltodextrin, apply), ``built_in``: the parameters that
+        keep a built-in value because the named material gives none, with that value (SI). None without a particle
+        system."""
+        if self.grid() is None:
+            return None
+        name = self._scene.material or None
+        built_in = {q: self.get(q) for q in self._scene.material_unsupplied}
+        note = ("no material named: the solid's values are the units' built-in ones (paper 001's maltodextrin); "
+                "name one with particles: material: NAME (granuflow materials)") if name is None else (
+            f"material {name} gives no value for {', '.join(built_in)}: built-in (paper 001) values used; set them "
+            "in the scene's params" if built_in else None)
+        return {"name": name, "built_in": built_in, "note": note}
+
     def units(self) -> dict[str, str]:
         """SI unit of every state and reported output."""
         return dict(_core.scene_units(self._scene))
@@ -282,6 +298,7 @@ class Flowsheet:
             layout = self._layout = Layout(raw, self.units())
             self._summary_map = dict(self._scene.summary_map)
         res = Result(raw, scene_name=self.name, summary_map=self._summary_map, layout=layout)
+        res.material = self.material
         res.check_balance()  # a unit that loses mass is an error, not a number in a file
         if error_estimate:
             res.error_estimate = self._error_estimate(res, linear_solver=linear_solver, max_steps=max_steps,

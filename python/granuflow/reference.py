@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 from typing import Mapping
 
-from . import _core
+from . import _core, materials
 
 # Kernel families as they are chosen in a scene: the setting of the particle units that names one.
 KERNEL_FAMILIES = {
@@ -181,10 +181,58 @@ def unit_text(name: str) -> str:
     return unit_markdown(name)
 
 
+# -- materials ------------------------------------------------------------------------------------------------------
+def parameters_set(prop: dict) -> list[str]:
+    """Where a property lands with the units' default settings: ``unit_type.param`` and ``kernel KERNEL.param``."""
+    if prop["applies_to"] == "particles":
+        return [f"particles.{prop['name']}"]
+    names = {prop["name"], "agg_" + prop["name"]}
+    out = [f"{t}.{p['name']}" for t in unit_types() if t != "particles"
+           for p in unit_reference(t)["params"] if p["name"] in names]
+    out += [f"aggregation kernel {k['name']}.{p['name']}" for k in kernel_reference().get("aggregation", [])
+            for p in k["params"] if p["name"] == prop["name"]]
+    return out
+
+
+def _value(v: float) -> str:
+    return f"{v:.6g}"
+
+
+def material_markdown(m: dict) -> str:
+    """The catalogue entry of one material as Markdown (``granuflow materials NAME``)."""
+    rows = [[f"`{p['name']}`", _value(p["value"]), p["unit"], p["description"],
+             ", ".join(f"`{x}`" for x in parameters_set(p)) or "(informative: no parameter reads it yet)",
+             p["source"]] for p in m["properties"]]
+    lines = [f"## `{m['name']}`", "", m["description"] + ".", "", f"Main source: {m['citation']}.", ""]
+    lines += _table(["property", "value", "SI unit", "what", "sets", "source"], rows)
+    return "\n".join(lines) + "\n"
+
+
+def catalogue_markdown() -> str:
+    """docs/materials.md: the whole catalogue."""
+    lines = ["# Materials", "",
+             "Generated from the catalogue in `framework/src/materials.cpp` by `granuflow docs --write docs` (do not "
+             "edit by hand; `tests/python/test_reference_docs.py` checks it is up to date).", "",
+             "A scene names its solid in the particle system: `particles: {material: maltodextrin_de21, settings: ...,"
+             " params: ...}`. Each property below then becomes the default of the parameters it sets (`granuflow "
+             "describe SCENE` shows `material NAME: source` as their source); the scene's own `params:` override any "
+             "of them. A parameter that some material of the catalogue sets but the chosen material does not keeps "
+             "the unit's built-in value only openly: its source in `describe` says so, and summary.json lists it "
+             "under `material.built_in` (set it in the scene's params to replace it). "
+             "A scene that names no material keeps the units' built-in defaults, which are paper 001's maltodextrin "
+             "(its `describe` sources say `paper 001, Table N`).", "",
+             "Values enter the catalogue only with a published source. Properties that no model reads yet are kept "
+             "where a source gives them (strength, restitution), for the user's information.", ""]
+    for m in materials.catalogue():
+        lines += [material_markdown(m)]
+    return "\n".join(lines)
+
+
 def pages() -> dict[str, str]:
     """Every generated page: relative path under docs/ -> Markdown."""
     out = {f"units/{n}.md": unit_markdown(n) for n in unit_types()}
     out.update({f"kernels/{f}.md": kernel_markdown(f) for f in kernel_reference()})
+    out["materials.md"] = catalogue_markdown()
     lines = ["# Reference: units and kernels", "",
              "Generated from the registries by `granuflow docs --write docs`; checked by "
              "`tests/python/test_reference_docs.py`.", "", "## Units", ""]
@@ -193,5 +241,7 @@ def pages() -> dict[str, str]:
     own = set(_core.python_kernels())
     lines += [f"- [{KERNEL_FAMILIES.get(f, (f, ''))[0]}](kernels/{f}.md): "
               + ", ".join(f"`{e['name']}`" for e in es if e["name"] not in own) for f, es in kernel_reference().items()]
+    lines += ["", "## Materials", "", "- [the catalogue of solid materials](materials.md): "
+              + ", ".join(f"`{m['name']}`" for m in materials.catalogue())]
     out["reference.md"] = "\n".join(lines) + "\n"
     return out

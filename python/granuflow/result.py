@@ -74,6 +74,7 @@ class Result:
         self.rtol = raw.get("rtol")
         self.atol = raw.get("atol")
         self.error_estimate = None  # granuflow.accuracy.ErrorEstimate with simulate(error_estimate=True)
+        self.material = None  # Flowsheet.material: the solid's catalogue entry and what it did not give
         self.t_end = raw.get("t_end", float(self.t[-1]))
         self.scene_name = scene_name
         self.summary_map = dict(summary_map or {})
@@ -281,6 +282,8 @@ class Result:
                 reasons[key] = outputs.null_reason(src, si)
         s["null_reasons"] = reasons  # why a value the scene declares is null (an empty stream has no size)
         s["balance"] = self.balance_closure()
+        if self.material is not None:
+            s["material"] = self.material
         # Where a model left the paper's literal equations (floors, caps, regularizations): the largest count of
         # classes or instances affected at any output time, per unit (docs/paper001_decisions.md asks for this).
         s["regularizations"] = {n: _finite(np.max(self.outputs[:, j]))

@@ -183,6 +183,8 @@ void register_flowsheet(py::module_& m) {
       .def_readonly("path", &Scene::path)
       .def_readonly("name", &Scene::name)
       .def_readonly("description", &Scene::description)
+      .def_readonly("material", &Scene::material)
+      .def_readonly("material_unsupplied", &Scene::material_unsupplied)
       .def_readonly("summary_map", &Scene::summary)
       .def_readonly("extra_yaml", &Scene::extra_yaml)
       .def_readonly("text", &Scene::text)

@@ -11,6 +11,7 @@
 
 #include "granuflow/errors.hpp"
 #include "granuflow/flowsheet.hpp"
+#include "granuflow/materials.hpp"
 #include "granuflow/quantity.hpp"
 #include "granuflow/scene.hpp"
 #include "kernels/registry.hpp"
@@ -169,6 +170,22 @@ void register_reference(py::module_& m) {
   m.def("kernel_reference", &kernel_reference,
         "Every registered kernel and scheme by family: description, parameters, settings, per-class needs.");
   m.def("known_si_units", &known_si_units, "The SI units parameters, states and outputs may declare.");
+  m.def(
+      "material_catalogue",
+      []() {
+        py::list out;
+        for (const Material& mat : material_catalogue()) {
+          py::list props;
+          for (const MaterialProperty& p : mat.properties)
+            props.append(py::dict("name"_a = p.name, "value"_a = p.value, "unit"_a = p.unit, "source"_a = p.source,
+                                  "description"_a = p.description,
+                                  "applies_to"_a = particle_system_property(p.name) ? "particles" : "units"));
+          out.append(py::dict("name"_a = mat.name, "description"_a = mat.description, "citation"_a = mat.citation,
+                              "properties"_a = props));
+        }
+        return out;
+      },
+      "The catalogue of solid materials (name, description, citation, properties with value, SI unit, source).");
   m.def(
       "scene_units",
       [](const Scene& s) {

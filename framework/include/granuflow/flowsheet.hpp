@@ -93,6 +93,9 @@ class Flowsheet {
   const ParamSpec& param_spec(int id) const;
   double param_value(int id) const;
   void set_param_value(int id, double value_si);
+  // Makes `value_si` the parameter's default and current value, `source` where it comes from (a material); checked
+  // against the declared bounds like set_param.
+  void set_param_default(int id, double value_si, const std::string& source);
   std::pair<int, int> param_location(int id) const;  // (unit index, local param index)
   // A parameter driven by a time-dependent input takes its values from the input in every run, so
   // set_param / set_param_value on it are a ConfigError naming the input (a value set there would be ignored);

@@ -7,6 +7,8 @@
 //   t_end: 2000 s                     # required; "value unit" or a number in SI
 //   output: {n: 201}                  # or {times: [0 s, 10 s, ...]}
 //   solver: {rtol: 1e-6, atol: 1e-8, max_steps: 100000, linear_solver: auto}
+//   particles: {material: maltodextrin_de21, settings: {classes: 10}, params: {rho_s: 1545 kg/m3}}
+//                                     # material: a catalogue entry (materials.hpp, `granuflow materials`)
 //   units:
 //     tank1: {type: stirred_tank, settings: {...}, params: {mass: 100 kg, Q: 20 kW}}
 //   connections: ["feed.out -> mixer.in1", ...]
@@ -31,6 +33,10 @@ struct Scene {
   std::string path;
   std::string name;
   std::string description;
+  std::string material;  // particles.material (materials.hpp), "" when the scene names none
+  // Parameters the catalogue knows but the named material gives no value for and the scene does not set: they keep
+  // the units' built-in (paper 001) values, and a run says so.
+  std::vector<std::string> material_unsupplied;
   std::unique_ptr<Flowsheet> flowsheet;
   SimOptions options;
   std::map<std::string, std::string> summary;  // summary key -> "unit.state" or "unit.output"

@@ -208,6 +208,8 @@ class UnitSpec {
   const ClassLayout& classes() const { return classes_; }
   int state_index(const std::string& name) const;  // -1 if absent
   int param_index(const std::string& name) const;  // -1 if absent
+  // A new default for parameter `index` with where it comes from (a material of the catalogue, materials.hpp).
+  void rebase_param(int index, double value, std::string source);
 
  private:
   std::vector<StateSpec> states_;

@@ -1,4 +1,5 @@
-"""Command line: ``granuflow run | steady | sweep | contour | calibrate | describe | units | kernels | docs | bench``.
+"""Command line: ``granuflow run | steady | sweep | contour | calibrate | describe | units | kernels | materials |
+docs | bench``.
 
 Exit codes: 0 success, 2 bad input (scene, option, parameter), 3 solver failure. A failure prints one line
 on stderr naming what went wrong. Each command's module is imported only when it runs, so that ``granuflow run``
@@ -98,6 +99,9 @@ def main(argv=None) -> int:
     kk = sub.add_parser("kernels", help="registered kernels and schemes; with FAMILY their parameters and settings")
     kk.add_argument("family", nargs="?", help="e.g. aggregation, breakage_selection, growth_scheme")
     kk.set_defaults(func=_cmd("info", "cmd_kernels"))
+    mt = sub.add_parser("materials", help="the catalogue of solid materials; with NAME its values and sources")
+    mt.add_argument("name", nargs="?")
+    mt.set_defaults(func=_cmd("info", "cmd_materials"))
     d = sub.add_parser("describe", help="a scene's parameters: value, SI unit, default, bounds, source, description")
     d.add_argument("scene")
     d.add_argument("--format", choices=["table", "csv", "json"], default="table",

@@ -1,4 +1,5 @@
-"""granuflow units [NAME] | kernels [FAMILY] | describe SCENE | docs: the reference, from the registries."""
+"""granuflow units [NAME] | kernels [FAMILY] | materials [NAME] | describe SCENE | docs: the reference, from the
+registries."""
 from __future__ import annotations
 
 import csv
@@ -39,6 +40,19 @@ def cmd_kernels(args) -> int:
         for e in entries:
             print(f"  {e['name']:24s} {e['description']}")
     print("\n(granuflow kernels FAMILY: parameters and settings of every kernel of one family)")
+    return 0
+
+
+def cmd_materials(args) -> int:
+    from .. import materials, reference
+
+    if args.name:
+        sys.stdout.write(reference.material_markdown(materials.material(args.name)))
+        return 0
+    for m in materials.catalogue():
+        print(f"{m['name']:24s} {m['description']}")
+    print("\n(granuflow materials NAME: its values, the parameters they set and their sources; a scene names one in "
+          "particles: material: NAME)")
     return 0
 
 

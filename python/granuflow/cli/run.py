@@ -67,7 +67,8 @@ def cmd_run(args) -> int:
         print(f"{fs.name}: {res.t[-1]:g} s simulated in {res.wall_time_s * 1e3:.1f} ms "
               f"({res.stats['steps']} steps); wrote {', '.join(written)} to {args.out}")
         print(json.dumps({k: summary[k] for k in summary
-                          if k not in ("solver", "units", "grid_end", "warnings", "error_estimate")}, indent=None))
+                          if k not in ("solver", "units", "grid_end", "warnings", "error_estimate", "material")},
+                         indent=None))
         if res.error_estimate is not None:
             ee = res.error_estimate
             print(f"estimated numerical error ({ee.grid or 'no size grid'}; rtol {ee.rtol[0]:g} vs {ee.rtol[1]:g}; "
