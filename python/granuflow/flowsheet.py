@@ -180,6 +180,17 @@ class Flowsheet:
         fs.set_t_end(self.t_end)
         return fs
 
+    def with_settings(self, settings: Mapping[str, object]) -> "Flowsheet":
+        """A new flowsheet with unit settings changed (``{"particles.classes": 40, "bed.aggregation": "constant",
+        "particles.d_max": "3 mm"}``): a setting shapes the structure, so the scene text is built again with the
+        values checked as in a scene file; this flowsheet's parameter values and end time carry over
+        (:mod:`granuflow.structure`)."""
+        from . import structure
+
+        if not isinstance(settings, Mapping):
+            raise ConfigError(f"with_settings({short(settings)}): expected a mapping {{'unit.setting': value}}")
+        return structure.with_settings(self, settings, "with_settings():")
+
     def copy_values_from(self, other: "Flowsheet") -> "Flowsheet":
         """Every constant parameter value of ``other`` (a flowsheet of the same scene), links respected; an input
         set from Python that the scene text does not hold cannot be carried over (ConfigError)."""
