@@ -3,10 +3,10 @@ of a flowsheet, so changing one rebuilds the flowsheet from its scene text with 
 are checked by the scene loader exactly as if the scene file gave them (same one-line messages), and parameter
 values set on the old flowsheet carry over where the new one has the same parameter.
 
-A name ``unit.key`` given as ``--set``, a sweep variable or a contour axis is a setting when ``key`` is not a
-parameter of ``unit``. One name is both in some units (``bed_mass`` of a continuous granulator: the setting
-``free | controlled`` and the parameter in kg): a value among the setting's choices sets the setting, any other
-the parameter."""
+A name ``unit.key`` given as ``--set``, a sweep variable or a contour axis is a setting when the unit declares
+a setting ``key`` (``granuflow describe`` lists them) and no parameter of that name. One name is both in some
+units (``bed_mass`` of a continuous granulator: the setting ``free | controlled`` and the parameter in kg): a value
+among the setting's choices sets the setting, any other the parameter."""
 from __future__ import annotations
 
 import json
@@ -30,23 +30,24 @@ def setting_spec(fs, name: str) -> dict | None:
 
 
 def is_setting(fs, name: str, value=None) -> bool:
-    """True when ``name`` (with ``value``, if given) addresses a setting of ``fs`` rather than a parameter: a name
-    that is not a parameter, of a unit of the flowsheet, or a name that is both whose ``value`` is one of the
-    setting's choices."""
+    """True when ``name`` (with ``value``, if given) addresses a setting of ``fs`` rather than a parameter: a setting
+    the unit declares that is not also a parameter, or a name that is both whose ``value`` is one of the setting's
+    choices. A name that is neither is taken for a (misspelt) parameter."""
     if not isinstance(name, str) or "." not in name:
         return False
-    unit = name.partition(".")[0]
-    if unit not in fs.unit_settings():
+    spec = setting_spec(fs, name)
+    if spec is None:
         return False
     if name not in fs.params:
         return True
-    spec = setting_spec(fs, name)
-    return spec is not None and value is not None and isinstance(value, str) and value.strip() in spec["choices"]
+    return isinstance(value, str) and value.strip() in spec["choices"]
 
 
 def split(fs, values: Mapping) -> tuple[dict, dict]:
-    """``values`` as (settings, parameters), by :func:`is_setting`. A name that is both a parameter and a setting
-    with a value that fits neither is refused, naming both."""
+    """``values`` as (settings, parameters), by :func:`is_setting`. A name the unit does not declare, of a unit
+    whose declared settings are changed too, is a setting (``particles.grid=geometric`` with ``particles.q=4``:
+    a setting read only under another choice); the loader checks it. A name that is both a parameter and a
+    setting, with a value that fits neither, is refused naming both."""
     settings, params = {}, {}
     for k, v in values.items():
         if is_setting(fs, k, v):
@@ -58,6 +59,9 @@ def split(fs, values: Mapping) -> tuple[dict, dict]:
                               f"({', '.join(spec['choices'])}) of unit {k.partition('.')[0]}; give a number with a "
                               f"unit for the parameter or one of {', '.join(spec['choices'])} for the setting")
         params[k] = v
+    rebuilt = {str(k).partition(".")[0] for k in settings}
+    for k in [k for k in params if isinstance(k, str) and k not in fs.params and k.partition(".")[0] in rebuilt]:
+        settings[k] = params.pop(k)
     return settings, params
 
 
@@ -193,7 +197,10 @@ def apply(fs, values: Mapping, where: str = "--set"):
         try:
             fs.set(k, v)
         except ConfigError as e:
-            raise ConfigError(f"{where} {k} = {short(v)}: {' '.join(str(e).split())}") from None
+            unit = str(k).partition(".")[0]
+            names = [s["name"] for s in fs._scene.setting_specs().get(unit, [])] if k not in fs.params else []
+            also = f"; settings of {unit}: {', '.join(names)}" if names else ""
+            raise ConfigError(f"{where} {k} = {short(v)}: {' '.join(str(e).split())}{also}") from None
     return fs
 
 
