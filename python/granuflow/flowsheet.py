@@ -229,6 +229,14 @@ class Flowsheet:
     def unit_settings(self) -> dict:
         return self._scene.unit_settings()
 
+    def setting_specs(self) -> dict[str, list[dict]]:
+        """Per unit its declared settings: name, type, value in use, choices, lower, upper, description."""
+        return self._scene.setting_specs()
+
+    def from_text(self, text: str) -> "Flowsheet":
+        """A flowsheet built from ``text`` (this scene changed), named as this one in messages."""
+        return load_text(text, self.path or self.name)
+
     # -- simulation -----------------------------------------------------------------------------
     def steady_state(self, *, t: float = 0.0, ftol: float = 1e-10, max_iterations: int = 200,
                      max_pseudo_steps: int = 2000, stability: bool = False) -> dict:

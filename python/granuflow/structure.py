@@ -23,7 +23,7 @@ def setting_spec(fs, name: str) -> dict | None:
     """The declared setting ``unit.key`` of ``fs`` ({name, type, value, choices, lower, upper, description}), or
     None."""
     unit, _, key = name.partition(".")
-    for s in fs._scene.setting_specs().get(unit, []):
+    for s in fs.setting_specs().get(unit, []):
         if s["name"] == key:
             return s
     return None
@@ -90,8 +90,6 @@ def with_settings(fs, settings: Mapping, where: str = "settings"):
     """A new flowsheet: the scene text of ``fs`` with ``settings`` ({"unit.key": value}) changed, built again, with
     every parameter value of ``fs`` the new flowsheet also has, and its end time. ``where`` names the source in
     messages (``--set``). ConfigError as the scene loader gives it, for the setting named."""
-    from .flowsheet import load_text
-
     if not settings:
         return fs
     by_unit: dict[str, dict] = {}
@@ -105,14 +103,14 @@ def with_settings(fs, settings: Mapping, where: str = "settings"):
         by_unit.setdefault(unit, {})[key] = setting_text(value)
     for unit, values in by_unit.items():
         for key, value in values.items():
-            values[key] = _si_text(fs, f"{unit}.{key}", value, where)
+            values[key] = si_text(fs, f"{unit}.{key}", value, where)
     text = fs.text
     label = fs.path or fs.name
     for unit, values in by_unit.items():
         text = splice_settings(text, unit, values, label)
     shown = ", ".join(f"{k}={setting_text(v)}" for k, v in settings.items())
     try:
-        new = load_text(text, label)
+        new = fs.from_text(text)
     except ConfigError as e:
         raise ConfigError(f"{where} {shown}: {_explain(fs, str(e), label)}") from None
     copy_common_values(new, fs)
@@ -134,7 +132,7 @@ def setting_si_unit(spec: dict) -> str:
     return ""
 
 
-def _si_text(fs, name: str, text: str, where: str) -> str:
+def si_text(fs, name: str, text: str, where: str) -> str:
     """A real setting given with a unit ("3 mm") as its SI value, converted here at the edge; anything else as
     given (the loader checks it)."""
     from .quantity import split as split_quantity, to_si
@@ -198,7 +196,7 @@ def apply(fs, values: Mapping, where: str = "--set"):
             fs.set(k, v)
         except ConfigError as e:
             unit = str(k).partition(".")[0]
-            names = [s["name"] for s in fs._scene.setting_specs().get(unit, [])] if k not in fs.params else []
+            names = [s["name"] for s in fs.setting_specs().get(unit, [])] if k not in fs.params else []
             also = f"; settings of {unit}: {', '.join(names)}" if names else ""
             raise ConfigError(f"{where} {k} = {short(v)}: {' '.join(str(e).split())}{also}") from None
     return fs

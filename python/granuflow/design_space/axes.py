@@ -166,7 +166,7 @@ def _list_axis(fs: Flowsheet, spec: str, where: str) -> Axis | tuple:
     ss = structure.setting_spec(fs, name)
     desc = ss.get("description", "") if ss else ""
     if ss is not None and ss["type"] in ("integer", "number"):
-        si = np.array([float(structure._si_text(fs, name, v, where)) for v in raw])
+        si = np.array([float(structure.si_text(fs, name, v, where)) for v in raw])
         parts = [split_quantity(v, where) for v in raw]
         if len({u for _, u in parts}) != 1:
             raise ConfigError(f"{where} = '{spec}': give every value in the same unit")
