@@ -196,6 +196,17 @@ class Flowsheet:
         fs.set_t_end(self.t_end)
         return fs
 
+    def with_settings(self, settings: Mapping[str, object]) -> "Flowsheet":
+        """A new flowsheet with unit settings changed (``{"particles.classes": 40, "bed.aggregation": "constant",
+        "particles.d_max": "3 mm"}``): a setting shapes the structure, so the scene text is built again with the
+        values checked as in a scene file; this flowsheet's parameter values and end time carry over
+        (:mod:`granuflow.structure`)."""
+        from . import structure
+
+        if not isinstance(settings, Mapping):
+            raise ConfigError(f"with_settings({short(settings)}): expected a mapping {{'unit.setting': value}}")
+        return structure.with_settings(self, settings, "with_settings():")
+
     def copy_values_from(self, other: "Flowsheet") -> "Flowsheet":
         """Every constant parameter value of ``other`` (a flowsheet of the same scene), links respected; an input
         set from Python that the scene text does not hold cannot be carried over (ConfigError)."""
@@ -233,6 +244,14 @@ class Flowsheet:
 
     def unit_settings(self) -> dict:
         return self._scene.unit_settings()
+
+    def setting_specs(self) -> dict[str, list[dict]]:
+        """Per unit its declared settings: name, type, value in use, choices, lower, upper, description."""
+        return self._scene.setting_specs()
+
+    def from_text(self, text: str) -> "Flowsheet":
+        """A flowsheet built from ``text`` (this scene changed), named as this one in messages."""
+        return load_text(text, self.path or self.name)
 
     # -- simulation -----------------------------------------------------------------------------
     def steady_state(self, *, t: float = 0.0, ftol: float = 1e-10, max_iterations: int = 200,

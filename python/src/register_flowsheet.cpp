@@ -255,6 +255,22 @@ void register_flowsheet(py::module_& m) {
              }
              return d;
            })
+      .def("setting_specs",
+           [](const Scene& s) {
+             // unit -> [{name, type, value, choices, lower, upper, description}]: what a settings override is checked
+             // against before the flowsheet is rebuilt (a name both a parameter and a setting)
+             py::dict d;
+             for (const auto& u : s.flowsheet->units()) {
+               if (u.owner >= 0) continue;
+               py::list st;
+               for (const auto& x : u.settings)
+                 st.append(py::dict("name"_a = x.name, "type"_a = to_string(x.type),
+                                    "value"_a = setting_to_string(x.value), "choices"_a = x.choices,
+                                    "lower"_a = x.lower, "upper"_a = x.upper, "description"_a = x.description));
+               d[py::str(u.name)] = st;
+             }
+             return d;
+           })
       .def("time_residual", &time_residual, "repeats"_a = 7, "dense_limit"_a = 400)
       .def(
           "steady_state",

@@ -79,9 +79,10 @@ def main(argv=None) -> int:
     k = sub.add_parser("contour", help="contour map of outputs over two parameters; feasible window; CSV and PNG")
     k.add_argument("scene")
     k.add_argument("--x", required=True, metavar="UNIT.PARAM:UNIT:LO:HI:N",
-                   help="e.g. inlet.T:degC:40:80:15 (N: 1 to 401 points)")
+                   help="e.g. inlet.T:degC:40:80:15 (N: 1 to 401 points), or a unit setting's values "
+                        "UNIT.SETTING=V1,V2,... (particles.classes=10,20,40,80; bed.aggregation=kapur,sum)")
     k.add_argument("--y", required=True, metavar="UNIT.PARAM:UNIT:LO:HI:N",
-                   help="e.g. nozzle.mdot:g/min:60:120:15 (N: 1 to 401 points)")
+                   help="e.g. nozzle.mdot:g/min:60:120:15 (N: 1 to 401 points), or UNIT.SETTING=V1,V2,...")
     k.add_argument("--output", action="append", help="summary key or state/output name (repeatable; default d50_um)")
     k.add_argument("--constraint", action="append", metavar="OUTPUT>=VALUE", help='e.g. "bed_moisture_wet<0.04"')
     k.add_argument("--out", required=True, help="output folder (created)")

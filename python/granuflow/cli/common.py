@@ -31,13 +31,18 @@ def parse_seconds(text: str, option: str = "--t-end") -> float:
 
 
 def parse_sets(items) -> dict:
-    """``--set unit.param=value`` options as {name: value text}; a malformed one is bad input."""
+    """``--set unit.name=value`` options as {name: value text} (a parameter, or a setting, which rebuilds the
+    flowsheet: granuflow.structure.apply); a malformed one is bad input. Quotes around the value are the shell's
+    or the user's: ``--set 'particles.d_max="3 mm"'`` gives 3 mm."""
     overrides = {}
     for item in items or []:
         if "=" not in item:
-            raise ConfigError(f"--set '{item}': expected unit.param=value")
+            raise ConfigError(f"--set '{item}': expected unit.param=value or unit.setting=value")
         name, value = item.split("=", 1)
-        overrides[name.strip()] = value.strip()
+        value = value.strip()
+        if len(value) >= 2 and value[0] == value[-1] and value[0] in "\"'":
+            value = value[1:-1].strip()
+        overrides[name.strip()] = value
     return overrides
 
 

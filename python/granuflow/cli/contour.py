@@ -16,6 +16,13 @@ from .common import (check_out_dir, check_workers, json_value, parse_seconds, pa
                      with_unit_headers)
 
 
+def _at(grid, i) -> str:
+    """Where a grid point is, for messages: "particles.classes = 10, bed.aggregation = kapur"."""
+    def one(ax, k):
+        return f"{ax.param} = " + (ax.labels[k] if ax.labels else f"{ax.values[k]:g} {ax.unit}".strip())
+    return f"{one(grid.x, i[1])}, {one(grid.y, i[0])}"
+
+
 def cmd_contour(args) -> int:
     """``granuflow contour SCENE --x P:U:LO:HI:N --y ... --output O [--constraint "O>=V"] --out DIR``: writes
     contour.csv (one row per grid point; with constraints their margins and ``feasible``), contour.json (metadata,
@@ -65,8 +72,8 @@ def cmd_contour(args) -> int:
             written.append(f"contour_{o}.png")
     n_failed = int((~grid.ok).sum())
     meta = {"scene": os.path.abspath(args.scene), "x": {"param": grid.x.param, "unit": grid.x.unit,
-                                                        "values": grid.x.values.tolist()},
-            "y": {"param": grid.y.param, "unit": grid.y.unit, "values": grid.y.values.tolist()},
+                                                        "values": list(grid.x.labels) or grid.x.values.tolist()},
+            "y": {"param": grid.y.param, "unit": grid.y.unit, "values": list(grid.y.labels) or grid.y.values.tolist()},
             "outputs": list(grid.outputs), "fixed": fixed, "t_end_s": None if grid.steady else grid.t_end_s,
             "steady_state": bool(args.steady), "n_points": grid.n_simulations,
             "n_failed": n_failed, "wall_time_s": grid.wall_time_s,
@@ -87,11 +94,9 @@ def cmd_contour(args) -> int:
     if warned.any():
         i = np.argwhere(warned)[0]
         print(f"granuflow: {int(warned.sum())} of {grid.n_simulations} points warn (see contour.csv, message); "
-              f"first: {grid.x.param} = {grid.x.values[i[1]]:g} {grid.x.unit}, {grid.y.param} = "
-              f"{grid.y.values[i[0]]:g} {grid.y.unit}: {grid.message[tuple(i)]}", file=sys.stderr)
+              f"first: {_at(grid, i)}: {grid.message[tuple(i)]}", file=sys.stderr)
     if n_failed:
         i = np.argwhere(~grid.ok)[0]
-        print(f"granuflow: {n_failed} of {grid.n_simulations} points failed; first: {grid.x.param} = "
-              f"{grid.x.values[i[1]]:g} {grid.x.unit}, {grid.y.param} = {grid.y.values[i[0]]:g} {grid.y.unit}: "
+        print(f"granuflow: {n_failed} of {grid.n_simulations} points failed; first: {_at(grid, i)}: "
               f"{grid.message[tuple(i)]}", file=sys.stderr)
     return 3 if n_failed == grid.n_simulations else 0

@@ -9,6 +9,7 @@ import os
 import sys
 
 from ..flowsheet import load
+from ..structure import apply as apply_sets
 from ..plots.spec import plot_specs
 from ..result import BalanceError
 from .common import check_out_dir, parse_seconds, parse_sets
@@ -41,8 +42,7 @@ def _draw(res, specs, out: str) -> list[str]:
 
 
 def cmd_run(args) -> int:
-    fs = load(args.scene)
-    fs.update(parse_sets(args.set))
+    fs = apply_sets(load(args.scene), parse_sets(args.set))  # settings rebuild the flowsheet
     specs = plot_specs(fs, drawing=not args.no_plots)  # against the scene file's own t_end
     if args.t_end is not None:
         fs.set_t_end(parse_seconds(args.t_end))

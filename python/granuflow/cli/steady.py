@@ -10,6 +10,7 @@ import sys
 
 from ..flowsheet import load
 from ..result import BalanceError
+from ..structure import apply as apply_sets
 from ..steady import steady_psd_rows, steady_report
 from .common import check_out_dir, json_value, parse_seconds, parse_sets
 
@@ -23,8 +24,7 @@ def _clean(v):
 
 
 def cmd_steady(args) -> int:
-    fs = load(args.scene)
-    fs.update(parse_sets(args.set))
+    fs = apply_sets(load(args.scene), parse_sets(args.set))  # settings rebuild the flowsheet
     t = parse_seconds(args.t, "--t") if args.t else 0.0
     check_out_dir(args.out)
     failure = None

@@ -8,9 +8,9 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from .. import _core, sweep
+from .. import _core, structure, sweep
 from ..flowsheet import Flowsheet
-from ..quantity import affine, parse_time
+from ..quantity import affine, parse_time, split as split_quantity
 
 ConfigError = _core.ConfigError
 SolverError = _core.SolverError
@@ -33,6 +33,12 @@ class Axis:
     si: np.ndarray
     description: str = ""
     si_unit: str = ""
+    settings: tuple = ()  # a unit setting's axis: the value each point gets (10, "constant"); rebuilds per value
+    labels: tuple = ()    # a categorical setting: the names; ``values`` are then their positions 0, 1, ...
+
+    def point(self, i: int):
+        """The value the flowsheet gets at position ``i`` of the axis: the setting's value, or SI."""
+        return self.settings[i] if self.settings else float(self.si[i])
 
     @property
     def column(self) -> str:
@@ -131,9 +137,59 @@ def _parse_spec(spec, where: str, with_n: bool):
     return param, unit, [lo, hi]
 
 
+def _list_axis(fs: Flowsheet, spec: str, where: str) -> Axis | tuple:
+    """``"name=v1,v2,..."``: a unit setting's axis (``particles.classes=10,20,40``, ``bed.aggregation=kapur,sum``;
+    every value checked by building the flowsheet with it), or for a parameter ``(param, unit, [values])`` (the
+    values numbers in one unit: ``inlet.T=40 degC,60 degC``)."""
+    name, _, text = spec.partition("=")
+    name = name.strip()
+    raw = [v.strip() for v in text.split(",")]
+    if not name or not all(raw):
+        raise ConfigError(f"{where} = '{spec}': expected unit.name=v1,v2,... (e.g. particles.classes=10,20,40)")
+    if len(raw) > MAX_AXIS_POINTS:
+        raise ConfigError(f"{where}: {name}: {len(raw)} values: expected at most {MAX_AXIS_POINTS} points per axis")
+    if len(set(raw)) != len(raw):
+        raise ConfigError(f"{where} = '{spec}': a value is given twice")
+    if not structure.is_setting(fs, name, raw[0]):
+        parts = []
+        for v in raw:
+            try:
+                parts.append(split_quantity(v, where))
+            except ConfigError:
+                raise ConfigError(f"{where}: {name} = '{v}': expected a number with an optional unit ({name} is a "
+                                  "parameter; a list of names is for a unit setting)") from None
+        if len({u for _, u in parts}) != 1:
+            raise ConfigError(f"{where} = '{spec}': give every value in the same unit")
+        return name, parts[0][1], [x for x, _ in parts]
+    for v in raw:  # as the scene loader checks it, with the value named
+        structure.with_settings(fs, {name: v}, where)
+    ss = structure.setting_spec(fs, name)
+    desc = ss.get("description", "") if ss else ""
+    if ss is not None and ss["type"] in ("integer", "number"):
+        si = np.array([float(structure.si_text(fs, name, v, where)) for v in raw])
+        parts = [split_quantity(v, where) for v in raw]
+        if len({u for _, u in parts}) != 1:
+            raise ConfigError(f"{where} = '{spec}': give every value in the same unit")
+        values = np.array([x for x, _ in parts])
+        if values.size > 1 and not np.all(np.diff(values) > 0):
+            raise ConfigError(f"{where}: {name}: expected increasing values, got {raw}")
+        return Axis(name, parts[0][1], values, si, desc, structure.setting_si_unit(ss) if ss else "",
+                    settings=tuple(int(v) if ss["type"] == "integer" else v for v in raw))
+    pos = np.arange(len(raw), dtype=float)
+    return Axis(name, "", pos, pos, desc, "", settings=tuple(raw), labels=tuple(raw))
+
+
 def make_axis(fs: Flowsheet, spec, where: str = "axis", *, with_n: bool = True, allow_t_end: bool = False) -> Axis:
-    """An :class:`Axis` from ``(param, unit, lo, hi, n)``, ``(param, unit, [values])`` or ``"param:unit:lo:hi:n"``;
-    checks the parameter, the unit and the parameter's bounds. Raises ConfigError naming ``where``."""
+    """An :class:`Axis` from ``(param, unit, lo, hi, n)``, ``(param, unit, [values])``, ``"param:unit:lo:hi:n"``
+    or ``"name=v1,v2,..."`` (a unit setting: ``particles.classes=10,20,40``, a categorical one
+    ``bed.aggregation=kapur,sum``; or a parameter's values in one unit); checks the parameter, the unit and the
+    parameter's bounds, a setting's values by building the flowsheet with each. Raises ConfigError naming
+    ``where``."""
+    if isinstance(spec, str) and "=" in spec:
+        listed = _list_axis(fs, spec, where)
+        if isinstance(listed, Axis):
+            return listed
+        spec = listed
     param, unit, values = _parse_spec(spec, where, with_n)
     if param == T_END and allow_t_end:
         desc, lower, upper = "end time of the run", 0.0, math.inf
@@ -178,7 +234,9 @@ def fixed_flowsheet(flowsheet: Flowsheet, fixed: Mapping[str, float | str] | Non
                     t_end: float | str | None) -> Flowsheet:
     """A clone with ``fixed`` applied (the caller's flowsheet is never changed)."""
     fs = flowsheet.clone()
-    for k, v in (fixed or {}).items():
+    settings, fixed = structure.split(fs, dict(fixed or {}))
+    fs = structure.with_settings(fs, settings, "fixed:")
+    for k, v in fixed.items():
         if k not in fs.params:
             raise ConfigError(f"fixed: unknown parameter '{k}' of scene '{fs.name}' (allowed: {', '.join(fs.params)})")
         sweep.file.set_or_raise(fs, k, v, f"fixed.{k}")

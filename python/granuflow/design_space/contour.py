@@ -75,6 +75,9 @@ class ContourGrid:
         Xs, Ys = np.meshgrid(self.x.si, self.y.si)
         xs, ys = label(self.x.param, self.x.si_unit), label(self.y.param, self.y.si_unit)
         data = {self.x.column: X.ravel(), self.y.column: Y.ravel()}
+        for ax, col in ((self.x, self.x.column), (self.y, self.y.column)):
+            if ax.labels:  # a categorical setting: its names, not their positions
+                data[col] = [ax.labels[int(v)] for v in data[col]]
         if xs != self.x.column:  # the SI values too, where the axis is not in SI already
             data[xs] = Xs.ravel()
         if ys != self.y.column:
@@ -90,7 +93,7 @@ class ContourGrid:
 
 
 def grid_points(x: Axis, y: Axis) -> list[dict]:
-    return [{x.param: float(xs), y.param: float(ys)} for ys in y.si for xs in x.si]
+    return [{x.param: x.point(j), y.param: y.point(i)} for i in range(len(y.si)) for j in range(len(x.si))]
 
 
 def contour_map(flowsheet: Flowsheet, x, y, outputs: Sequence[str] = ("d50_um",), *,
@@ -190,6 +193,9 @@ class FeasibleWindow:
 
         X, Y = np.meshgrid(self.x.values, self.y.values)
         data = {self.x.column: X.ravel(), self.y.column: Y.ravel()}
+        for ax, col in ((self.x, self.x.column), (self.y, self.y.column)):
+            if ax.labels:  # a categorical setting: its names, not their positions
+                data[col] = [ax.labels[int(v)] for v in data[col]]
         data.update({f"margin[{k}]": v.ravel() for k, v in self.margins.items()})
         data["feasible"] = self.mask.ravel()
         return pd.DataFrame(data)

@@ -81,8 +81,17 @@ def plot_contour(grid, output: str, path: str | None = None, *, ax=None, levels:
         ax.plot(X[~grid.ok], Y[~grid.ok], "rx", ms=5, label="failed")
     ax.set_xlabel(grid.x.label)
     ax.set_ylabel(grid.y.label)
+    _category_ticks(ax, grid.x, grid.y)
     ax.set_title(title if title is not None else f"{label.split(' / ')[0]} {grid.when}")
     return _finish(fig, ax, path, own)
+
+
+def _category_ticks(ax, x, y) -> None:
+    """A categorical setting's axis (bed.aggregation=kapur,sum) shows the names at their positions."""
+    if x is not None and x.labels:
+        ax.set_xticks(x.values, x.labels)
+    if y is not None and y.labels:
+        ax.set_yticks(y.values, y.labels)
 
 
 def _profile(fig, ax, path, own, grid, output, label, z, title, window):
@@ -96,6 +105,7 @@ def _profile(fig, ax, path, own, grid, output, label, z, title, window):
         ax.plot(along.values[ok], v[ok], "o", color="tab:red", ms=6, label="feasible")
         ax.legend(loc="best", fontsize=8)
     ax.set_xlabel(along.label)
+    _category_ticks(ax, along, None)
     ax.set_ylabel(label)
     ax.grid(alpha=0.3)
     note = f"{held.param} = {held.values[0]:g} {held.unit}".strip()

@@ -5,7 +5,7 @@ import os
 from dataclasses import dataclass, field
 from typing import Any, Mapping
 
-from .. import _core
+from .. import _core, structure
 from ..flowsheet import Flowsheet, load
 from ..quantity import affine, is_number, parse_time, split, to_si
 from ..textfile import load_yaml, short
@@ -20,16 +20,17 @@ _POINT_LABELS = ("name", "kind")
 @dataclass
 class Variable:
     name: str          # column name in the results
-    param: str         # scene parameter, "unit.param"
+    param: str         # scene parameter, "unit.param", or a unit setting ("particles.classes": rebuilds the flowsheet)
     unit: str          # edge unit of the values ("" = SI)
     levels: list[float] = field(default_factory=list)  # optional, informative (low, centre, high)
     description: str = ""
+    setting: bool = False  # a unit setting: point values as written in a scene file (10, "constant", "3 mm")
 
     def to_si(self, value: float, si_unit: str) -> float:
         return to_si(float(value), si_unit, self.param, self.unit)
 
-    def quantity(self, value: float) -> str:
-        return f"{value!r} {self.unit}".strip()
+    def quantity(self, value):
+        return value if self.setting else f"{value!r} {self.unit}".strip()
 
 
 @dataclass
@@ -50,12 +51,15 @@ class Sweep:
     def flowsheet(self, overrides: Mapping[str, float | str] | None = None) -> Flowsheet:
         """The scene with the sweep file's ``set`` and then ``overrides`` applied."""
         fs = load(self.scene)
-        for k, v in self.set.items():
-            set_or_raise(fs, k, v, f"{self.path}: set.{k}")
         for k, v in (overrides or {}).items():
             if any(var.param == k for var in self.variables):
                 raise ConfigError(f"--set {k}={v}: {k} is a variable of sweep '{self.name}' "
                                   f"(its values come from the points)")
+        fs = structure.with_settings(fs, structure.split(fs, self.set)[0], f"{self.path}: set:")
+        fs = structure.with_settings(fs, structure.split(fs, overrides or {})[0], "--set")
+        for k, v in structure.split(fs, self.set)[1].items():
+            set_or_raise(fs, k, v, f"{self.path}: set.{k}")
+        for k, v in structure.split(fs, overrides or {})[1].items():
             set_or_raise(fs, k, v, f"--set {k}")
         if self.t_end is not None:
             fs.set_t_end(self.t_end)
@@ -86,20 +90,34 @@ class Sweep:
         df = raw[["point"]].copy()
         df["kind"] = [p.get("kind", "") for p in self.points]
         for v in self.variables:
-            df[v.name] = [float(p[v.name]) for p in self.points]
+            df[v.name] = [p[v.name] if v.setting else float(p[v.name]) for p in self.points]
         for c in self.outputs + errs + ["wall_time_s", "solve_time_s", "status", "message"]:
             df[c] = raw[c].to_numpy()
         df.attrs.update(self.metadata())
-        df.attrs["units"] = {**{v.name: v.unit or fs.spec(v.param)["unit"] for v in self.variables},
+        df.attrs["units"] = {**{v.name: "" if v.setting else v.unit or fs.spec(v.param)["unit"]
+                                for v in self.variables},
                              **{o: raw.attrs["units"].get(o, "") for o in self.outputs + errs},
                              "wall_time_s": "s", "solve_time_s": "s"}
         return df
 
     def metadata(self) -> dict:
         return {"sweep": self.name, "description": self.description, "scene": self.scene,
-                "variables": {v.name: {"param": v.param, "unit": v.unit, "levels": list(v.levels)}
+                "variables": {v.name: {"param": v.param, "unit": v.unit, "levels": list(v.levels),
+                                       **({"setting": True} if v.setting else {})}
                               for v in self.variables},
                 "outputs": list(self.outputs), "set": dict(self.set), "t_end_s": self.t_end}
+
+
+def _setting_variable(fs: Flowsheet, vname: str, spec: dict, err) -> Variable:
+    """A variable that is a unit setting: its values as a scene file writes them (no edge unit: a real setting's
+    value may carry one, "3 mm"); levels informative."""
+    if spec.get("unit", ""):
+        raise err(f"variables.{vname}.unit", f"{spec['param']} is a unit setting: give its values as in a scene "
+                                             "file (a length with its unit, e.g. '3 mm'), not a unit")
+    levels = spec.get("levels", [])
+    if not isinstance(levels, list):
+        raise err(f"variables.{vname}.levels", f"expected a list, got {short(levels)}")
+    return Variable(vname, spec["param"], "", list(levels), str(spec.get("description", "")), setting=True)
 
 
 def set_or_raise(fs: Flowsheet, name: str, value, where: str, shown=None) -> None:
@@ -152,6 +170,9 @@ def load_sweep(path: str | os.PathLike) -> Sweep:
         if "param" not in spec:
             raise err(f"{key}.param", "missing required key")
         param = spec["param"]
+        if structure.is_setting(fs, param):
+            variables.append(_setting_variable(fs, vname, spec, err))
+            continue
         if param not in fs.params:
             raise err(f"{key}.param", f"unknown parameter '{param}' of scene '{fs.name}' "
                                       f"(allowed: {', '.join(fs.params)})")
@@ -186,12 +207,15 @@ def load_sweep(path: str | os.PathLike) -> Sweep:
     if not isinstance(fixed, dict):
         raise err("set", f"expected a mapping unit.param -> value, got {short(fixed)}")
     for k, v in fixed.items():
-        if k not in fs.params:
+        if k not in fs.params and not structure.is_setting(fs, k):
             raise err(f"set.{k}", f"unknown parameter (allowed: {', '.join(fs.params)})")
         if any(var.param == k for var in variables):
             raise err(f"set.{k}", "is also a sweep variable")
         if not (is_number(v) or isinstance(v, str)):
             raise err(f"set.{k}", f"expected a number or a string with a unit, got {short(v)}")
+    settings, params = structure.split(fs, fixed)
+    fs = structure.with_settings(fs, settings, f"{path}: set:")
+    for k, v in params.items():
         set_or_raise(fs, k, v, f"{path}: set.{k}")
     t_end = None
     if "t_end" in doc:
@@ -222,10 +246,17 @@ def load_sweep(path: str | os.PathLike) -> Sweep:
                 raise err(f"{key}.{v.name}", f"missing (every point gives every variable: "
                                              f"{', '.join(x.name for x in variables)})")
             value = p[v.name]
+            if v.setting:  # checked once per value below, by building the flowsheet with it
+                point[v.name] = value
+                continue
             point[v.name] = _edge_value(fs, v, value, f"{path}: {key}.{v.name}")
             set_or_raise(fs, v.param, value if isinstance(value, str) else v.quantity(point[v.name]),
                          f"{path}: {key}.{v.name}", shown=value)
         points.append(point)
+    for v in variables:
+        if v.setting:
+            for value in dict.fromkeys(structure.setting_text(p[v.name]) for p in points):
+                structure.with_settings(fs, {v.param: value}, f"{path}: points: {v.name} =")
     return Sweep(path=path, name=name, description=str(doc.get("description", "")), scene=scene,
                  variables=variables, points=points, outputs=outputs, set=dict(fixed), t_end=t_end)
 

@@ -5,7 +5,7 @@ import math
 import time
 from typing import Any, Callable, Mapping, Sequence
 
-from .. import _core, outputs as roles, progress as progress_bars
+from .. import _core, outputs as roles, progress as progress_bars, structure
 from ..flowsheet import Flowsheet
 from ..quantity import si_or_nan
 from .executors import make_executor
@@ -122,6 +122,11 @@ def run_sweep(flowsheet: Flowsheet, points: Sequence[Mapping[str, float | str]],
         raise ConfigError(f"names: {len(names)} names for {len(points)} points")
     outputs = check_outputs(flowsheet, list(outputs))
     params = list(dict.fromkeys(k for p in points for k in p))
+    structural = [k for k in params if structure.is_setting(flowsheet, k, next(p[k] for p in points if k in p))]
+    if structural:  # settings shape the flowsheet: one build per structure, its points on it
+        return _run_by_structure(flowsheet, points, outputs, structural, names, raise_errors=raise_errors,
+                                 workers=workers, progress=progress, executor=executor, t_end=t_end,
+                                 simulate=simulate, desc=desc, error_estimate=error_estimate, steady=steady)
     known = set(flowsheet.params)
     for k in params:
         if k not in known:
@@ -181,4 +186,38 @@ def run_sweep(flowsheet: Flowsheet, points: Sequence[Mapping[str, float | str]],
                          **{o: flowsheet.value_unit(o) for o in outputs},
                          **{error_column(o): flowsheet.value_unit(o) for o in outputs if error_estimate},
                          "wall_time_s": "s", "solve_time_s": "s"}
+    return df
+
+
+def _run_by_structure(flowsheet: Flowsheet, points: list[dict], outputs: list[str], structural: list[str],
+                      names: Sequence, *, raise_errors: bool, **kwargs):
+    """:func:`run_sweep` over points that also set unit settings (``particles.classes``): the points are grouped
+    by their settings, every group runs on its own flowsheet built once (points sharing a structure share the
+    build), and the rows come back in the order of ``points`` with one column per setting (its value as given)."""
+    import numpy as np
+    import pandas as pd
+
+    groups: dict[tuple, list[int]] = {}
+    for i, p in enumerate(points):
+        groups.setdefault(tuple((k, structure.setting_text(p[k])) for k in structural if k in p), []).append(i)
+    frames = []
+    for key, idx in groups.items():
+        settings = dict(key)
+        try:
+            fs = structure.with_settings(flowsheet, settings, "point")
+            sub = run_sweep(fs, [{k: v for k, v in points[i].items() if k not in structural} for i in idx], outputs,
+                            names=[names[i] for i in idx], raise_errors=raise_errors,
+                            **{**kwargs, "desc": f"{kwargs['desc']} ({', '.join(f'{k}={v}' for k, v in key)})"})
+        except ConfigError as e:  # a structure the loader refuses: its points fail, the others run
+            if raise_errors:
+                raise
+            sub = pd.DataFrame({"point": [names[i] for i in idx], **{o: np.nan for o in outputs},
+                                "status": STATUS_FAILED, "message": " ".join(str(e).split())})
+        for j, k in enumerate(structural):
+            sub.insert(1 + j, k, [points[i].get(k) for i in idx])
+        sub["_i"] = idx
+        frames.append(sub)
+    units = next((f.attrs["units"] for f in frames if f.attrs.get("units")), {})
+    df = pd.concat(frames, ignore_index=True).sort_values("_i").drop(columns="_i").reset_index(drop=True)
+    df.attrs["units"] = {**{k: "" for k in structural}, **units}
     return df
