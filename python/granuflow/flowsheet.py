@@ -305,11 +305,11 @@ class Flowsheet:
         if target is not None:
             from .accuracy import target as acc_target
 
+            if sensitivities:
+                raise ConfigError("simulate(): sensitivities with an accuracy target: run simulate(accuracy=False) "
+                                  "on the grid the target chose (Result.accuracy.grid)")
             res = acc_target.solve(self, target, t_end=t_end, t_out=t_out, n_out=n_out, rtol=rtol, atol=atol,
                                    linear_solver=linear_solver, max_steps=max_steps, method=method)
-            if sensitivities:
-                raise ConfigError("simulate(): sensitivities with accuracy: run simulate(accuracy=False) on the "
-                                  "grid the accuracy target chose")
             if error_estimate:
                 res.error_estimate = res.flowsheet._error_estimate(res, linear_solver=linear_solver,
                                                                    max_steps=max_steps, method=method)
