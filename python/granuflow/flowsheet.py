@@ -343,7 +343,9 @@ class Flowsheet:
         if error_estimate:
             res.error_estimate = self._error_estimate(res, linear_solver=linear_solver, max_steps=max_steps,
                                                       method=method)
-        if warn if grid_check is None else grid_check:
+        if grid_check is None:  # a scene's `accuracy: false` keeps its grid as written, unchecked
+            grid_check = warn and self.scene_accuracy is not False
+        if grid_check:
             from .accuracy import grid_check as gc
 
             res.grid_check = gc.check(self, res, linear_solver=linear_solver, max_steps=max_steps, method=method)
@@ -364,16 +366,25 @@ class Flowsheet:
             return None
         if accuracy is not None:
             return acc_target.parse_target(accuracy, "simulate(): accuracy")
-        if not hasattr(self, "_scene_accuracy"):  # the scene text never changes: read once
-            self._scene_accuracy = self.extra.get("accuracy") if "accuracy" in self._scene.extra_yaml else None
-            self._no_classes = self._grid_without_classes()
-        scene = self._scene_accuracy
+        scene = self.scene_accuracy
         if scene is not None:
             return None if scene is False else acc_target.parse_target(scene, f"{self.path or self.name}: accuracy")
-        return {"*": DEFAULT_ACCURACY} if self._no_classes else None
+        return {"*": DEFAULT_ACCURACY} if self._grid_without_classes() else None
+
+    @property
+    def scene_accuracy(self):
+        """The scene's ``accuracy:`` as written (None without one; ``False``: its grid as written, unchecked)."""
+        if not hasattr(self, "_scene_accuracy"):  # the scene text never changes: read once
+            self._scene_accuracy = self.extra.get("accuracy") if "accuracy" in self._scene.extra_yaml else None
+        return self._scene_accuracy
 
     def _grid_without_classes(self) -> bool:
         """The scene has a particles: section whose settings give no classes (the user left the grid to us)."""
+        if not hasattr(self, "_no_classes"):
+            self._no_classes = self._find_no_classes()
+        return self._no_classes
+
+    def _find_no_classes(self) -> bool:
         if self.grid() is None:
             return False
         import yaml

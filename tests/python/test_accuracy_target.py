@@ -77,6 +77,13 @@ def test_a_scene_accuracy_key_and_the_command_line(tmp_path):
     assert r.accuracy is not None and r.accuracy.target == {"d50_um": 0.05}
     assert r.accuracy.outputs["d50_um"]["relative"] < 0.05
     assert gf.load_text(text, "acc.yaml").simulate(warn=False, accuracy=False).accuracy is None
+    # accuracy: false keeps the grid as written, unchecked (the scene's way of --no-grid-check)
+    off = gf.load_text(HEADLINE.replace("t_end: 60 min", "t_end: 60 min\naccuracy: false"), "off.yaml")
+    r = off.simulate(warn=False, grid_check=None)
+    assert r.accuracy is None and r.grid_check is None
+    with pytest.warns(gf.GridWarning) as caught:
+        assert off.simulate().grid_check is None
+    assert not any("grid error" in str(w.message) for w in caught)
     before = sha256(SCENE)
     p = cli("run", SCENE, "--out", tmp_path / "o", "--no-plots", "--accuracy", "d50_um=5%")
     assert p.returncode == 0, p.stderr

@@ -21,6 +21,7 @@ from __future__ import annotations
 import math
 import re
 import time
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 
 from .. import _core
@@ -128,7 +129,7 @@ class Accuracy:
                 out.append(f"  {name} = {o['value']:.6g}{u}: not estimated ({o['not_estimated']})")
                 continue
             out.append(f"  {name} = {o['value']:.6g}{u}; estimated error {o['error']:+.3g}{u} "
-                       f"({100 * o['relative']:.2g} %, target {100 * o['target']:.2g} %; grid {o['grid']:+.3g}, "
+                       f"({100 * o['relative']:.3g} %, target {100 * o['target']:.3g} %; grid {o['grid']:+.3g}, "
                        f"tolerance {o['tolerance']:+.3g})")
         return out + [f"  note: {n}" for n in self.notes]
 
@@ -155,27 +156,13 @@ def solve(fs, target: dict[str, float], **kw):
                               f"{', '.join(numeric)})")
         goals = dict(target)
     notes: list[str] = []
-    # the tolerance, on the scene's grid
-    rtol0, atol0 = base.rtol, base.atol
-    kl = 100.0 if rtol0 * 100 <= 1e-3 else 10.0
-    loose = fs.simulate(**dict(run, rtol=rtol0 * kl, atol=atol0 * kl)).summary_values()
-    e_int = {k: (loose[k] - s0[k]) / (kl - 1) if loose.get(k) is not None else math.inf for k in goals}
-    need = min((TOL_SHARE * goals[k] * abs(s0[k]) / abs(e) for k, e in e_int.items() if e and s0[k]),
-               default=math.inf)
-    rtol = rtol0
-    if need < 1:
-        rtol = max(rtol0 * 10.0 ** math.floor(math.log10(need)), MIN_RTOL)
-        run.update(rtol=rtol, atol=atol0 * rtol / rtol0)
-        notes.append(f"tolerance tightened from rtol {rtol0:g} to {rtol:g}")
-    e_int = {k: e * rtol / rtol0 for k, e in e_int.items()}
-    levels = []  # (spacing, flowsheet, result)
+    levels, rtol, e_int, extra = _start(fs, base, run, goals, s0, notes)
+    rtol0 = base.rtol
 
     def level(factor):
-        f = fs if factor == 1 else fs.regridded(factor)
-        r = base if factor == 1 and rtol == rtol0 else f.simulate(**run)
-        levels.append((spacing(f), f, r))
+        f = fs.regridded(factor)
+        levels.append((spacing(f), f, f.simulate(**run)))
         levels.sort(key=lambda x: -x[0])
-        return r
 
     out, reached = {}, False
     if fs.grid() is None:
@@ -186,20 +173,11 @@ def solve(fs, target: dict[str, float], **kw):
             out[k] = _entry(v, units.get(k, ""), g, None, e_int[k], None, "tolerance only")
         reached = all(o["relative"] <= o["target"] for o in out.values())
     else:
-        n = int(fs.grid()["classes"])
-        try:
-            for factor in ((0.5, 0.75, 1) if n >= COARSE_FROM else (1, 2, 3)):
-                level(factor)
-        except ConfigError as e:  # a coarser grid the scene does not allow (a pivot it needs): refine instead
-            notes.append(f"no coarser grid ({' '.join(str(e).split())}): refined 2 and 3 times")
-            levels.clear()
-            for factor in (1, 2, 3):
-                level(factor)
         skip = not_corresponding(levels[-1][2], [levels[0][2]])
         for k in list(goals):
             reason = skip.get(fs.summary_map.get(k, ""), "")
             if reason:
-                out[k] = {"value": s0[k], "unit": units.get(k, ""), "not_estimated": reason}
+                out[k] = {"unit": units.get(k, ""), "not_estimated": reason}
                 del goals[k]
         while True:
             (h1, _, r1), (h2, _, r2), (h3, f3, r3) = levels[-3:]
@@ -231,14 +209,16 @@ def solve(fs, target: dict[str, float], **kw):
                 notes.append(f"a solve on a finer grid failed: {' '.join(str(e).split())}")
                 break
         answer_fs, answer = f3, r3
+        for k, o in out.items():  # the values not estimated: the answer's own
+            o["value"] = r3.summary_values()[k]
         for k, g in goals.items():
             err, p, method = est[k]
             out[k] = _entry(r3.summary_values()[k], units.get(k, ""), g, err, e_int[k], p, method)
     wall = time.perf_counter() - t0
     grids = [f.grid_label() for _, f, _ in levels] if levels else []
-    rep = Accuracy({k: v for k, v in target.items()}, reached, answer_fs.grid_label(), rtol, out, grids,
-                   len(levels) + 1 + (0 if rtol == rtol0 else 1), wall / base_cost if base_cost > 0 else math.nan,
-                   wall, notes)
+    solves = (len(levels) + extra) if levels else 2 + (rtol != rtol0)
+    rep = Accuracy(dict(target), reached, answer_fs.grid_label(), rtol, out, grids, solves,
+                   wall / base_cost if base_cost > 0 else math.nan, wall, notes)
     answer.accuracy = rep
     if not reached:
         worst = [k for k, o in out.items() if not o.get("not_estimated") and not o["relative"] <= o["target"]]
@@ -247,6 +227,43 @@ def solve(fs, target: dict[str, float], **kw):
                 f"{display_name(k, '')[0]} ≈ {100 * out[k]['relative']:.2g} % (target {100 * out[k]['target']:.2g} %)"
                 for k in worst) + (f" ({notes[-1]})" if notes else ""))
     return answer
+
+
+def _start(fs, base, run: dict, goals: dict, s0: dict, notes: list):
+    """The tolerance check and the first three grids: (levels, rtol, integration error per key, extra solves)."""
+    levels = []  # (spacing, flowsheet, result)
+    rtol0, atol0 = base.rtol, base.atol
+    kl = 100.0 if rtol0 * 100 <= 1e-3 else 10.0
+    loose_run = dict(run, rtol=rtol0 * kl, atol=atol0 * kl)
+    # the first grids and the tolerance check are independent: solved side by side (simulate releases the GIL),
+    # the grids copied here first (building a flowsheet holds it)
+    first: list = []
+    if fs.grid() is not None:
+        try:
+            first = [(f, fs.regridded(f)) for f in ((0.5, 0.75) if int(fs.grid()["classes"]) >= COARSE_FROM
+                                                    else (2, 3))]
+        except ConfigError as e:  # a coarser grid the scene does not allow (a pivot it needs): refine instead
+            notes.append(f"no coarser grid ({' '.join(str(e).split())}): refined 2 and 3 times")
+            first = [(f, fs.regridded(f)) for f in (2, 3)]
+    with ThreadPoolExecutor(max_workers=2) as ex:
+        futures = [ex.submit(f.simulate, **run) for _, f in first]
+        loose = fs.simulate(**loose_run).summary_values()
+        solved = [(spacing(f), f, fut.result()) for (_, f), fut in zip(first, futures)]
+    e_int = {k: (loose[k] - s0[k]) / (kl - 1) if loose.get(k) is not None else math.inf for k in goals}
+    need = min((TOL_SHARE * goals[k] * abs(s0[k]) / abs(e) for k, e in e_int.items() if e and s0[k]),
+               default=math.inf)
+    rtol = rtol0
+    if need < 1:  # the grids at the tighter tolerance (rare: the first ones are solved again)
+        rtol = max(rtol0 * 10.0 ** math.floor(math.log10(need)), MIN_RTOL)
+        run.update(rtol=rtol, atol=atol0 * rtol / rtol0)
+        notes.append(f"tolerance tightened from rtol {rtol0:g} to {rtol:g}")
+        solved = [(h, f, f.simulate(**run)) for h, f, _ in solved]
+    e_int = {k: e * rtol / rtol0 for k, e in e_int.items()}
+    levels += solved + [(spacing(fs), fs, base if rtol == rtol0 else fs.simulate(**run))] if first else []
+    levels.sort(key=lambda x: -x[0])
+
+    extra = 1 + (len(solved) + 1 if rtol != rtol0 else 0)
+    return levels, rtol, e_int, extra
 
 
 def _entry(value, unit, goal, grid, tol, order, method) -> dict:

@@ -58,7 +58,7 @@ def cmd_run(args) -> int:
         fs.set_t_end(parse_seconds(args.t_end))
     check_out_dir(args.out)
     res = fs.simulate(warn=False, error_estimate=args.error_estimate, accuracy=_accuracy_option(args.accuracy),
-                      grid_check=not args.no_grid_check)
+                      grid_check=not args.no_grid_check and fs.scene_accuracy is not False)
     for w in res.warnings:  # also in summary.json; exit 0: the run is what was asked for
         print(f"granuflow: warning: {w}", file=sys.stderr)
     os.makedirs(args.out, exist_ok=True)
