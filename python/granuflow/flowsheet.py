@@ -9,6 +9,7 @@ from typing import Iterable, Mapping, Sequence
 import numpy as np
 
 from . import _core, accuracy, outputs
+from .accuracy import grid_check as _grid_check
 from .quantity import is_number, parse_time
 from .result import GridWarning, Layout, Result
 from .textfile import check_regular, check_yaml, short
@@ -294,8 +295,9 @@ class Flowsheet:
         (:mod:`granuflow.accuracy.target`); the result is the solve on that grid, ``Result.accuracy`` says what
         was reached and at what cost. Default: the scene's ``accuracy:``; a scene whose ``particles:`` gives no
         ``classes`` gets DEFAULT_ACCURACY (its grid is then chosen to converge); ``False``: none.
-        ``grid_check`` (default: ``warn``): one solve on a grid twice as fine estimates the grid error of every
-        summary output and warns above 2 % (:mod:`granuflow.accuracy.grid_check`; ``Result.grid_check``).
+        ``grid_check`` (default: ``warn``, for flowsheets of up to grid_check.PYTHON_MAX_STATES unknowns): one solve
+        on a grid twice as fine estimates the grid error of every summary output and warns above 2 %
+        (:mod:`granuflow.accuracy.grid_check`; ``Result.grid_check``).
         """
         if not isinstance(error_estimate, (bool, np.bool_)):
             raise ConfigError(f"simulate(): error_estimate = {short(error_estimate)}: expected True or False")
@@ -344,7 +346,8 @@ class Flowsheet:
             res.error_estimate = self._error_estimate(res, linear_solver=linear_solver, max_steps=max_steps,
                                                       method=method)
         if grid_check is None:  # a scene's `accuracy: false` keeps its grid as written, unchecked
-            grid_check = warn and self.scene_accuracy is not False
+            grid_check = (warn and self.scene_accuracy is not False
+                          and res.stats["states"] <= _grid_check.PYTHON_MAX_STATES)
         if grid_check:
             from .accuracy import grid_check as gc
 

@@ -16,6 +16,11 @@ from .. import _core
 from .estimate import display_name, not_corresponding
 
 THRESHOLD = 0.02   # relative grid error above which a run warns (and the default accuracy target: the same 2 %)
+# Python's simulate() checks by default flowsheets of up to this many unknowns: their grid twice as fine costs a few
+# times the run (the headline: 70 unknowns, 10 ms). Larger ones (the 100-class loops, 700-800 unknowns over 300 h;
+# the 2-D population, 1603, whose doubled grid has 4 times the unknowns and costs 6 times the run) are checked when
+# asked (grid_check=True), so that loops in scripts and notebooks stay fast; `granuflow run` checks every scene.
+PYTHON_MAX_STATES = 500
 CURE_TARGET = "1%"
 
 
