@@ -43,7 +43,7 @@ class Loader {
     if (!root.IsMap()) fail("", "the file must be a mapping of scene keys, got " + kind_name(root));
     check_keys(root, "",
                {"scene", "description", "t_end", "output", "solver", "particles", "units", "connections", "inputs",
-                "summary", "plots", "sweep", "notes", "links"});
+                "summary", "plots", "sweep", "notes", "links", "accuracy"});
     Scene s;
     s.path = label_;
     s.name = scalar(required(root, "scene", ""), "scene");
@@ -87,7 +87,7 @@ class Loader {
     }
     if (root["summary"]) load_summary(root["summary"], fs, s.summary);
     YAML::Node extra;
-    for (const char* k : {"plots", "sweep", "notes"})
+    for (const char* k : {"plots", "sweep", "notes", "accuracy"})  // accuracy: read by granuflow.accuracy
       if (root[k]) extra[k] = root[k];
     YAML::Emitter em;
     em << extra;

@@ -9,11 +9,24 @@ from typing import Iterable, Mapping, Sequence
 import numpy as np
 
 from . import _core, accuracy, outputs
+from .accuracy import grid_check as _grid_check
 from .quantity import is_number, parse_time
 from .result import BalanceWarning, GridWarning, Layout, Result
 from .textfile import check_regular, check_yaml, short
 
 ConfigError = _core.ConfigError
+# The accuracy target of a scene that leaves its size grid to granuflow (particles: without classes): the threshold
+# of the grid check (granuflow.accuracy.grid_check.THRESHOLD), so that such a scene is converged to what a plain run
+# would accept without a warning.
+DEFAULT_ACCURACY = 0.02
+
+
+def _yaml_loader():
+    """libyaml's safe loader where PyYAML has it (the grid copies of the accuracy target parse the scene text each
+    time: 100 ms in pure Python, 2 ms in C), else PyYAML's own."""
+    import yaml
+
+    return getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 
 
 class Flowsheet:
@@ -178,20 +191,31 @@ class Flowsheet:
     def refined(self, factor: int) -> "Flowsheet":
         """The same flowsheet on a size grid ``factor`` times finer over the same range of sizes (log-diameter
         grids: the pivot spacing divided by ``factor``, so every old pivot is a new one; geometric grids: ``factor``
-        times the classes per doubling of volume), with this flowsheet's parameter values. ConfigError when the
-        scene has no size grid or the finer one exceeds the grid's limits."""
+        times the classes per doubling of volume; a 2-D population's liquid axis: ``factor`` times its classes),
+        with this flowsheet's parameter values. ConfigError when the scene has no size grid or the finer one
+        exceeds the grid's limits."""
+        if not isinstance(factor, int) or isinstance(factor, bool) or factor < 1:
+            raise ConfigError(f"refined(factor = {short(factor)}): expected a whole number >= 1")
+        return self.regridded(factor)
+
+    def regridded(self, factor: float) -> "Flowsheet":
+        """:meth:`refined` by any factor > 0 (below 1: coarser), the class counts rounded (granuflow.accuracy
+        chooses grids between the nested ones)."""
         g = self.grid()
         if g is None:
             raise ConfigError(f"{self.path or self.name}: no size grid (particles: section) to refine")
-        if not isinstance(factor, int) or isinstance(factor, bool) or factor < 1:
-            raise ConfigError(f"refined(factor = {short(factor)}): expected a whole number >= 1")
         n = int(g["classes"])
         if g.get("grid", "log_diameter") == "geometric":
-            new = {"q": int(g["q"]) * factor, "classes": n * factor}
+            q = max(1, round(int(g["q"]) * factor))
+            new = {"q": q, "classes": max(2, round(n * q / int(g["q"])))}
         else:
-            new = {"classes": (n - 1) * factor + 1}
-        text = _with_grid_settings(self.text, new, self.path or self.name)
-        fs = load_text(text, f"{self.path or self.name} (grid refined {factor}x)")
+            new = {"classes": max(3, round((n - 1) * factor) + 1)}
+        label = self.path or self.name
+        text = _with_grid_settings(self.text, new, label)
+        for unit, nl in self._liquid_classes().items():
+            text = _with_grid_settings(text, {"liquid_classes": max(2, round(nl * factor))}, label,
+                                       ("units", unit))
+        fs = load_text(text, f"{label} (grid refined {factor:g}x)")
         fs.copy_values_from(self)
         fs.set_t_end(self.t_end)
         return fs
@@ -207,13 +231,27 @@ class Flowsheet:
             raise ConfigError(f"with_settings({short(settings)}): expected a mapping {{'unit.setting': value}}")
         return structure.with_settings(self, settings, "with_settings():")
 
+    def _liquid_classes(self) -> dict[str, int]:
+        """The liquid classes of every 2-D population (unit settings ``liquid_classes``)."""
+        return {u: int(s[1]["liquid_classes"]) for u, s in self.unit_settings().items()
+                if "liquid_classes" in s[1]}
+
+    def grid_label(self) -> str:
+        """The grid's size for messages: ``classes 10`` (``q 8, classes 40`` on a geometric grid; a 2-D
+        population's liquid classes after an x: ``classes 40 x 40``); "" without a size grid."""
+        g = self.grid()
+        if g is None:
+            return ""
+        lab = f"q {g['q']}, classes {g['classes']}" if g.get("grid") == "geometric" else f"classes {g['classes']}"
+        return lab + "".join(f" x {nl}" for nl in self._liquid_classes().values())
+
     def copy_values_from(self, other: "Flowsheet") -> "Flowsheet":
         """Every constant parameter value of ``other`` (a flowsheet of the same scene), links respected; an input
         set from Python that the scene text does not hold cannot be carried over (ConfigError)."""
         import yaml
 
         try:
-            doc = yaml.safe_load(other.text) or {}
+            doc = yaml.load(other.text, Loader=_yaml_loader()) or {}
         except yaml.YAMLError:  # YAML the core reads but PyYAML does not: the inputs cannot be told apart
             doc = {}
         declared = (doc.get("inputs") or {}) if isinstance(doc, dict) else {}
@@ -274,7 +312,7 @@ class Flowsheet:
                  n_out: int | None = None, rtol: float | None = None, atol: float | None = None,
                  sensitivities: Sequence[str] = (), linear_solver: str | None = None,
                  max_steps: int | None = None, method: str | None = None, warn: bool = True,
-                 error_estimate: bool = False) -> Result:
+                 error_estimate: bool = False, accuracy=None, grid_check: bool | None = None) -> Result:
         """Integrate the flowsheet; the GIL is released during the solve.
 
         ``method``: ``auto`` (default: IDAS for a DAE, for an ODE chosen by its stiffness), ``ida``, ``bdf``,
@@ -290,9 +328,33 @@ class Flowsheet:
         ``error_estimate``: re-solve at a 100 times tighter tolerance and on size grids refined twice and four
         times, and attach the estimated numerical error of every summary output and time series as
         ``Result.error_estimate`` (:mod:`granuflow.accuracy`; also in ``Result.summary`` and the plots).
+        ``accuracy``: a relative error (``0.01``, ``"1%"``) or a mapping per summary key: the grid and tolerance
+        are refined until the estimated numerical error of every (named) summary output is below it
+        (:mod:`granuflow.accuracy.target`); the result is the solve on that grid, ``Result.accuracy`` says what
+        was reached and at what cost. Default: the scene's ``accuracy:``; a scene whose ``particles:`` gives no
+        ``classes`` gets DEFAULT_ACCURACY (its grid is then chosen to converge); ``False``: none.
+        ``grid_check`` (default: ``warn``, for flowsheets of up to grid_check.PYTHON_MAX_STATES unknowns): one solve
+        on a grid twice as fine estimates the grid error of every summary output and warns above 2 %
+        (:mod:`granuflow.accuracy.grid_check`; ``Result.grid_check``).
         """
         if not isinstance(error_estimate, (bool, np.bool_)):
             raise ConfigError(f"simulate(): error_estimate = {short(error_estimate)}: expected True or False")
+        if grid_check is not None and not isinstance(grid_check, (bool, np.bool_)):
+            raise ConfigError(f"simulate(): grid_check = {short(grid_check)}: expected True or False")
+        target = self._accuracy_target(accuracy)
+        if target is not None:
+            from .accuracy import target as acc_target
+
+            if sensitivities:
+                raise ConfigError("simulate(): sensitivities with an accuracy target: run simulate(accuracy=False) "
+                                  "on the grid the target chose (Result.accuracy.grid)")
+            res = acc_target.solve(self, target, t_end=t_end, t_out=t_out, n_out=n_out, rtol=rtol, atol=atol,
+                                   linear_solver=linear_solver, max_steps=max_steps, method=method)
+            if error_estimate:
+                res.error_estimate = res.flowsheet._error_estimate(res, linear_solver=linear_solver,
+                                                                   max_steps=max_steps, method=method)
+            self._warn(res, warn)
+            return res
         if t_out is not None:
             t_out = _times(t_out, "simulate(): t_out")
             if not t_out:  # as the scene file's `output: {times: []}`: an empty list is a mistake, not "default"
@@ -318,15 +380,66 @@ class Flowsheet:
             self._summary_map = dict(self._scene.summary_map)
         res = Result(raw, scene_name=self.name, summary_map=self._summary_map, layout=layout)
         res.material = self.material
+        res.flowsheet = self
         res.check_balance()  # a unit that loses mass is an error, not a number in a file
         if error_estimate:
             res.error_estimate = self._error_estimate(res, linear_solver=linear_solver, max_steps=max_steps,
                                                       method=method)
+        if grid_check is None:  # a scene's `accuracy: false` keeps its grid as written, unchecked
+            grid_check = (warn and self.scene_accuracy is not False
+                          and res.stats["states"] <= _grid_check.PYTHON_MAX_STATES)
+        if grid_check:
+            from .accuracy import grid_check as gc
+
+            res.grid_check = gc.check(self, res, linear_solver=linear_solver, max_steps=max_steps, method=method)
+        self._warn(res, warn)
+        return res
+
+    def _warn(self, res: Result, warn: bool) -> None:
         if warn:
             for w in res.warnings:
                 kind = BalanceWarning if w.startswith("balance:") else GridWarning
-                warnings.warn(f"{self.path or self.name}: {w}", kind, stacklevel=2)
-        return res
+                warnings.warn(f"{self.path or self.name}: {w}", kind, stacklevel=3)
+
+    def _accuracy_target(self, accuracy) -> dict | None:
+        """The accuracy target of a run (granuflow.accuracy.target.parse_target) or None: ``accuracy`` given, else
+        the scene's ``accuracy:``, else DEFAULT_ACCURACY when the scene's particles: give no classes."""
+        from .accuracy import target as acc_target
+
+        if accuracy is False:
+            return None
+        if accuracy is not None:
+            return acc_target.parse_target(accuracy, "simulate(): accuracy")
+        scene = self.scene_accuracy
+        if scene is not None:
+            return None if scene is False else acc_target.parse_target(scene, f"{self.path or self.name}: accuracy")
+        return {"*": DEFAULT_ACCURACY} if self._grid_without_classes() else None
+
+    @property
+    def scene_accuracy(self):
+        """The scene's ``accuracy:`` as written (None without one; ``False``: its grid as written, unchecked)."""
+        if not hasattr(self, "_scene_accuracy"):  # the scene text never changes: read once
+            self._scene_accuracy = self.extra.get("accuracy") if "accuracy" in self._scene.extra_yaml else None
+        return self._scene_accuracy
+
+    def _grid_without_classes(self) -> bool:
+        """The scene has a particles: section whose settings give no classes (the user left the grid to us)."""
+        if not hasattr(self, "_no_classes"):
+            self._no_classes = self._find_no_classes()
+        return self._no_classes
+
+    def _find_no_classes(self) -> bool:
+        if self.grid() is None:
+            return False
+        import yaml
+
+        try:
+            doc = yaml.load(self.text, Loader=_yaml_loader()) or {}
+        except yaml.YAMLError:
+            return False
+        part = doc.get("particles") if isinstance(doc, dict) else None
+        settings = (part or {}).get("settings") if isinstance(part, dict) else None
+        return not (isinstance(settings, dict) and "classes" in settings)
 
     def _error_estimate(self, res: Result, **solver) -> "accuracy.ErrorEstimate":
         """The re-solves of :mod:`granuflow.accuracy` for ``res``: same output times and end time, tolerances
@@ -355,6 +468,9 @@ class Flowsheet:
             key = "q" if g.get("grid") == "geometric" else "classes"
             if flowsheets:
                 grid = f"particles.{key} " + ", ".join(str(x.grid()[key]) for x in [self] + flowsheets)
+                for u in self._liquid_classes():  # a 2-D population's liquid axis, refined alike
+                    grid += f"; {u}.liquid_classes " + ", ".join(str(x._liquid_classes()[u])
+                                                                 for x in [self] + flowsheets)
         return accuracy.estimate(res, tight_res, refined, self.summary_keys(), grid, (res.rtol, tight["rtol"]),
                                  time.perf_counter() - t0, notes)
 
@@ -389,14 +505,15 @@ class Flowsheet:
         return f"<granuflow.Flowsheet {self.name!r}: {len(self.state_names)} states, {len(self.params)} parameters>"
 
 
-def _with_grid_settings(text: str, settings: dict, label: str) -> str:
-    """The scene text with ``particles: settings:`` holding ``settings`` (keys replaced or added), all else as
-    written: the values are spliced in at the positions of the YAML nodes, so comments, layout and every value the
-    core reads stay byte for byte."""
+def _with_grid_settings(text: str, settings: dict, label: str, section: tuple = ("particles",)) -> str:
+    """The scene text with ``particles: settings:`` (or the ``settings:`` of another ``section``, e.g.
+    ``("units", "granulator")``) holding ``settings`` (keys replaced or added), all else as written: the values are
+    spliced in at the positions of the YAML nodes, so comments, layout and every value the core reads stay byte for
+    byte."""
     import yaml
 
     try:
-        root = yaml.compose(text)
+        root = yaml.compose(text, Loader=_yaml_loader())
     except yaml.YAMLError as e:
         raise ConfigError(f"{label}: cannot refine the size grid of this scene text "
                           f"({short(' '.join(str(e).split()), 100)})") from None
@@ -417,9 +534,11 @@ def _with_grid_settings(text: str, settings: dict, label: str) -> str:
             return first.index, first.index, entries + ", "
         return first.index, first.index, entries.replace(", ", "\n" + " " * first.column) + "\n" + " " * first.column
 
-    particles = find(root, "particles")
+    particles = root
+    for key in section:
+        particles = find(particles, key)
     if not isinstance(particles, yaml.MappingNode):
-        raise ConfigError(f"{label}: no particles: section to refine")
+        raise ConfigError(f"{label}: no {': '.join(section)}: section to refine")
     node = find(particles, "settings")
     edits = []
     if not isinstance(node, yaml.MappingNode):

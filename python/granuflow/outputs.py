@@ -115,13 +115,18 @@ _SUMMARY_DISPLAY = {
 }
 
 
-def grid_end_warnings(ends: Mapping[str, Mapping], when: str = "at the end of the run") -> list[str]:
+def grid_end_warnings(ends: Mapping[str, Mapping], when: str = "at the end of the run",
+                      causes: Mapping[str, str | None] | None = None) -> list[str]:
     """The warnings of an end class of a size grid holding more than GRID_END_WARNING of the mass, from grid ends as
     :meth:`granuflow.Result.grid_ends` gives them (``initial``, ``final``, ``max``, ``d_um`` per end): at the start
-    (the initial distribution lies outside the grid) or later (the grid clips the product); ``when`` says where the
-    final value stands ("at the end of the run", "at the steady state")."""
+    (the initial distribution lies outside the grid) or later; ``when`` says where the final value stands ("at the
+    end of the run", "at the steady state"). Mass piles up in the top class for two reasons with opposite cures:
+    ``causes`` (from the grid check, granuflow.accuracy.grid_check) names it per end, "coarse" (numerical smearing
+    of a coarse grid: more classes; a wider grid makes it worse) or "range" (the product grows beyond the grid:
+    widen it); without it both are named."""
     out = []
     lim = GRID_END_WARNING
+    causes = causes or {}
     for name, e in ends.items():
         unit, _, end = name.rpartition(".")
         where = {"top_class": "top size class", "bottom_class": "bottom size class"}.get(end, name)
@@ -133,9 +138,21 @@ def grid_end_warnings(ends: Mapping[str, Mapping], when: str = "at the end of th
                        "distribution against the grid (particles: settings: d_min, d_max)")
         elif e["max"] > lim:
             peak = f" (up to {100 * e['max']:.3g} % during it)" if e["max"] > 1.01 * e["final"] else ""
-            out.append(f"{unit}: {100 * e['final']:.3g} % of the mass is in the {where}{at} {when}{peak}: the grid "
-                       f"clips the distribution (more than {100 * lim:g} %), so the sizes near that end are the "
-                       f"grid's, not the product's; widen the grid (particles: settings: {side})")
+            head = f"{unit}: {100 * e['final']:.3g} % of the mass is in the {where}{at} {when}{peak}"
+            cause = causes.get(name)
+            if cause == "coarse":
+                out.append(f"{head}: numerical smearing of a coarse grid (on a grid twice as fine the fraction "
+                           "shrinks towards zero), not product beyond the grid; use more classes (accuracy: 1% or "
+                           f"particles: settings: classes), not a wider grid ({side})")
+            elif cause == "range":
+                out.append(f"{head}: the grid clips the distribution (more than {100 * lim:g} %, and as much on a "
+                           f"grid twice as fine), so the sizes near that end are the grid's, not the product's; "
+                           f"widen the grid (particles: settings: {side})")
+            else:
+                out.append(f"{head}: the grid clips the distribution (more than {100 * lim:g} %), so the sizes "
+                           "near that end are the grid's, not the product's: either the grid is too coarse (mass "
+                           "smeared into the end class: more classes) or too short (widen it: particles: settings: "
+                           f"{side}); the grid check of a plain run tells which")
     return out
 
 

@@ -75,6 +75,9 @@ class Result:
         self.atol = raw.get("atol")
         self.error_estimate = None  # granuflow.accuracy.ErrorEstimate with simulate(error_estimate=True)
         self.material = None  # Flowsheet.material: the solid's catalogue entry and what it did not give
+        self.accuracy = None        # granuflow.accuracy.target.Accuracy with simulate(accuracy=...)
+        self.grid_check = None      # granuflow.accuracy.grid_check.GridCheck of a plain run
+        self.extra_warnings: list[str] = []
         self.t_end = raw.get("t_end", float(self.t[-1]))
         self.scene_name = scene_name
         self.summary_map = dict(summary_map or {})
@@ -227,9 +230,56 @@ class Result:
     def warnings(self) -> list[str]:
         """What a user must know before trusting the numbers (summary.json ``warnings``): an end class of a size
         grid holding more than ``outputs.GRID_END_WARNING`` of the mass, at the start (the initial distribution
-        lies outside the grid) or at any later output time (the grid clips the product); a balance closure above its
-        limit (:func:`granuflow.outputs.balance_findings`)."""
-        return outputs.grid_end_warnings(self.grid_ends()) + self.balance_findings()[0]
+        lies outside the grid) or at any later output time (the grid clips the product), with its cause when the
+        grid check tells it; a characteristic diameter that lies in an end class; the grid check's estimated grid
+        error above its threshold; an accuracy target not reached; a balance closure above its limit
+        (:func:`granuflow.outputs.balance_findings`)."""
+        ends = self.grid_ends()
+        gc = self.grid_check
+        causes = {k: gc.end_cause(k) for k in ends} if gc is not None else None
+        out = outputs.grid_end_warnings(ends, causes=causes)
+        out += [b["note"] for b in self.end_class_percentiles(ends).values()]
+        if gc is not None:
+            out += gc.warnings()
+        return out + list(self.extra_warnings) + self.balance_findings()[0]
+
+    def end_class_percentiles(self, ends: dict | None = None) -> dict[str, dict]:
+        """Summary keys of characteristic diameters (d90 ...) whose percentile lies in an end class at the end of
+        the run: ``{key: {"bound": "lower"|"upper", "value": pivot in the key's unit, "note": ...}}``. Such a value
+        is the grid's end, not the product's (summary.json reports null and ``<key>_lower_bound``)."""
+        ends = self.grid_ends() if ends is None else ends
+        out = {}
+        for key, src in self.summary_map.items():
+            frac = outputs.size_fraction(src)
+            unit = src.rpartition(".")[0]
+            if frac is None:
+                continue
+            top, bottom = ends.get(f"{unit}.top_class"), ends.get(f"{unit}.bottom_class")
+            name = src.rpartition(".")[2]
+            for end, which, inside in (("top", "lower", top and top["final"] > 1.0 - frac + 1e-12),
+                                       ("bottom", "upper", bottom and bottom["final"] > frac + 1e-12)):
+                if inside:
+                    e = top if end == "top" else bottom
+                    d_um = float(f"{e['d_um']:.12g}")  # the pivot, without the roundoff of m -> um
+                    value = d_um if outputs.summary_in_um(key) else d_um * 1e-6
+                    word = "at least" if end == "top" else "at most"
+                    out[key] = {"bound": which, "value": value,
+                                "note": f"{unit}: {name} lies in the {end} size class ({100 * e['final']:.3g} % of "
+                                        f"the mass there): {word} the grid's end, {d_um:.4g} um; summary {key} is "
+                                        f"null, {key}_{which}_bound = {value:.4g}"}
+                    break
+        return out
+
+    def summary_values(self) -> dict:
+        """The summary keys' values at the end of the run as the core computes them (units as in summary.json)."""
+        if getattr(self, "_summary_values", None) is not None:
+            return dict(self._summary_values)
+        out = {}
+        for key, src in self.summary_map.items():
+            si = self.unit(src)
+            out[key] = _finite(float(from_si(self[src][-1], outputs.summary_unit(key, si), si)))
+        self._summary_values = out  # a result never changes
+        return dict(out)
 
     def balance_findings(self) -> tuple[list[str], list[str]]:
         """(warnings, failures) of the balance guard on :meth:`balance_closure` at this run's tolerance."""
@@ -273,13 +323,17 @@ class Result:
         for key in outputs.STANDARD_SUMMARY_KEYS:
             s[key] = None
         units, reasons = {}, {}
-        for key, src in self.summary_map.items():
-            si = self.unit(src)
-            shown = outputs.summary_unit(key, si)
-            s[key] = _finite(float(from_si(self[src][-1], shown, si)))
-            units[key] = shown
-            if s[key] is None:
-                reasons[key] = outputs.null_reason(src, si)
+        for key, v in self.summary_values().items():
+            s[key] = v
+            units[key] = outputs.summary_unit(key, self.unit(self.summary_map[key]))
+            if v is None:
+                reasons[key] = outputs.null_reason(self.summary_map[key], self.unit(self.summary_map[key]))
+        ends = self.grid_ends()
+        for key, b in self.end_class_percentiles(ends).items():  # the grid's end, not a result
+            s[key] = None
+            s[f"{key}_{b['bound']}_bound"] = b["value"]
+            units[f"{key}_{b['bound']}_bound"] = units[key]
+            reasons[key] = b["note"]
         s["null_reasons"] = reasons  # why a value the scene declares is null (an empty stream has no size)
         s["balance"] = self.balance_closure()
         if self.material is not None:
@@ -290,7 +344,11 @@ class Result:
                                 for j, n in outputs.regularization_columns(self.output_roles, self.output_names)}
         if self.error_estimate is not None:
             s["error_estimate"] = self.error_estimate.to_json()
-        s["grid_end"] = {k: {x: _finite(v) for x, v in e.items()} for k, e in self.grid_ends().items()}
+        if self.accuracy is not None:
+            s["accuracy"] = self.accuracy.to_json()
+        if self.grid_check is not None:
+            s["grid_check"] = self.grid_check.to_json()
+        s["grid_end"] = {k: {x: _finite(v) for x, v in e.items()} for k, e in ends.items()}
         s["warnings"] = self.warnings
         s["wall_time_s"] = self.wall_time_s
         st = self.stats

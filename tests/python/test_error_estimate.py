@@ -123,7 +123,9 @@ def test_command_line_error_estimate(tmp_path):
     p = cli("run", SCENE, "--out", tmp_path / "out", "--error-estimate")
     assert p.returncode == 0, p.stderr
     assert "estimated numerical error (particles.classes 10, 19, 37" in p.stdout
-    assert "d50_um = 499.702 +- 61.4 (grid +61.4, order 1.53; tolerance" in p.stdout
+    # the signed error split into grid and tolerance, and the corrected value (issue 28 §6)
+    assert "d50 = 499.702 µm; estimated error +61.4 µm (grid +61.4 µm, order 1.53, tolerance -0.00014 µm); " \
+           "corrected 438.254 µm" in p.stdout
     s = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert s["error_estimate"]["outputs"]["d50_um"]["total"] == pytest.approx(61.4, abs=0.1)
     assert (tmp_path / "out" / "diameters.png").stat().st_size > 0

@@ -25,7 +25,8 @@ def headline(old=None, new=None):
 def test_the_headline_grid_clips_the_product_and_says_so():
     with pytest.warns(gf.GridWarning, match="top size class") as caught:
         r = headline().simulate()
-    assert len(caught) == 1
+    # the top class, d90 inside it, and the grid error of the grid check (issue 28)
+    assert len(caught) == 3
     ends = r.grid_ends()
     top = ends["bed.top_class"]
     # the fraction is the fluid bed's own top_class_fraction (OutputRole kGridEnd), not a count of collisions
@@ -38,22 +39,25 @@ def test_the_headline_grid_clips_the_product_and_says_so():
     assert top["final"] == pytest.approx(m[-1] / m.sum(), rel=1e-12)
     s = r.summary
     assert s["grid_end"]["bed.top_class"]["final"] == pytest.approx(top["final"])
-    assert len(s["warnings"]) == 1
+    assert len(s["warnings"]) == 3
     w = s["warnings"][0]
-    for needle in ("bed:", "20.8 %", "top size class (1000 um)", "more than 5 %", "d_max"):
+    # numerical smearing (20.8 % on 10 classes, 9.9 % on 19: towards zero), so the cure is more classes, not d_max
+    for needle in ("bed:", "20.8 %", "top size class (1000 um)", "numerical smearing", "more classes",
+                   "not a wider grid (d_max)"):
         assert needle in w, (needle, w)
 
 
 def test_a_wider_grid_does_not_warn():
     # 3 mm top pivot, the same class width as the headline's: the end classes stay nearly empty
     r = headline(GRID, "settings: {classes: 15, d_min: 50e-6, d_max: 3000e-6}").simulate(warn=False)
-    assert r.warnings == []
+    assert r.warnings == []  # (the grid check is off with warn=False; on, it would report d90's grid error)
     ends = r.grid_ends()
     assert ends["bed.top_class"]["max"] < outputs.GRID_END_WARNING
     assert ends["bed.bottom_class"]["max"] < outputs.GRID_END_WARNING
     with warnings.catch_warnings():
         warnings.simplefilter("error", gf.GridWarning)
-        headline(GRID, "settings: {classes: 15, d_min: 50e-6, d_max: 3000e-6}").simulate(t_end=60.0)
+        wide = headline(GRID, "settings: {classes: 15, d_min: 50e-6, d_max: 3000e-6}")
+        wide.simulate(t_end=60.0, grid_check=False)
 
 
 def test_an_initial_distribution_outside_the_grid_warns_at_t0():
@@ -78,9 +82,9 @@ def test_the_command_line_warns_on_stderr_and_in_summary_json(tmp_path):
     p = cli("run", SCENE, "--out", tmp_path / "out", "--no-plots")
     assert p.returncode == 0, p.stderr
     lines = p.stderr.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("granuflow: warning: bed: 20.8 % of the mass"), p.stderr
+    assert len(lines) == 3 and lines[0].startswith("granuflow: warning: bed: 20.8 % of the mass"), p.stderr
     s = json.loads((tmp_path / "out" / "summary.json").read_text())
-    assert s["warnings"] == [lines[0][len("granuflow: warning: "):]]
+    assert s["warnings"] == [x[len("granuflow: warning: "):] for x in lines]
     assert s["units"]["grid_end"].startswith("mass fraction")
     assert sha256(SCENE) == before
 

@@ -73,7 +73,8 @@ def test_python_sum_kernel_gets_the_pivot_sizes():
     name = unique("sum")
     gf.register_kernel(name, golovin)
     compiled = scene("sum", "cell_average", t_end=3.0).simulate()
-    python = scene(name, "cell_average", t_end=3.0).simulate()
+    # without the grid check: its solve on a grid twice as fine would call the kernel last, with that grid's sizes
+    python = scene(name, "cell_average", t_end=3.0).simulate(grid_check=False)
     assert_same_solution(compiled, python)
     v = 2.0 ** -12 * 2.0 ** np.arange(28)  # the scene's doubling grid; pivots at the volume midpoints
     np.testing.assert_allclose(seen["v"], 0.5 * (v[:-1] + v[1:]), rtol=1e-14)
@@ -87,7 +88,7 @@ def test_state_independent_python_kernel_runs_once_per_run():
     gf.register_kernel(name, lambda d, v: calls.append(1) or np.full((d.size, d.size), 0.5))
     fs = scene(name)
     for _ in range(3):
-        fs.simulate()
+        fs.simulate(grid_check=False)  # (the grid check's solve on a finer grid would be a run of its own)
     assert len(calls) == 3
 
 

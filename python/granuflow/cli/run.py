@@ -41,6 +41,17 @@ def _draw(res, specs, out: str) -> list[str]:
     return written
 
 
+def _accuracy_option(text):
+    """--accuracy: None (the scene's), False ('off'), a relative error ('1%') or per key ('d50_um=1%,d90_um=3%')."""
+    if text is None:
+        return None
+    if text.strip().lower() in ("off", "none", "false"):
+        return False
+    if "=" in text:
+        return dict(item.split("=", 1) for item in text.split(",") if item.strip())
+    return text
+
+
 def cmd_run(args) -> int:
     fs = apply_sets(load(args.scene), parse_sets(args.set))  # settings rebuild the flowsheet
     specs = plot_specs(fs, drawing=not args.no_plots)  # against the scene file's own t_end
@@ -49,7 +60,8 @@ def cmd_run(args) -> int:
     check_out_dir(args.out)
     failure = None
     try:
-        res = fs.simulate(warn=False, error_estimate=args.error_estimate)
+        res = fs.simulate(warn=False, error_estimate=args.error_estimate, accuracy=_accuracy_option(args.accuracy),
+                          grid_check=not args.no_grid_check and fs.scene_accuracy is not False)
     except BalanceError as e:  # a unit lost mass: write what happened, then exit 3 naming the balance
         res, failure = e.result, e
     for w in res.warnings:  # also in summary.json; exit 0 (but for a failed balance): the run is what was asked for
@@ -67,8 +79,11 @@ def cmd_run(args) -> int:
         print(f"{fs.name}: {res.t[-1]:g} s simulated in {res.wall_time_s * 1e3:.1f} ms "
               f"({res.stats['steps']} steps); wrote {', '.join(written)} to {args.out}")
         print(json.dumps({k: summary[k] for k in summary
-                          if k not in ("solver", "units", "grid_end", "warnings", "error_estimate", "material")},
-                         indent=None))
+                          if k not in ("solver", "units", "grid_end", "warnings", "error_estimate", "accuracy",
+                                       "grid_check", "material")}, indent=None))
+        if res.accuracy is not None:
+            for line in res.accuracy.lines():
+                print(line)
         if res.error_estimate is not None:
             ee = res.error_estimate
             print(f"estimated numerical error ({ee.grid or 'no size grid'}; rtol {ee.rtol[0]:g} vs {ee.rtol[1]:g}; "

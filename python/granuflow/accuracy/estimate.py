@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .outputs import per_class_names
+from ..outputs import per_class_names
 
 REFINEMENTS = (2, 4)          # grid refinement factors of the two extra grids
 TOLERANCE_FACTOR = 100.0      # the tighter solve: rtol and atol divided by this
@@ -61,15 +61,25 @@ def richardson_series(f1: np.ndarray, f2: np.ndarray, f4: np.ndarray, noise: np.
 
 @dataclass
 class OutputError:
-    """The estimated numerical error of one value (in its own unit: µm for ``*_um`` summary keys)."""
+    """The estimated numerical error of one value (in its own unit: µm for ``*_um`` summary keys). ``total`` is
+    signed: the value minus the converged answer (a bias, not a ± band); ``corrected`` = value - total.
+    ``reason`` says why the grid part was not estimated (the value does not correspond across grids)."""
     value: float
-    discretization: float | None   # None: the scene has no size grid
+    discretization: float | None   # None: the scene has no size grid, or the value has no counterpart (reason)
     integration: float
     order: float | None = None
     method: str = ""
+    unit: str = ""
+    reason: str = ""
+
+    @property
+    def estimated(self) -> bool:
+        return not self.reason
 
     @property
     def total(self) -> float:
+        if self.reason:
+            return math.nan
         return self.integration + (self.discretization or 0.0)
 
     @property
@@ -84,9 +94,32 @@ class OutputError:
     def to_json(self) -> dict:
         def num(x):
             return float(x) if x is not None and math.isfinite(x) else None
-        return {"value": num(self.value), "discretization": num(self.discretization),
-                "integration": num(self.integration), "total": num(self.total), "corrected": num(self.corrected),
-                "relative": num(self.relative), "order": num(self.order), "method": self.method}
+        out = {"value": num(self.value), "unit": self.unit, "total": num(self.total),
+               "discretization": num(self.discretization), "integration": num(self.integration),
+               "corrected": num(self.corrected), "relative": num(self.relative), "order": num(self.order),
+               "method": self.method}
+        if self.reason:
+            out["not_estimated"] = self.reason
+        return out
+
+    def line(self, key: str) -> str:
+        """``d50 = 499.7 µm; estimated error +61.4 µm (grid +61.3, tolerance +0.1); corrected 438.3 µm``."""
+        name, unit = display_name(key, self.unit)
+        u = f" {unit}" if unit else ""
+        head = f"{name} = {self.value:.6g}{u}"
+        if self.reason:
+            return f"{head}; grid error not estimated ({self.reason}); tolerance {self.integration:+.3g}{u}"
+        grid = "n/a" if self.discretization is None else f"{self.discretization:+.3g}{u}"
+        how = f", order {self.order:.2f}" if self.order is not None else (f", {self.method}" if self.method else "")
+        return (f"{head}; estimated error {self.total:+.3g}{u} (grid {grid}{how}, tolerance "
+                f"{self.integration:+.3g}{u}); corrected {self.corrected:.6g}{u}")
+
+
+def display_name(key: str, unit: str) -> tuple[str, str]:
+    """A summary key and its unit as a line shows them: ``d50_um``, ``um`` -> ``d50``, ``µm``."""
+    if key.endswith("_um"):
+        return key[:-3], "µm"
+    return key, "" if unit == "-" else unit
 
 
 @dataclass
@@ -114,24 +147,35 @@ class ErrorEstimate:
                 "outputs": {k: e.to_json() for k, e in self.outputs.items()}}
 
     def lines(self) -> list[str]:
-        """One line per summary output: value, estimated error and its parts."""
-        out = []
-        for k, e in self.outputs.items():
-            if not math.isfinite(e.value):
-                continue
-            disc = "n/a" if e.discretization is None else f"{e.discretization:+.3g}"
-            order = f", order {e.order:.2f}" if e.order is not None else (f", {e.method}" if e.method else "")
-            out.append(f"{k} = {e.value:.6g} +- {abs(e.total):.3g} (grid {disc}{order}; tolerance "
-                       f"{e.integration:+.3g})")
-        return out
+        """One line per summary output: value, signed estimated error split into grid and tolerance, and the
+        corrected value (or why the grid part was not estimated)."""
+        return [e.line(k) for k, e in self.outputs.items() if math.isfinite(e.value)]
+
+
+def not_corresponding(base, refined: list) -> dict[str, str]:
+    """The states and outputs of ``base`` that have no counterpart on the refined grids, with the reason: those of
+    one size class (their index means another range of sizes on a finer grid: issue 29, ``tracer_out_N10`` of the
+    tanks-in-series scene) and the fraction in an end class (which narrows as the grid refines). Values at fixed
+    sizes (the 2-D population's reporting classes) keep their names and are compared."""
+    names = list(base.state_names) + list(base.output_names)
+    out = {}
+    for r in refined:
+        for n in per_class_names(names, list(r.state_names) + list(r.output_names)):
+            out[n] = "one size class's value: on a finer grid that class is another range of sizes"
+    for j, role in enumerate(base.output_roles):
+        if role[0] == "grid_end":
+            out.setdefault(base.output_names[j], "the grid end's value: on a finer grid the end class is narrower")
+    return out
 
 
 def estimate(base, tight, refined: list, keys: list[str], grid: str, rtol: tuple[float, float],
              wall_time_s: float = 0.0, notes: list[str] | None = None) -> ErrorEstimate:
     """The estimate from results: ``base`` (the answer), ``tight`` (same grid, tighter tolerance) and ``refined``
     (grids h/2 and h/4 at the tighter tolerance; empty without a size grid). ``keys``: the summary keys."""
-    s_base, s_tight = base.summary, tight.summary
-    s_ref = [r.summary for r in refined]
+    s_base, s_tight = base.summary_values(), tight.summary_values()  # the core's values (also of a d90 at the grid end)
+    s_ref = [r.summary_values() for r in refined]
+    units = base.summary.get("units", {})
+    skip = not_corresponding(base, refined) if refined else {}
     outs = {}
     for k in keys:
         v = s_base.get(k)
@@ -140,17 +184,15 @@ def estimate(base, tight, refined: list, keys: list[str], grid: str, rtol: tuple
         vt = s_tight.get(k)
         e_int = v - vt if vt is not None else math.nan
         disc, order, method = None, None, ""
-        if refined:
+        reason = skip.get(base.summary_map.get(k, ""), "")
+        if refined and not reason:
             f2, f4 = (s.get(k) for s in s_ref)
             if f2 is None or f4 is None or vt is None:
                 disc, method = math.nan, "not finite"
             else:
                 disc, order, method = richardson(vt, f2, f4, noise=abs(e_int))
-        outs[k] = OutputError(float(v), disc, float(e_int), order, method)
-    skip = set()
-    for r in refined:
-        skip |= per_class_names(list(base.state_names) + list(base.output_names),
-                                list(r.state_names) + list(r.output_names))
+        outs[k] = OutputError(float(v), disc, float(e_int), order, "not estimated" if reason else method,
+                              units.get(k, ""), reason)
     names = [n for n in list(base.state_names) + list(base.output_names)
              if n not in skip and n in tight and all(n in r for r in refined)]
     series = {}
