@@ -400,14 +400,17 @@ class Pbm2D : public UnitBase<Pbm2D> {
             u[row] += -v * shared;
           });
         }
-        // droplets off the grid, R w_out N_out / W into the liquid that left (w_out's size dependence left to Newton)
         std::vector<int> cols(w.cols.begin(), w.cols.end());
         std::vector<double> wts(dep.w.begin(), dep.w.end());
-        if (dep.n_out > 0) {
-          const int rl = s_out_[kOut2Liquid].i, cn = c.offset + s_out_[kOut2Number].i;
-          sink.add(rl, cn, -dep.vd * dep.R * dep.w_out / dep.W);
+        if (dep.n_out > 0) {  // droplets off the grid: v_d R g / W into the liquid that left, g = w_out N_out
+          const int rl = s_out_[kOut2Liquid].i;
           u[rl] += dep.vd * dep.R * dep.w_out * dep.n_out / (dep.W * dep.W);
-          cols.push_back(cn), wts.push_back(dep.w_out);
+          for (int q : {kOut2Number, kOut2Solid, kOut2Liquid}) {
+            const double g = q == kOut2Number ? dep.g_n : dep.g_v;  // dg/d(that state)
+            if (g == 0.0) continue;
+            sink.add(rl, c.offset + s_out_[q].i, -dep.vd * dep.R * g / dep.W);
+            cols.push_back(c.offset + s_out_[q].i), wts.push_back(g);
+          }
         }
         sink.add_outer(static_cast<int>(u.size()), u.data(), static_cast<int>(cols.size()), cols.data(), wts.data());
       }
@@ -480,6 +483,7 @@ class Pbm2D : public UnitBase<Pbm2D> {
   template <class T>
   struct Deposit {
     T R = T(0.0), W = T(0.0), nu = T(0.0), vd = T(0.0), n_out = T(0.0), w_out = T(0.0);
+    double g_n = 0.0, g_v = 0.0;  // d(w_out N_out)/dN_out, /d(volume off the grid)
     int lo = 0;
     std::vector<T> w;
   };
@@ -488,24 +492,24 @@ class Pbm2D : public UnitBase<Pbm2D> {
     Deposit<T> d;
     const T dd = c.par(p_dd_);
     const T vd = kPi / 6.0 * dd * dd * dd;
-    d.R = c.par(p_q_) / vd;
+    d.R = c.par(p_q_) / vd, d.vd = vd;
     d.w.resize(n_);
     for (int a = 0; a < n_; ++a) {
-      if (weight_ == SprayWeight::kNumber) {
-        d.w[a] = T(1.0);
-      } else {
-        const T s = grid_->diameter(a) + dd;
-        d.w[a] = s * s;
-      }
+      const T s = grid_->diameter(a) + dd;
+      d.w[a] = weight_ == SprayWeight::kNumber ? T(1.0) : T(s * s);
       d.W += d.w[a] * N[a];
     }
     if (s_out_[kOut2Number] && value_of(c.x(s_out_[kOut2Number])) > 0.0) {
       d.n_out = c.x(s_out_[kOut2Number]);
-      const T s = cbrt(6.0 / kPi * (c.x(s_out_[kOut2Solid]) + c.x(s_out_[kOut2Liquid])) / d.n_out) + dd;  // mean
-      d.w_out = weight_ == SprayWeight::kNumber ? T(1.0) : T(s * s);
+      d.w_out = T(1.0), d.g_n = 1.0;
+      const T V = c.x(s_out_[kOut2Solid]) + c.x(s_out_[kOut2Liquid]);
+      if (weight_ == SprayWeight::kCrossSection && value_of(V) > 0.0) {  // at the mean size off the grid
+        const T D = cbrt(6.0 / kPi * V / d.n_out);
+        d.w_out = (D + dd) * (D + dd);
+        d.g_n = value_of(d.w_out - 2.0 / 3.0 * (D + dd) * D), d.g_v = value_of(2.0 / 3.0 * (D + dd) * D * d.n_out / V);
+      }
       d.W += d.w_out * d.n_out;
     }
-    d.vd = vd;
     const T x = vd / grid_->liquid_step();
     d.lo = static_cast<int>(std::floor(value_of(x)));
     d.nu = x - double(d.lo);
