@@ -3,7 +3,7 @@
 #   ./run.sh main   install what is missing (apt-get), build (CMake, Release), run the main job into out/main
 #   ./run.sh test   same setup, then lint (clang-format-14, flake8) and every test: GoogleTest (ctest), pytest,
 #                   notebooks, and the sanitizer build (./run.sh sanitize)
-# Also: ./run.sh setup | build | lint | bench | sanitize | fuzz scene|experiments [seconds]
+# Also: ./run.sh setup | build | lint | bench | sanitize | fuzz scene|experiments|collisions [seconds]
 set -euo pipefail
 cd "$(dirname "$0")"
 
@@ -66,13 +66,14 @@ sanitize() {
   (cd build-asan && ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
     ctest --output-on-failure -j "$(nproc)" -L 'fast|scene|fuzz')
 }
-# A longer fuzz run of one target: ./run.sh fuzz scene|experiments [seconds] (default 600).
+# A longer fuzz run of one target: ./run.sh fuzz scene|experiments|collisions [seconds] (default 600).
 fuzz() {
   local target="${1:-scene}" seconds="${2:-600}" seeds
   case "$target" in
     scene) seeds="flowsheets tests/fuzz/regressions/scene" ;;
     experiments) seeds="tests/fuzz/seeds/experiments tests/fuzz/regressions/experiments" ;;
-    *) echo "usage: ./run.sh fuzz scene|experiments [seconds]" >&2; exit 2 ;;
+    collisions) seeds="tests/fuzz/seeds/collisions tests/fuzz/regressions/collisions" ;;
+    *) echo "usage: ./run.sh fuzz scene|experiments|collisions [seconds]" >&2; exit 2 ;;
   esac
   sanitize_build
   mkdir -p "build-asan/tests/fuzz/corpus/$target" build-asan/tests/fuzz/findings

@@ -10,15 +10,19 @@
 // that meets a particle is absorbed by it whole, so a particle's liquid volume grows by v_d at a time. With a liquid
 // flow Q the droplets arrive at R = Q / v_d per second and each lands on one particle, chosen with a weight per
 // particle (setting spray_weight: every particle alike, or in proportion to the collision cross-section (D +
-// d_drop)^2). A bin's particles therefore leave at rate R w_a / sum_b w_b N_b towards l_j + v_d, split between the two
-// liquid pivots around it so that number and liquid volume are kept. The liquid added is exactly Q.
+// d_drop)^2). A bin's particles therefore leave at rate R w_a / W towards l_j + v_d, split between the two liquid
+// pivots around it so that number and liquid volume are kept. The liquid added is exactly Q. W = sum_b w_b N_b +
+// w_out N_out counts the particles that left the grid too (still in the vessel, they meet droplets): without them the
+// last particles on the grid would take all R droplets however few they are, a drain that does not vanish with them.
 //
 // Drying (setting drying: surface): the constant-rate period of a wet particle, liquid volume lost at j_dry pi D^2 per
 // particle (surface-proportional evaporation, paper 000, section 2.2), moved down the liquid axis by first-order upwind
 // fluxes, which remove exactly the evaporated volume.
 //
 // What leaves the grid (aggregates beyond the solid grid, liquid beyond the liquid axis) is integrated in book-keeping
-// states (number, solid and liquid volume), so solid and liquid balances close to round-off and are reported.
+// states (number, solid and liquid volume), so solid and liquid balances close to round-off and are reported; the top
+// class of Eq. (14) holds that mass (as the 1-D top class holds what grew beyond its grid), so the grid-end warnings
+// cover it. Bin numbers are inventories declared non-negative (the integrators enforce it).
 //
 // Linear algebra: below dense_limit states the analytic Jacobian (complete) with dense LU; above it GMRES with the
 // unit's preconditioner: per solid class the exact block of the liquid-axis couplings (deposition, drying) and the
@@ -179,6 +183,9 @@ class Pbm2D : public UnitBase<Pbm2D> {
     }
     if (drying_) s_out_[kEvaporated] = s.add_accumulator("liquid_evaporated", "m3", number_scale * l_mid);
     n_states_ = static_cast<int>(s.states().size());
+    s.set_nonnegative(sN_, n_);
+    for (const StateId& o : s_out_)
+      if (o) s.set_nonnegative(o);
     s.set_analytic_part(true);
     s.set_preconditioner();
   }
@@ -338,8 +345,12 @@ class Pbm2D : public UnitBase<Pbm2D> {
       if (a / nl_ == ns_ - 1 || a % nl_ == nl_ - 1) end += m;
     }
     auto acc = [&](int k) { return s_out_[k] ? T(c.x(s_out_[k])) : T(0.0); };
+    // what left the grid: in the top class (the grid-end warnings then say how much)
+    const T left = rho_s * acc(kOut2Solid) + rho_l * acc(kOut2Liquid);
+    psd[npsd - 1] += left, mass += left, end += left;
     c.out(o_number_) = number;
-    const T none = kernels::undefined_size<T>();  // the means of no particles are undefined, not 0
+    // Eqs. (15)-(16) of an empty grid are undefined (NaN: null in summaries), not 0
+    const T none = kernels::undefined_size<T>();
     c.out(o_davg_) = number > 0.0 ? T(dsum / number) : none;
     c.out(o_xavg_) = number > 0.0 ? T(xsum / number) : none;
     c.out(o_d50_) = characteristic_diameter_of_mass(psd_edges_, psd.data(), 0.5);
@@ -391,7 +402,18 @@ class Pbm2D : public UnitBase<Pbm2D> {
           });
         }
         std::vector<int> cols(w.cols.begin(), w.cols.end());
-        sink.add_outer(static_cast<int>(u.size()), u.data(), n_, cols.data(), dep.w.data());
+        std::vector<double> wts(dep.w.begin(), dep.w.end());
+        if (dep.n_out > 0) {  // droplets off the grid: v_d R g / W into the liquid that left, g = w_out N_out
+          const int rl = s_out_[kOut2Liquid].i;
+          u[rl] += dep.vd * dep.R * dep.w_out * dep.n_out / (dep.W * dep.W);
+          for (int q : {kOut2Number, kOut2Solid, kOut2Liquid}) {
+            const double g = q == kOut2Number ? dep.g_n : dep.g_v;  // dg/d(that state)
+            if (g == 0.0) continue;
+            sink.add(rl, c.offset + s_out_[q].i, -dep.vd * dep.R * g / dep.W);
+            cols.push_back(c.offset + s_out_[q].i), wts.push_back(g);
+          }
+        }
+        sink.add_outer(static_cast<int>(u.size()), u.data(), static_cast<int>(cols.size()), cols.data(), wts.data());
       }
     }
     if (drying_) {
@@ -458,9 +480,11 @@ class Pbm2D : public UnitBase<Pbm2D> {
 
   // The droplet arrivals: R droplets per second, weight per bin, their sum over the particles, and the liquid
   // shift v_d / dl in steps (lo steps with weight 1 - nu, lo + 1 with nu).
+  // n_out, w_out: the particles that left the grid and the weight of one (at their mean volume).
   template <class T>
   struct Deposit {
-    T R = T(0.0), W = T(0.0), nu = T(0.0);
+    T R = T(0.0), W = T(0.0), nu = T(0.0), vd = T(0.0), n_out = T(0.0), w_out = T(0.0);
+    double g_n = 0.0, g_v = 0.0;  // d(w_out N_out)/dN_out, /d(volume off the grid)
     int lo = 0;
     std::vector<T> w;
   };
@@ -469,16 +493,23 @@ class Pbm2D : public UnitBase<Pbm2D> {
     Deposit<T> d;
     const T dd = c.par(p_dd_);
     const T vd = kPi / 6.0 * dd * dd * dd;
-    d.R = c.par(p_q_) / vd;
+    d.R = c.par(p_q_) / vd, d.vd = vd;
     d.w.resize(n_);
     for (int a = 0; a < n_; ++a) {
-      if (weight_ == SprayWeight::kNumber) {
-        d.w[a] = T(1.0);
-      } else {
-        const T s = grid_->diameter(a) + dd;
-        d.w[a] = s * s;
-      }
+      const T s = grid_->diameter(a) + dd;
+      d.w[a] = weight_ == SprayWeight::kNumber ? T(1.0) : T(s * s);
       d.W += d.w[a] * N[a];
+    }
+    if (s_out_[kOut2Number] && value_of(c.x(s_out_[kOut2Number])) > 0.0) {
+      d.n_out = c.x(s_out_[kOut2Number]);
+      d.w_out = T(1.0), d.g_n = 1.0;
+      const T V = c.x(s_out_[kOut2Solid]) + c.x(s_out_[kOut2Liquid]);
+      if (weight_ == SprayWeight::kCrossSection && value_of(V) > 0.0) {  // at the mean size off the grid
+        const T D = cbrt(6.0 / kPi * V / d.n_out);
+        d.w_out = (D + dd) * (D + dd);
+        d.g_n = value_of(d.w_out - 2.0 / 3.0 * (D + dd) * D), d.g_v = value_of(2.0 / 3.0 * (D + dd) * D * d.n_out / V);
+      }
+      d.W += d.w_out * d.n_out;
     }
     const T x = vd / grid_->liquid_step();
     d.lo = static_cast<int>(std::floor(value_of(x)));
@@ -525,6 +556,7 @@ class Pbm2D : public UnitBase<Pbm2D> {
                 if (s_out_[k].i == row) out[k] += v * rate;
           });
         }
+        out[kOut2Liquid] += dep.vd * dep.R * dep.w_out * dep.n_out / dep.W;  // droplets on particles off the grid
       }
     }
     if (drying_) {

@@ -252,6 +252,15 @@ std::vector<double> DaeSystem::scales() const {
   return s;
 }
 
+std::vector<double> DaeSystem::constraints() const {
+  std::vector<double> c(n_, 0.0);
+  bool any = false;
+  for (int i = 0; i < n_; ++i)
+    if (fs_.state_spec(i).nonnegative) c[i] = 1.0, any = true;
+  if (!any) c.clear();
+  return c;
+}
+
 std::vector<double> DaeSystem::quadrature_scales() const {
   std::vector<double> s;
   for (const auto& u : fs_.units())

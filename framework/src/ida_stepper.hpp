@@ -50,6 +50,7 @@ class IdaStepper : public Stepper {
   NVec y_, yp_, atol_, q_, qatol_;
   IdaUser user_;
   std::unique_ptr<Ida> ida_;
+  std::unique_ptr<NVec> constraints_;  // non-negative inventories (DaeSystem::constraints), if any
   N_Vector* yS_ = nullptr;
   N_Vector* ypS_ = nullptr;
   N_Vector* qS_ = nullptr;

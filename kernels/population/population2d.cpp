@@ -312,7 +312,9 @@ void Population2D::convolve(Work& w, const double* N, double* dN, double* out) c
         }
       }
     }
-  // back along the liquid axis: births of row r at liquid class L, beyond nl - 1 they leave the grid
+  // back along the liquid axis: births of row r at liquid class L, beyond nl - 1 they leave the grid. Births are
+  // non-negative; the inverse FFT leaves round-off of both signs (1e-16 of the row's largest) where there are none,
+  // which would take empty bins below zero: cut at zero
   for (int r = 0; r < ns + 2; ++r) {
     const Complex* s = &w.S[size_t(r) * nf];
     bool any = false;
@@ -320,6 +322,7 @@ void Population2D::convolve(Work& w, const double* N, double* dN, double* out) c
     if (!any) continue;
     std::copy(s, s + nf, w.spec.begin());
     w.fft.inv(w.births, w.spec, 2 * nl);
+    for (double& x : w.births) x = std::max(x, 0.0);
     if (r < ns) {
       const double sr = g.solid().pivot(r);
       for (int L = 0; L < nl; ++L) dN[size_t(r) * nl + L] += w.births[L];

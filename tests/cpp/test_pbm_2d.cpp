@@ -164,6 +164,40 @@ TEST(Pbm2D, SceneFileRunsAndClosesItsBalances) {
   }
 }
 
+// Particles at liquid content 0.95 sit at the top of the liquid axis: droplets and aggregation take nearly all of them
+// off the grid within 2 s. Numbers and masses stay non-negative (the number fell to -0.09 when the last particles on
+// the grid took every droplet, however few they were), what left is held in the top class of Eq. (14), which the
+// grid-end warnings read, and the balances close.
+TEST(Pbm2D, APopulationLeavingItsGridStaysNonNegativeAndFillsTheTopClass) {
+  Scene s = testing::scene_from_text(
+      replaced(testing::scene_from_file("flowsheets/sen_2d_dem_kernel.yaml").text,
+               {{"N0: 50000", "N0: 50000\n      lc0: 0.95"},
+                {"agg_collisions_file: data/", "agg_collisions_file: " + repo_path("flowsheets/data/")}}));
+  const SimResult r = simulate(*s.flowsheet, s.options);
+  const size_t last = r.t.size() - 1;
+  for (size_t k = 0; k < r.t.size(); ++k) {
+    for (size_t i = 0; i < r.state_names.size(); ++i)
+      if (r.state_names[i].rfind("granulator.N_", 0) == 0) ASSERT_GE(r.state(k, i), 0.0) << r.state_names[i];
+    EXPECT_GE(output(r, k, "granulator.solids_mass"), 0.0);
+    EXPECT_GE(output(r, k, "granulator.liquid_mass"), 0.0);
+  }
+  const double m0 = output(r, 0, "granulator.solids_mass");
+  EXPECT_GT(output(r, last, "granulator.solids_left_grid"), 0.5 * m0);
+  EXPECT_GT(output(r, last, "granulator.mu_15"), 0.5);  // the top class holds what left
+  EXPECT_GT(output(r, last, "granulator.number"), 0.0);
+  EXPECT_LT(std::abs(output(r, last, "granulator.solid_balance")), 1e-6);
+  EXPECT_LT(std::abs(output(r, last, "granulator.liquid_balance")), 1e-6);
+}
+
+// Eqs. (15)-(16) of no particles are undefined: NaN (null in a summary), never a size of 0.
+TEST(Pbm2D, AnEmptyPopulationHasNoAverageSize) {
+  Scene s = paper_scene(10, {{"N0: 50000", "N0: 0"}});
+  const SimResult r = simulate(*s.flowsheet, s.options);
+  EXPECT_EQ(output(r, 2, "g.number"), 0.0);
+  EXPECT_TRUE(std::isnan(output(r, 2, "g.D_avg")));
+  EXPECT_TRUE(std::isnan(output(r, 2, "g.x_avg")));
+}
+
 // With no aggregation every particle receives droplets at the same rate lambda = R / N0 (number weighting): the
 // liquid added is exactly the sprayed volume and the droplets per particle follow a Poisson distribution.
 TEST(Pbm2D, LiquidAdditionAloneAddsExactlyTheSprayedVolume) {

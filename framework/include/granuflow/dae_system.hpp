@@ -86,6 +86,9 @@ class DaeSystem {
   void initial_sensitivities(const std::vector<int>& params, std::vector<std::vector<double>>& yS0) const;
   std::vector<double> differential_id() const;  // 1 differential, 0 algebraic
   std::vector<double> scales() const;
+  // Per integrated state, the integrators' constraint: 1 for an inventory declared non-negative
+  // (UnitSpec::set_nonnegative), 0 for none; empty when no state has one.
+  std::vector<double> constraints() const;
   std::vector<double> quadrature_scales() const;
   // Reported outputs at the full state vector (see extend()) and the quadratures.
   void report(double t, const double* y_full, const double* yp_full, const double* q, double* out);
