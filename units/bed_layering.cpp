@@ -9,7 +9,7 @@ namespace granuflow::units {
 
 void BedLayering::declare(Settings& st, const kernels::Grid& g) {
   const auto& reg = kernels::registries().growth_schemes;
-  fv_ = reg.create(st.get_choice("growth_scheme", "fv_van_albada", reg.names(),
+  fv_ = reg.create(st.get_choice("layering_scheme", "fv_van_albada", reg.names(),
                                  "finite-volume scheme of the binder's layering (fv_van_albada: smooth, for the "
                                  "integrator)"),
                    st.where());

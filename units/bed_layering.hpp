@@ -22,7 +22,7 @@ namespace granuflow::units {
 
 class BedLayering {
  public:
-  // Reads the setting growth_scheme (default fv_van_albada: smooth, for the integrator).
+  // Reads the setting layering_scheme (default fv_van_albada: smooth, for the integrator).
   void declare(Settings& st, const kernels::Grid& g);
 
   template <class T>
