@@ -1,5 +1,6 @@
 #include "chamber_gas.hpp"
 
+#include "granuflow/errors.hpp"
 #include "granuflow/properties.hpp"
 #include "kernels/paper001_defaults.hpp"
 
@@ -67,6 +68,14 @@ class ChamberGas : public UnitBase<ChamberGas> {
   }
   template <class T>
   void outputs(const Ctx<T>& c) const {
+    // Only water can evaporate into the gas: a spray that carries dissolved solids (its w) must deposit them first
+    // (droplet_evaporation's vapour carries none). Checked on the solution at the output times, not in the residual,
+    // whose states a finite-difference Jacobian perturbs.
+    if (value_of(c.port(evap_, liquid::kW)) > 0.0 && value_of(c.port(evap_, liquid::kMdot)) > 0.0)
+      throw ConfigError("chamber_gas, port evap: the liquid evaporating into the gas carries dissolved solids (w = " +
+                        fmt_num(value_of(c.port(evap_, liquid::kW))) +
+                        " kg/kg) that the gas cannot hold; allowed: w = 0 (pass a solution through a "
+                        "droplet_evaporation unit, whose vapour is water)");
     c.out(o_rh_) = props::relative_humidity(c.x(sY_), c.x(sT_), c.port(in_, gas::kP));
     c.out(o_water_) = c.x(sW_);
     c.out(o_energy_) = c.x(sH_);

@@ -1,5 +1,7 @@
 #include "droplet_evaporation.hpp"
 
+#include <tuple>
+
 #include "granuflow/properties.hpp"
 #include "kernels/drying/paper001_drying.hpp"
 
@@ -21,14 +23,17 @@ class DropletEvaporation : public UnitBase<DropletEvaporation> {
                            "docs/paper001_decisions.md"});
     sEvap_ = s.add_state("m_evap", StateKind::Algebraic, "kg/s", 1e-4);
     sDep_ = s.add_state("m_dep", StateKind::Algebraic, "kg/s", 1e-3);
+    sWdep_ = s.add_state("w_dep", StateKind::Algebraic, "kg/kg", 1.0);
+    sWvap_ = s.add_state("w_vap", StateKind::Algebraic, "kg/kg", 1.0);
     spray_ = s.add_port("spray", streams::liquid(), PortDir::In);
     gas_ = s.add_port("gas", streams::gas(), PortDir::In);  // probe of the chamber gas: humidity and temperature
-    // both outlets carry the spray's temperature and composition, passed on
-    for (auto [name, m] : {std::pair{"vapour", sEvap_}, std::pair{"deposit", sDep_}}) {
+    // Both outlets at the spray's temperature. Only water evaporates: the vapour carries no solids, and the dissolved
+    // solids all stay in the deposited droplets, which the evaporation concentrates.
+    for (auto [name, m, w] : {std::tuple{"vapour", sEvap_, sWvap_}, std::tuple{"deposit", sDep_, sWdep_}}) {
       const PortId p = s.add_port(name, streams::liquid(), PortDir::Out);
       s.provide(p, liquid::kMdot, m);
       s.forward(p, liquid::kT, spray_, liquid::kT);
-      s.forward(p, liquid::kW, spray_, liquid::kW);
+      s.provide(p, liquid::kW, w);
     }
     s.set_explicit();
     o_frac_ = s.add_output("evaporated_fraction", "-");
@@ -47,30 +52,39 @@ class DropletEvaporation : public UnitBase<DropletEvaporation> {
   template <class T>
   Status eval(const Ctx<T>& c) const {
     const T& m_l = c.port(spray_, liquid::kMdot);
+    const T& w = c.port(spray_, liquid::kW);
+    const T water = m_l * (1.0 - w);  // = m_l exactly for a water spray (w = 0)
     T m = raw_rate(c);
-    // A droplet cannot evaporate more than is sprayed, nor condense (the cap is reported when active).
+    // A droplet cannot evaporate more water than it carries, nor condense (the cap is reported when active).
     if (m < T(0.0)) m = T(0.0);
-    if (m > m_l) m = m_l;
+    if (m > water) m = water;
     c.res(sEvap_) = c.x(sEvap_) - m;
     c.res(sDep_) = c.x(sDep_) - (m_l - m);
+    // solids fraction of the deposit: all of the sprayed solids in what is left (the spray's own w when nothing is
+    // sprayed)
+    const T left = m_l - m;
+    c.res(sWdep_) = c.x(sWdep_) - (left > 0.0 ? T(m_l * w / left) : T(w));
+    c.res(sWvap_) = c.x(sWvap_);
     return Status::kOk;
   }
   template <class T>
   void init(InitCtx<T>& c) const {
     c.x(sEvap_) = T(0.0);
     c.x(sDep_) = T(0.0);
+    c.x(sWdep_) = c.x(sWvap_) = T(0.0);
   }
   template <class T>
   void outputs(const Ctx<T>& c) const {
     const T& m_l = c.port(spray_, liquid::kMdot);
     const T raw = raw_rate(c);
+    const T water = m_l * (1.0 - c.port(spray_, liquid::kW));
     c.out(o_frac_) = m_l > 0.0 ? T(c.x(sEvap_) / m_l) : T(0.0);
-    c.out(o_cap_) = (raw < 0.0 || raw > m_l) && m_l > 0.0 ? T(1.0) : T(0.0);
+    c.out(o_cap_) = (raw < 0.0 || raw > water) && m_l > 0.0 ? T(1.0) : T(0.0);
   }
 
  private:
   ParamId p_k_, p_d_, p_rho_, p_mult_;
-  StateId sEvap_, sDep_;
+  StateId sEvap_, sDep_, sWdep_, sWvap_;
   PortId spray_, gas_;
   OutputId o_frac_, o_cap_;
 };

@@ -6,6 +6,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "bed_layering.hpp"
 #include "chamber_outlet.hpp"
 #include "granuflow/errors.hpp"
 #include "granuflow/flowsheet.hpp"
@@ -35,10 +36,13 @@ struct Work : Workspace {
   std::vector<double> pm, spm;  // particle mass and surface per mass of each class at the run's parameters
   template <class T>
   struct Scratch {
-    std::vector<T> pm, spm, N, floor, dN, dW, dry, q, fwet, xwet, temp, nu, area, flux;
+    std::vector<T> pm, spm, N, floor, dN, dW, dry, q, fwet, xwet, temp, nu, area, flux, lay_m, lay_w, shape;
+    BedLayering::Scratch<T> lay;
     void resize(int n) {
-      for (auto* v : {&pm, &spm, &N, &floor, &dN, &dW, &dry, &q, &fwet, &xwet, &temp, &nu, &area, &flux})
+      for (auto* v :
+           {&pm, &spm, &N, &floor, &dN, &dW, &dry, &q, &fwet, &xwet, &temp, &nu, &area, &flux, &lay_m, &lay_w})
         v->assign(n, T(0.0));
+      shape.assign(n + 1, T(0.0));
     }
   };
   Scratch<double> sd;
@@ -79,6 +83,7 @@ class FluidBed : public UnitBase<FluidBed> {
     p_dv_ = s.add_param({"D_v", "m2/s", def::kVapourDiffusivity, 1e-7, 1e-3, "vapour diffusivity", t6});
     p_lambda_ = s.add_param({"lambda_g", "W/(m K)", def::kGasConductivity, 1e-3, 1.0, "gas thermal conductivity", t6});
     declare_population(s, st);
+    declare_binder(st);
     const bool discharge = declare_states(s, st);
     declare_ports(s, discharge);
     declare_structure(s);
@@ -107,6 +112,21 @@ class FluidBed : public UnitBase<FluidBed> {
                           std::string(kernels::field_name(f)));
     if (pop_.needs().number)
       throw ConfigError(st.where() + ": kernels that read particle numbers are not supported in the fluid bed");
+  }
+
+  // Solids dissolved in the spray (spray_nozzle.w) deposit with the droplets and stay as a layer when the water dries
+  // (docs/binder_granulation.md). The binder solid is read as the bed's own solid (maltodextrin in paper 001): the
+  // layer takes the particles' density and heat capacity and the wet spot's glass transition is Gordon-Taylor of water
+  // and that one solid (Eq. (54)). Another binder material would be a second solid component: refused by name.
+  void declare_binder(Settings& st) {
+    const std::string b = st.get_choice("binder", "bed_solid", {},
+                                        "material of the solids dissolved in the spray: bed_solid (the binder is the "
+                                        "bed's own solid, e.g. maltodextrin on maltodextrin); no other is modelled");
+    if (b != "bed_solid")
+      throw ConfigError(st.where() + ".binder = '" + b +
+                        "': a binder other than the bed solid is not modelled yet (its layer would be a second "
+                        "solid component with its own density and glass transition); allowed: bed_solid");
+    layering_.declare(st, *grid_);
   }
 
   // The states; with a discharge also its parameter and rate state. Returns whether the bed discharges.
@@ -267,15 +287,24 @@ class FluidBed : public UnitBase<FluidBed> {
         c.reduce(r_feed_water_, n_, [&](int i) { return fed ? c.port(feed_, solids::water(n_, i)) : T(0.0); });
     const T k_out = sRate_ ? c.x(sRate_) : T(0.0);
     if (sRate_) c.res(sRate_) = c.x(sRate_) - c.par(p_kdis_);
+    // The deposit's dissolved solids (a fraction w of it) layer the particles; its water wets them. Nothing to
+    // layer (a water spray) skips the layering, so that it changes no bit of a result.
+    const T w_dep = wet ? c.port(wet_, wetting::w(n_)) : T(0.0);
+    const bool layering = !c.in_jacobian() && wet && !carries_nothing(T(w_dep * dep));  // in the Jacobian: analytic
+    if (layering) layering_rates(c, sc, pm, T(w_dep * dep));
     for (int i = 0; i < n_; ++i) {
       T in_m(0.0), in_w(0.0), out_m(0.0), out_w(0.0);
       if (fed) in_m = c.port(feed_, solids::mdot(i)), in_w = c.port(feed_, solids::water(n_, i));
-      if (sRate_) out_m = k_out * M[i], out_w = k_out * W[i];              // a well-mixed outlet: every class alike
-      c.res(sM_ + i) = c.xd(sM_ + i) - (pm[i] * sc.dN[i] + in_m - out_m);  // Eq. (20), paper 001, in mass
-      c.res(sW_ + i) = c.xd(sW_ + i) - (deposit(c, i, wet) - sc.dry[i] + sc.dW[i] + in_w - out_w);  // Eq. (58)
+      if (sRate_) out_m = k_out * M[i], out_w = k_out * W[i];  // a well-mixed outlet: every class alike
+      T rate_m = pm[i] * sc.dN[i] + in_m - out_m;              // Eq. (20), paper 001, in mass
+      T rate_w = deposit(c, i, wet) * (1.0 - w_dep) - sc.dry[i] + sc.dW[i] + in_w - out_w;  // Eq. (58)
+      if (layering) rate_m += sc.lay_m[i], rate_w += sc.lay_w[i];
+      c.res(sM_ + i) = c.xd(sM_ + i) - rate_m;
+      c.res(sW_ + i) = c.xd(sW_ + i) - rate_w;
     }
     const T t_liq = wet ? c.port(wet_, wetting::T(n_)) : T(props::kT0);
-    // Eq. (59), paper 001, conservative: deposited liquid at its enthalpy, drying vapour leaves at h_v(T_S)
+    // Eq. (59), paper 001, conservative: deposited liquid at its enthalpy (dissolved solids included, at the liquid
+    // heat capacity like spray_nozzle's balance_energy_in), drying vapour leaves at h_v(T_S)
     // (the particle supplies the latent heat), gas-solid heat transfer Q; fed solids bring their enthalpy, the
     // discharge takes its share of the bed's.
     T h_flow(0.0);
@@ -291,8 +320,9 @@ class FluidBed : public UnitBase<FluidBed> {
   }
 
   void analytic_jacobian(const Ctx<double>& c, double, JacobianSink& sink) const override {
-    if (!pop_.aggregation() && !pop_.breakage()) return;
     Work& w = c.template ws<Work>();
+    layering_jacobian(c, w, sink);
+    if (!pop_.aggregation() && !pop_.breakage()) return;
     if (!w.mapped) {
       kernels::Population::Map& m = w.map;
       const auto& ports = *c.port_index;
@@ -399,6 +429,31 @@ class FluidBed : public UnitBase<FluidBed> {
     }
   }
 
+  // The binder's layering (bed_layering.hpp) in sc.lay_m, sc.lay_w, with the growth shape Eq. (29)'s tau at the faces.
+  template <class T>
+  void layering_rates(const Ctx<T>& c, typename Work::template Scratch<T>& sc, const T* pm, const T& m_s) const {
+    std::fill(sc.lay_m.begin(), sc.lay_m.end(), T(0.0));
+    std::fill(sc.lay_w.begin(), sc.lay_w.end(), T(0.0));
+    layering_.rates(layer_classes(c, sc, pm), m_s, sc.lay, sc.lay_m.data(), sc.lay_w.data());
+  }
+  template <class T>
+  BedLayering::Classes<T> layer_classes(const Ctx<T>& c, typename Work::template Scratch<T>& sc, const T* pm) const {
+    for (int i = 0; i < n_; ++i) sc.N[i] = c.x(sM_ + i) / pm[i], sc.floor[i] = kMassFloor / pm[i];
+    for (int f = 0; f <= n_; ++f) sc.shape[f] = c.port(wet_, wetting::tau_face(n_, f));
+    return {sc.N.data(), &c.x(sW_), sc.floor.data(), pm, sc.shape.data(), pp_.envelope_density(c.shared)};
+  }
+  void layering_jacobian(const Ctx<double>& c, Work& w, JacobianSink& sink) const {
+    if (!c.connected(wet_)) return;
+    const auto& cols = (*c.port_index)[wet_.i];
+    const double w_dep = c.port(wet_, wetting::w(n_));
+    double dep = 0.0;
+    for (int i = 0; i < n_; ++i) dep += c.port(wet_, wetting::mdot(i));
+    BedLayering::Columns jc{sM_.i, sW_.i, c.offset + sM_.i, c.offset + sW_.i, {}, {{cols[wetting::w(n_)], dep}}};
+    for (int i = 0; i < n_; ++i) jc.amount_cols.push_back({cols[wetting::mdot(i)], w_dep});
+    for (int f = 0; f <= n_; ++f) jc.shape_cols.push_back(cols[wetting::tau_face(n_, f)]);
+    layering_.jacobian(layer_classes(c, w.sd, w.pm.data()), w_dep * dep, w.sd.lay, jc, sink);
+  }
+
   template <class T>
   T deposit(const Ctx<T>& c, int i, bool wet) const {
     return wet ? c.port(wet_, wetting::mdot(i)) : T(0.0);
@@ -501,6 +556,7 @@ class FluidBed : public UnitBase<FluidBed> {
   ParticleParams pp_;
   std::shared_ptr<const kernels::Grid> grid_;
   kernels::Population pop_;
+  BedLayering layering_;
   ParamId p_mass_, p_x0_, p_d50_, p_sigma_, p_t0_, p_cpl_, p_abed_, p_xcr_, p_sh_, p_betmm_, p_betn_, p_dv_, p_lambda_;
   StateId sM_, sW_, sH_, sT_, sU0_, sVap_, sQ_;
   PortId wet_, gas_, inlet_, feed_;

@@ -73,11 +73,16 @@ class SprayZone : public UnitBase<SprayZone> {
     sFwet_ = s.add_states("fwet", n_, StateKind::Algebraic, "-", 0.1);
     sXwet_ = s.add_states("Xwet", n_, StateKind::Algebraic, "kg/kg", 0.1);
     sT_ = s.add_state("T", StateKind::Algebraic, "K", 300.0);
+    // Eq. (29)'s residence-time fraction at the faces of the size cells: the shape of the layering growth of the
+    // deposited binder solids (docs/binder_granulation.md)
+    sTauF_ = s.add_states("tau_face", n_ + 1, StateKind::Algebraic, "-", 0.1);
     liquid_ = s.add_port("liquid", streams::liquid(), PortDir::In);
     bed_ = s.add_port("bed", paper001::holdup_stream(), PortDir::In, n_);
     s.set_port_grid(bed_, grid_->diameter_pivots());
     const PortId out = s.add_port("out", paper001::wetting_stream(), PortDir::Out, n_);
-    s.provide_all(out, sDep_);
+    for (int k = 0; k <= paper001::wetting::T(n_); ++k) s.provide(out, k, sDep_ + k);  // mdot, fwet, Xwet, T
+    s.forward(out, paper001::wetting::w(n_), liquid_, liquid::kW);
+    for (int f = 0; f <= n_; ++f) s.provide(out, paper001::wetting::tau_face(n_, f), sTauF_ + f);
     s.set_port_grid(out, grid_->diameter_pivots());
     s.set_explicit();  // zero hold-up: its states are evaluated inline, never integrated
     // Class structure for the Jacobian: each class's outputs read its own mass and water, the bed temperature and
@@ -109,12 +114,14 @@ class SprayZone : public UnitBase<SprayZone> {
       c.res(sXwet_ + i) = c.x(sXwet_ + i) - sc.xwet[i];
     }
     c.res(sT_) = c.x(sT_) - c.port(liquid_, liquid::kT);
+    face_residence_times(c);
     return Status::kOk;
   }
   template <class T>
   void init(InitCtx<T>& c) const {
     for (int i = 0; i < n_; ++i) c.x(sDep_ + i) = c.x(sFwet_ + i) = c.x(sXwet_ + i) = T(0.0);
     c.x(sT_) = T(def::kSprayTemperature);
+    for (int f = 0; f <= n_; ++f) c.x(sTauF_ + f) = T(0.0);
   }
   // The closures' outputs are the unit's own states (x = f exactly when inlined), so only the flow closures run
   // again here, for their floors; the wetted-volume cap is a function of f_wet alone.
@@ -220,8 +227,8 @@ class SprayZone : public UnitBase<SprayZone> {
   // loop, its two cases would keep the loop scalar.
   template <p1::LiquidSplit S, class T>
   static bool class_outputs(const OutputParams<T>& o, double d_class, double v, const T& mass, const T& water,
-                            const T& m_liquid, const T& weight_sum, const T& tau, const T& ws, const T& t_cross,
-                            T* m_dep, T* fwet, T* xwet) {
+                            const T& m_liquid, const T& w, const T& weight_sum, const T& tau, const T& ws,
+                            const T& t_cross, T* m_dep, T* fwet, T* xwet) {
     const T d(d_class);
     *m_dep = split_weight<S>(o, d_class, v, mass, tau) * m_liquid / weight_sum;  // Eq. (44)
     // Eqs. (43), (45), (46): X_LS = m_dep / (w_s M / t). With the default split, m_dep is proportional to
@@ -240,8 +247,22 @@ class SprayZone : public UnitBase<SprayZone> {
     // a droplet's wet spot keeps its moisture however few droplets there are.
     const T g = value_of(phi) < 1e-8 ? T(1.0 + 0.5 * phi) : T(phi / *fwet);
     const T dx = capped ? x_ls : T(g / (kappa * o.h_pen * kernels::sphere_surface(d) / kernels::sphere_volume(d)));
-    *xwet = dx + water / (mass + kMassFloor);  // Eq. (55): plus the bed moisture of the class
+    // Eq. (55): plus the bed moisture X0 of the class. A binder solution (solids fraction w) brings its solids into the
+    // wet spot: water (1 - w) m_dep on solids m_s frac + w m_dep, X_wet = (X0 + (1 - w) dx) / (1 + w dx). The binder
+    // solid is read as the bed's own solid (maltodextrin: the Gordon-Taylor data of Eq. (54) apply to the mixture;
+    // docs/binder_granulation.md). For w = 0 this is dx + X0 to the last bit.
+    *xwet = (dx * (1.0 - w) + water / (mass + kMassFloor)) / (1.0 + w * dx);
     return capped;
+  }
+
+  // Eq. (29) at the n + 1 cell faces (diameter edges), where the bed's finite-volume layering evaluates its growth.
+  template <class T>
+  void face_residence_times(const Ctx<T>& c) const {
+    const T u0 = c.port(bed_, holdup::u0(n_));
+    const GasProps<T> g = gas_props(c.port(bed_, holdup::T(n_)));
+    const FlowParams<T> q = flow_params(c);
+    const auto& de = grid_->diameter_edges();
+    for (int f = 0; f <= n_; ++f) c.res(sTauF_ + f) = c.x(sTauF_ + f) - class_flow(q, de[f], u0, g).tau;
   }
 
   // All classes; counts the floors and caps that replaced the literal equations.
@@ -268,6 +289,7 @@ class SprayZone : public UnitBase<SprayZone> {
     const double* v = grid_->pivots().data();
     const T sum = c.reduce(r_weights_, n_, [&](int i) { return split_weight(o, d[i], v[i], mass[i], tau[i]); });
     const T m_liquid = c.port(liquid_, liquid::kMdot);
+    const T w = c.port(liquid_, liquid::kW);
     T *m_dep = sc.m_dep.data(), *fwet = sc.fwet.data(), *xwet = sc.xwet.data();
     auto outputs = [&](auto split) {
       constexpr p1::LiquidSplit S = decltype(split)::value;
@@ -275,7 +297,7 @@ class SprayZone : public UnitBase<SprayZone> {
       int capped = 0;
 #pragma omp simd reduction(+ : capped)  // in doubles a vector loop (libmvec's expm1, kernels/simd_math.hpp)
       for (int i = 0; i < n; ++i)
-        capped += class_outputs<S>(o, d[i], v[i], mass[i], water[i], m_liquid, sum, tau[i], ws[i], t_cross[i],
+        capped += class_outputs<S>(o, d[i], v[i], mass[i], water[i], m_liquid, w, sum, tau[i], ws[i], t_cross[i],
                                    &m_dep[i], &fwet[i], &xwet[i]);
       return capped;
     };
@@ -289,7 +311,7 @@ class SprayZone : public UnitBase<SprayZone> {
   std::shared_ptr<const kernels::Grid> grid_;
   p1::LiquidSplit split_ = p1::LiquidSplit::kClassSurface;
   ParamId p_tau1_, p_tau2_, p_ws1_, p_ws2_, p_ws3_, p_wsf_, p_v1_, p_v2_, p_zone_, p_drop_, p_rdrop_, p_hpen_;
-  StateId sDep_, sFwet_, sXwet_, sT_;
+  StateId sDep_, sFwet_, sXwet_, sT_, sTauF_;
   PortId liquid_, bed_;
   ReductionId r_weights_;
   OutputId o_ws_, o_cap_, o_nofl_, o_tau0_, o_fwet_;

@@ -273,6 +273,23 @@ TEST(Gf25Scene, JacobianIsExactAtAStateInsideTheRun) {
   }
 }
 
+// A binder solution (docs/binder_granulation.md): the layering's analytic Jacobian (class masses and water, the
+// deposit rate, its solids fraction and the growth shape) is exact too.
+TEST(Gf25Scene, JacobianIsExactWithABinderSolution) {
+  Scene s =
+      scene_from_text(std::regex_replace(headline().text, std::regex("T: 10 degC, t_on"), "T: 10 degC, w: 0.3, t_on"));
+  SimOptions o = s.options;
+  o.t_out = {0, 600};
+  const SimResult r = simulate(*s.flowsheet, o);
+  DaeSystem sys(*s.flowsheet);
+  const int n = r.n_states(), k = sys.size();
+  std::vector<double> y(r.y.begin() + n, r.y.begin() + n + k), yp(r.yp.begin() + n, r.yp.begin() + n + k);
+  testing::expect_jacobian_matches_fd(sys, 600.0, y, yp, 7.5, 2e-6);
+  DaeSystem full(*s.flowsheet, false);
+  std::vector<double> yf(r.y.begin() + n, r.y.begin() + 2 * n), ypf(r.yp.begin() + n, r.yp.begin() + 2 * n);
+  testing::expect_jacobian_matches_reference(full, 600.0, yf, ypf, 7.5, 1e-12);
+}
+
 // The inlined Jacobian keeps explicit units' outer products factored and multiplies only the nonzeros it finds
 // among the entries the units wrote: it must equal J_RR - J_RS J_SS^-1 J_SR of the Jacobian over all states, formed
 // densely here. It is evaluated at the run's start first, so the second evaluation also shows that the first left
@@ -402,7 +419,7 @@ TEST(Gf25Scene, MechanismsLeftOutCostNoStates) {
   text = std::regex_replace(text, std::regex("    type: fluid_bed\n"),
                             "    type: fluid_bed\n    settings: {breakage: none}\n");
   Scene lean = scene_from_text(text);
-  EXPECT_EQ(full.flowsheet->n_states() - lean.flowsheet->n_states(), 2 + 1);        // droplet evaporation, wall
+  EXPECT_EQ(full.flowsheet->n_states() - lean.flowsheet->n_states(), 4 + 1);        // droplet evaporation, wall
   EXPECT_EQ(full.flowsheet->n_quadratures() - lean.flowsheet->n_quadratures(), 1);  // the wall's energy lost
   EXPECT_EQ(full.flowsheet->param_names().size() - lean.flowsheet->param_names().size(), 4 + 3 + 6);  // + breakage
   const SimResult r = simulate(*lean.flowsheet, lean.options);

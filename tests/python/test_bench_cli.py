@@ -138,9 +138,9 @@ def test_bench_scene_reports_each_variant_with_the_scene_physics():
     assert [(r["classes"], r["breakage"]) for r in recs] == [(n, b) for n in (10, 20, 40) for b in (True, False)]
     for r in recs:
         n = r["classes"]
-        # unknowns: M_i, W_i, the bed's 5 and the gas's 4 lumped states; inlined: the spray zone (3 N + 1),
-        # droplets (2), inlet (4), nozzle (3), wall (1)
-        assert (r["unknowns"], r["inlined_states"]) == (2 * n + 9, 3 * n + 11), r
+        # unknowns: M_i, W_i, the bed's 5 and the gas's 4 lumped states; inlined: the spray zone (3 N + 1, and tau at
+        # the N + 1 faces), droplets (2 flows, 2 solids fractions), inlet (4), nozzle (3), wall (1)
+        assert (r["unknowns"], r["inlined_states"]) == (2 * n + 9, 4 * n + 14), r
         assert r["wall_ms_median"] > 0 and r["steps"] > 0 and r["jacobians"] > 0
         assert 0.02 < r["bed_moisture"] < 0.2, r
         assert (r["speedup_vs_issue_reference"] is not None) == (r["breakage"] and n in (10, 40))

@@ -388,7 +388,8 @@ def test_linear_solver_choice_follows_the_jacobian_fill():
     fine = gf.load_text(bench.scene_variant_text(SCENE, 200), "gf25_200")
     res = fine.simulate(t_end=600, t_out=[0, 600])
     assert res.stats["linear_solver"].startswith("dense")
-    assert (res.stats["states"], res.stats["explicit_states"]) == (2 * 200 + 9, 3 * 200 + 1 + 4 + 3 + 2 + 1)
+    # explicit: the spray zone's 3 per class, T and tau at the 201 faces, ..., the droplets' flows and w (2 + 2)
+    assert (res.stats["states"], res.stats["explicit_states"]) == (2 * 200 + 9, 3 * 200 + 1 + 201 + 4 + 3 + 4 + 1)
     assert all(v < res.rtol for v in res.summary["balance"].values())
     # a dense run starts each segment by the exact Newton on its algebraic states; a sparse one by IDACalcIC
     assert (res.stats["newton_starts"], res.stats["calcic_starts"]) == (1 + res.stats["reinits"], 0)
