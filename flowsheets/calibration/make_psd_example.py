@@ -95,7 +95,8 @@ if __name__ == "__main__":
     csv_path = os.path.join(DATA, "gf25_example_q3", "B1.csv")
     text = open(csv_path).read()
     with open(csv_path, "w") as f:
-        f.write("# MADE UP, not measurements: Q3 (mass fraction below each size) of the bed of gf25_measured_start.yaml\n"
+        f.write("# MADE UP, not measurements: Q3 (mass fraction below each size) of the bed of "
+                "gf25_measured_start.yaml\n"
                 f"# after {TIMES_MIN[0]} and {TIMES_MIN[1]} min: the model's with bed.ln_beta0 = {TRUE_LN_BETA0} plus "
                 f"Gaussian noise {SIGMA_Q3} (seed {SEED}),\n# written by flowsheets/calibration/make_psd_example.py; "
                 "docs/measured_psd.md\n" + text)

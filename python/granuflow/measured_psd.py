@@ -22,11 +22,11 @@ Example::
     mp.set_table("my_bed", bed)     # scene: settings: {initial_psd: table, initial_psd_table: my_bed}
 
 As calibration data, the observable ``unit.Q3(<size>)`` (e.g. ``bed.Q3(500 um)``) is the model's cumulative mass
-fraction below that size; :func:`granuflow.calibration.q3_observations` turns a measured Q3 curve at some times into such observations.
+fraction below that size; :func:`granuflow.calibration.q3_observations` turns a measured Q3 curve at some times
+into such observations.
 """
 from __future__ import annotations
 
-import math
 import os
 from dataclasses import dataclass
 from typing import Sequence
