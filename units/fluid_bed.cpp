@@ -12,6 +12,7 @@
 #include "granuflow/flowsheet.hpp"
 #include "granuflow/properties.hpp"
 #include "kernels/discretization/psd.hpp"
+#include "kernels/discretization/psd_setting.hpp"
 #include "kernels/drying/paper001_drying.hpp"
 #include "kernels/limited.hpp"
 #include "kernels/particle_geometry.hpp"
@@ -69,8 +70,12 @@ class FluidBed : public UnitBase<FluidBed> {
                       dec = "docs/paper001_decisions.md";
     p_mass_ = s.add_param({"bed_mass", "kg", 15.0, 1e-3, 1e4, "initial wet bed mass", "paper 001, section 3.1.3"});
     p_x0_ = s.add_param({"X0", "kg/kg", 0.03 / 0.97, 0.0, 1.0, "initial moisture, dry basis", dec});
-    p_d50_ = s.add_param({"d50_0", "m", 200e-6, 1e-6, 1e-2, "initial mass median diameter (log-normal in mass)", dec});
-    p_sigma_ = s.add_param({"sigma_0", "-", 1.5, 1.01, 5.0, "initial geometric standard deviation", dec});
+    psd_ = kernels::declare_table_psd(st, *grid_, "initial_", "initial bed");
+    if (!psd_.table) {
+      p_d50_ =
+          s.add_param({"d50_0", "m", 200e-6, 1e-6, 1e-2, "initial mass median diameter (log-normal in mass)", dec});
+      p_sigma_ = s.add_param({"sigma_0", "-", 1.5, 1.01, 5.0, "initial geometric standard deviation", dec});
+    }
     p_t0_ = s.add_param({"T0", "K", 333.15, 250.0, 500.0, "initial solids temperature", dec});
     p_cpl_ = s.add_param({"cp_l", "J/(kg K)", def::kLiquidCp, 100.0, 1e4, "liquid heat capacity", t6});
     p_abed_ = s.add_param({"A_bed", "m2", def::kBedArea, 1e-4, 100.0, "bed cross-section (A_inlet)", t6});
@@ -223,7 +228,8 @@ class FluidBed : public UnitBase<FluidBed> {
     o_water_ = s.add_output("balance_water_hold", "kg", OutputRole::kBalanceHold, "water");
     o_solids_ = s.add_output("balance_solids_hold", "kg", OutputRole::kBalanceHold, "solids");
     o_energy_ = s.add_output("balance_energy_hold", "J", OutputRole::kBalanceHold, "energy");
-    std::tie(o_psd_d_, o_psd_m_) = s.add_size_distribution(n_);
+    std::tie(o_psd_d_, o_psd_m_) = s.add_size_distribution(n_, grid_->diameter_edges());
+    if (psd_.table) o_outside_ = s.add_output("initial_psd_outside", "-");  // measured mass folded into end classes
   }
 
  public:
@@ -349,7 +355,7 @@ class FluidBed : public UnitBase<FluidBed> {
   void init(InitCtx<T>& c) const {
     const T dry = c.par(p_mass_) / (1.0 + c.par(p_x0_));
     // Initial log-normal mass distribution over the cells, tails beyond the grid folded into the end classes;
-    // in T, so that initial sensitivities to d50_0 and sigma_0 are exact.
+    // in T, so that initial sensitivities to d50_0 and sigma_0 are exact. Or a measured table's (mapped in declare).
     const auto& de = grid_->diameter_edges();
     auto cdf = [&](int e) {
       using std::erfc, std::log;
@@ -357,8 +363,8 @@ class FluidBed : public UnitBase<FluidBed> {
     };
     T capacity(0.0), below(0.0);
     for (int i = 0; i < n_; ++i) {
-      const T upto = i == n_ - 1 ? T(1.0) : cdf(i + 1);
-      c.x(sM_ + i) = dry * (upto - below);
+      const T upto = psd_.table ? T(0.0) : i == n_ - 1 ? T(1.0) : cdf(i + 1);
+      c.x(sM_ + i) = psd_.table ? dry * psd_.psd.mass[i] : dry * (upto - below);
       below = upto;
       c.x(sW_ + i) = c.x(sM_ + i) * c.par(p_x0_);
       capacity += c.x(sM_ + i) * c.sh(pp_.cp_s) + c.x(sW_ + i) * c.par(p_cpl_);
@@ -403,6 +409,7 @@ class FluidBed : public UnitBase<FluidBed> {
       c.out(o_psd_d_ + i) = T(grid_->diameter_pivots()[i]);
       c.out(o_psd_m_ + i) = M[i];
     }
+    if (o_outside_) c.out(o_outside_) = T(psd_.psd.outside());
   }
 
  private:
@@ -565,7 +572,8 @@ class FluidBed : public UnitBase<FluidBed> {
   ReductionId r_surface_, r_drying_, r_heat_, r_deposit_, r_capacity_, r_feed_, r_feed_water_;
   std::vector<OutputId> o_quantiles_;
   OutputId o_moisture_, o_moisture_wet_, o_particles_, o_top_, o_reg_eta_, o_reg_a_, o_water_, o_solids_, o_energy_,
-      o_psd_d_, o_psd_m_;
+      o_psd_d_, o_psd_m_, o_outside_;
+  kernels::TablePsd psd_;  // a measured initial bed (settings initial_psd, initial_psd_file)
 };
 
 }  // namespace

@@ -345,7 +345,7 @@ void ParticleChamber::analytic_jacobian(const Ctx<double>& c, double, JacobianSi
 template <class T>
 void ParticleChamber::init(InitCtx<T>& c) const {
   // Log-normal mass distribution over the cells, tails beyond the grid in the end classes; in T, so that initial
-  // sensitivities to d50_0 and sigma_0 are exact.
+  // sensitivities to d50_0 and sigma_0 are exact. Or a measured table's (mapped in declare).
   const auto& de = grid_->diameter_edges();
   auto cdf = [&](int e) {
     using std::erfc, std::log;
@@ -353,8 +353,8 @@ void ParticleChamber::init(InitCtx<T>& c) const {
   };
   T below(0.0);
   for (int i = 0; i < n_; ++i) {
-    const T upto = i == n_ - 1 ? T(1.0) : cdf(i + 1);
-    c.x(sM_ + i) = c.par(p_mass_) * (upto - below);
+    const T upto = psd_.table ? T(0.0) : i == n_ - 1 ? T(1.0) : cdf(i + 1);
+    c.x(sM_ + i) = c.par(p_mass_) * (psd_.table ? T(psd_.psd.mass[i]) : upto - below);
     below = upto;
     if (wet_) c.x(sW_ + i) = c.x(sM_ + i) * c.par(p_x0_);
   }
@@ -414,6 +414,7 @@ void ParticleChamber::outputs(const Ctx<T>& c) const {
     c.out(o_psd_d_ + i) = T(dp[i]);
     c.out(o_psd_m_ + i) = M[i];
   }
+  if (o_outside_) c.out(o_outside_) = T(psd_.psd.outside());
 }
 
 // Balance terms that cross the flowsheet's boundary here: the spray's solids, water and enthalpy, the vapour and its

@@ -36,6 +36,7 @@
 #include "classifier.hpp"
 #include "granuflow/unit.hpp"
 #include "kernels/discretization/fv_growth.hpp"
+#include "kernels/discretization/psd_setting.hpp"
 #include "kernels/population/population.hpp"
 #include "particles.hpp"
 
@@ -123,7 +124,8 @@ class ParticleChamber : public UnitBase<ParticleChamber> {
   ReductionId r_mass_, r_tm_, r_in_, r_surface_;
   QuadId q_solids_in_, q_water_in_, q_water_out_, q_energy_in_, q_energy_out_;
   OutputId o_mass_, o_moisture_, o_d_[3], o_d32_, o_dmean_, o_sigma_, o_g_, o_particles_, o_dis_, o_exch_, o_top_,
-      o_heat_, o_vapour_, o_hold_solids_, o_hold_water_, o_hold_energy_, o_psd_d_, o_psd_m_;
+      o_heat_, o_vapour_, o_hold_solids_, o_hold_water_, o_hold_energy_, o_psd_d_, o_psd_m_, o_outside_;
+  kernels::TablePsd psd_;  // a measured initial bed (settings initial_psd, initial_psd_file)
 };
 
 }  // namespace granuflow::units

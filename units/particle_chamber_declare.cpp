@@ -54,8 +54,11 @@ void ParticleChamber::declare_params(UnitSpec& s, Settings& st) {
   const std::string op = "operating input", init = "initial state (user)";
   p_mass_ = s.add_param(
       {"bed_mass", "kg", role_ == ChamberRole::kSprayZone ? 0.08 : 4.0, 0.0, 1e5, "initial dry solids hold-up", init});
-  p_d50_ = s.add_param({"d50_0", "m", 1.8e-3, 1e-7, 1.0, "initial mass median diameter (log-normal in mass)", init});
-  p_sigma_ = s.add_param({"sigma_0", "-", 1.15, 1.001, 10.0, "initial geometric standard deviation", init});
+  psd_ = kernels::declare_table_psd(st, *grid_, "initial_", "initial bed");
+  if (!psd_.table) {
+    p_d50_ = s.add_param({"d50_0", "m", 1.8e-3, 1e-7, 1.0, "initial mass median diameter (log-normal in mass)", init});
+    p_sigma_ = s.add_param({"sigma_0", "-", 1.15, 1.001, 10.0, "initial geometric standard deviation", init});
+  }
   p_t_ = s.add_param({"T_bed", "K", 353.15, 250.0, 700.0, "bed temperature (held by the gas)", "paper 003, Table 7.7"});
   p_cpl_ = s.add_param({"cp_l", "J/(kg K)", kernels::paper001::defaults::kLiquidCp, 100.0, 1e4,
                         "heat capacity of water and spray liquid", "paper 001, Table 6"});
@@ -196,7 +199,8 @@ void ParticleChamber::declare_outputs(UnitSpec& s) {
   o_hold_solids_ = s.add_output("balance_solids_hold", "kg", OutputRole::kBalanceHold, "solids");
   o_hold_water_ = s.add_output("balance_water_hold", "kg", OutputRole::kBalanceHold, "water");
   o_hold_energy_ = s.add_output("balance_energy_hold", "J", OutputRole::kBalanceHold, "energy");
-  std::tie(o_psd_d_, o_psd_m_) = s.add_size_distribution(n_);
+  std::tie(o_psd_d_, o_psd_m_) = s.add_size_distribution(n_, grid_->diameter_edges());
+  if (psd_.table) o_outside_ = s.add_output("initial_psd_outside", "-");  // measured mass folded into end classes
 }
 
 }  // namespace granuflow::units

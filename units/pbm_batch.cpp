@@ -18,6 +18,7 @@
 #include "granuflow/flowsheet.hpp"
 #include "kernels/discretization/initial_distribution.hpp"
 #include "kernels/discretization/psd.hpp"
+#include "kernels/discretization/psd_setting.hpp"
 #include "kernels/population/population.hpp"
 #include "particles.hpp"
 
@@ -26,7 +27,7 @@ namespace {
 
 using namespace kernels;
 
-enum class Initial { kExponential, kLognormalMass };
+enum class Initial { kExponential, kLognormalMass, kTable };
 
 struct Work : Workspace {
   Population::WorkPtr pop;
@@ -61,15 +62,20 @@ class PbmBatch : public UnitBase<PbmBatch> {
                                      "absolute tolerance of N_i: number_scale times min(1, x_ref / x_i), x_ref the "
                                      "mean particle volume at the start (volume: each class's volume held to the "
                                      "same level), or number_scale for every class (uniform)") == "volume";
-    initial_ = st.get_choice("initial", "exponential", {"exponential", "lognormal_mass"}, "initial distribution") ==
-                       "exponential"
-                   ? Initial::kExponential
-                   : Initial::kLognormalMass;
+    const std::string initial =
+        st.get_choice("initial", "exponential", {"exponential", "lognormal_mass", "table"},
+                      "initial distribution (table: a measured one, initial_psd_file, docs/measured_psd.md)");
+    initial_ = initial == "exponential"      ? Initial::kExponential
+               : initial == "lognormal_mass" ? Initial::kLognormalMass
+                                             : Initial::kTable;
     binning_ = binning_from_string(st.get_choice("initial_binning", "moments", {"moments", "number", "mass"},
                                                  "how cell integrals go on the pivots"));
     if (initial_ == Initial::kExponential) {
       p_init_[0] = s.add_param({"N0", "-", 1.0, 0.0, 1e30, "initial particle number", "docs/verification.md"});
       p_init_[1] = s.add_param({"v0", "m3", 1.0, 1e-30, 1e6, "initial mean particle volume", "docs/verification.md"});
+    } else if (initial_ == Initial::kTable) {
+      p_init_[0] = s.add_param({"mass0", "kg", 1.0, 0.0, 1e6, "initial particle mass", "initial state (user)"});
+      psd_ = read_table_psd(st, *grid_, "initial_", "initial distribution");
     } else {
       p_init_[0] = s.add_param({"mass0", "kg", 1.0, 0.0, 1e6, "initial particle mass", "initial state (user)"});
       p_init_[1] =
@@ -173,19 +179,24 @@ class PbmBatch : public UnitBase<PbmBatch> {
   // warning; held to the same volume instead, they cost 2-3 times more steps and stay right.
   void tolerance_scales(const double* p, const double*, double* scales) const override {
     if (!volume_weighted_) return;
-    const double x_ref = initial_ == Initial::kExponential ? p[p_init_[1].i] : volume_of_diameter(p[p_init_[1].i]);
+    const double x_ref = initial_ == Initial::kExponential ? p[p_init_[1].i]
+                         : initial_ == Initial::kTable     ? volume_of_diameter(psd_.d50)
+                                                           : volume_of_diameter(p[p_init_[1].i]);
     for (int i = 0; i < n_; ++i) scales[sN_.i + i] *= std::min(1.0, x_ref / grid_->pivot(i));
   }
 
   template <class T>
   void init(InitCtx<T>& c) const {
     std::vector<T> number(n_), volume(n_);
-    if (initial_ == Initial::kExponential)
+    if (initial_ == Initial::kTable) {  // the mapped table's mass fractions on the pivots (number basis: its numbers)
+      const T v_total = c.par(p_init_[0]) / pp_.envelope_density(c.shared);
+      for (int i = 0; i < n_; ++i) c.x(sN_ + i) = v_total * psd_.psd.mass[i] / grid_->pivot(i);
+    } else if (initial_ == Initial::kExponential)
       exponential_cells(*grid_, c.par(p_init_[0]), c.par(p_init_[1]), number.data(), volume.data());
     else
       lognormal_mass_cells(*grid_, T(c.par(p_init_[0]) / pp_.envelope_density(c.shared)), c.par(p_init_[1]),
                            c.par(p_init_[2]), number.data(), volume.data());
-    bin_cells(*grid_, binning_, number.data(), volume.data(), &c.x(sN_));
+    if (initial_ != Initial::kTable) bin_cells(*grid_, binning_, number.data(), volume.data(), &c.x(sN_));
     for (int k = 0; k < 3; ++k)
       if (s_out_[k]) c.x(s_out_[k]) = T(0.0);
     if (s_grown_) c.x(s_grown_) = T(0.0);
@@ -233,6 +244,7 @@ class PbmBatch : public UnitBase<PbmBatch> {
   std::shared_ptr<const Grid> grid_;
   int n_ = 0;
   Initial initial_ = Initial::kExponential;
+  TablePsd psd_;  // initial: table
   bool volume_weighted_ = true;
   Binning binning_ = Binning::kMoments;
   Population pop_;

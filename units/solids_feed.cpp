@@ -4,6 +4,7 @@
 
 #include "granuflow/flowsheet.hpp"
 #include "granuflow/properties.hpp"
+#include "kernels/discretization/psd_setting.hpp"
 #include "kernels/paper001_defaults.hpp"
 #include "particles.hpp"
 
@@ -20,9 +21,12 @@ class SolidsFeed : public UnitBase<SolidsFeed> {
     grid_ = ps.grid();
     n_ = grid_->size();
     p_m_ = s.add_param({"mdot", "kg/s", 1e-3, 0.0, 1e3, "dry-solids mass flow", "operating input"});
-    p_d50_ =
-        s.add_param({"d50", "m", 300e-6, 1e-7, 1.0, "mass median diameter (log-normal in mass)", "operating input"});
-    p_sigma_ = s.add_param({"sigma", "-", 1.3, 1.01, 10.0, "geometric standard deviation", "operating input"});
+    psd_ = kernels::declare_table_psd(st, *grid_, "", "feed");
+    if (!psd_.table) {
+      p_d50_ =
+          s.add_param({"d50", "m", 300e-6, 1e-7, 1.0, "mass median diameter (log-normal in mass)", "operating input"});
+      p_sigma_ = s.add_param({"sigma", "-", 1.3, 1.01, 10.0, "geometric standard deviation", "operating input"});
+    }
     p_x_ = s.add_param({"X", "kg/kg", 0.0, 0.0, 10.0, "moisture, dry basis", "operating input"});
     p_t_ = s.add_param({"T", "K", 293.15, 200.0, 700.0, "temperature", "operating input"});
     p_cpl_ = s.add_param({"cp_l", "J/(kg K)", kernels::paper001::defaults::kLiquidCp, 100.0, 1e4,
@@ -55,6 +59,7 @@ class SolidsFeed : public UnitBase<SolidsFeed> {
   // Mass fraction of class i of a log-normal mass distribution over the cells (tails in the end classes).
   template <class T>
   T fraction(int i, const T* p) const {
+    if (psd_.table) return T(psd_.psd.mass[i]);  // a measured table, mapped in declare
     using std::erfc, std::log;
     const auto& de = grid_->diameter_edges();
     auto cdf = [&](int e) { return T(0.5 * erfc(-log(de[e] / p[p_d50_.i]) / (log(p[p_sigma_.i]) * std::sqrt(2.0)))); };
@@ -95,6 +100,7 @@ class SolidsFeed : public UnitBase<SolidsFeed> {
   bool wet_ = true;  // the particle system carries water
   ParticleParams pp_;
   std::shared_ptr<const kernels::Grid> grid_;
+  kernels::TablePsd psd_;  // settings psd, psd_file
   ParamId p_m_, p_d50_, p_sigma_, p_x_, p_t_, p_cpl_;
   StateId sM_, sW_, sT_;
   QuadId q_solids_, q_water_, q_energy_;

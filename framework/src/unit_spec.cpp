@@ -94,7 +94,11 @@ OutputId UnitSpec::add_output(std::string name, std::string unit, OutputRole rol
   return {static_cast<int>(outputs_.size()) - 1};
 }
 
-std::pair<OutputId, OutputId> UnitSpec::add_size_distribution(int n) {
+std::pair<OutputId, OutputId> UnitSpec::add_size_distribution(int n, std::vector<double> diameter_edges) {
+  if (!diameter_edges.empty() && diameter_edges.size() != size_t(n) + 1)
+    throw std::logic_error("size distribution of " + std::to_string(n) + " classes with " +
+                           std::to_string(diameter_edges.size()) + " edges");
+  size_edges_ = std::move(diameter_edges);
   const OutputId d{static_cast<int>(outputs_.size())};
   for (int i = 0; i < n; ++i) add_output("psd_d_" + std::to_string(i), "m", OutputRole::kSizeDiameter, "", i);
   const OutputId m{static_cast<int>(outputs_.size())};

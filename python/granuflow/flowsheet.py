@@ -188,6 +188,11 @@ class Flowsheet:
         settings = self.unit_settings().get("particles")
         return dict(settings[1]) if settings and settings[0] == "particles" else None
 
+    def size_edges(self, unit: str) -> list[float]:
+        """The class edges (m, volume-equivalent diameters) of the size distribution ``unit`` reports (empty when it
+        reports none with edges): the grid a measured table is mapped onto (granuflow.measured_psd)."""
+        return list(_core.unit_size_edges(self._scene, unit))
+
     def refined(self, factor: int) -> "Flowsheet":
         """The same flowsheet on a size grid ``factor`` times finer over the same range of sizes (log-diameter
         grids: the pivot spacing divided by ``factor``, so every old pivot is a new one; geometric grids: ``factor``

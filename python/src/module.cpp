@@ -10,6 +10,7 @@ void register_flowsheet(py::module_& m);
 void register_kernels(py::module_& m);
 void register_calibration(py::module_& m);
 void register_reference(py::module_& m);
+void register_measured_psd(py::module_& m);
 }  // namespace granuflow::python
 
 PYBIND11_MODULE(_core, m) {
@@ -37,4 +38,5 @@ PYBIND11_MODULE(_core, m) {
   granuflow::python::register_kernels(m);
   granuflow::python::register_calibration(m);
   granuflow::python::register_reference(m);
+  granuflow::python::register_measured_psd(m);
 }

@@ -68,7 +68,11 @@ ExperimentModel::ExperimentModel(const Scene& scene, const Registry<Unit>& reg, 
     Obs ob;
     ob.src = &o;
     auto it = std::find(outs.begin(), outs.end(), o.name);
-    if (it != outs.end()) {
+    if (auto q3 = size_fraction(fs, o.name)) {
+      ob.q3 = static_cast<int>(q3_.size());
+      q3_.push_back(std::move(*q3));
+      any_output_ = true;
+    } else if (it != outs.end()) {
       ob.state = false, ob.index = static_cast<int>(it - outs.begin());
       any_output_ = true;
     } else {
@@ -182,6 +186,10 @@ void ExperimentModel::extract(const SimResult& r, std::vector<double>& m, std::v
   for (const auto& ob : obs_)
     for (size_t j = 0; j < ob.samples.size(); ++j, ++row) {
       const size_t it = ob.time_index[j];
+      if (ob.q3 >= 0) {
+        q3_row(ob.q3, r, it, dz, m[row], dm ? &(*dm)[size_t(row) * n] : nullptr);
+        continue;
+      }
       m[row] = ob.state ? r.y[it * ns + ob.index] : r.outputs[it * no + ob.index];
       if (!std::isfinite(m[row]))
         throw SolverError(
@@ -191,6 +199,26 @@ void ExperimentModel::extract(const SimResult& r, std::vector<double>& m, std::v
       for (int k = 0; k < n; ++k)
         (*dm)[size_t(row) * n + k] = ob.state ? r.sens[(it * n + k) * ns + ob.index] : dz[(it * n + k) * no + ob.index];
     }
+}
+
+void ExperimentModel::q3_row(int k, const SimResult& r, size_t it, const std::vector<double>& dz, double& m,
+                             double* dm) const {
+  const SizeFraction& f = q3_[k];
+  const int n = space_.size(), classes = static_cast<int>(f.w.size());
+  const size_t no = r.output_names.size();
+  std::vector<double> dq(classes);
+  m = size_fraction_value(f, &r.outputs[it * no + f.first_output], dq.data());
+  if (!std::isfinite(m))
+    throw SolverError("experiment '" + name_ + "': " + f.unit +
+                          " holds no particles at t = " + std::to_string(r.t[it]) +
+                          " s, so it has no size distribution to compare with Q3(" + fmt_num(f.size) + " m)",
+                      r.t[it], f.unit, 0.0);
+  if (!dm) return;
+  for (int p = 0; p < n; ++p) {
+    double s = 0.0;
+    for (int i = 0; i < classes; ++i) s += dq[i] * dz[(it * n + p) * no + f.first_output + i];
+    dm[p] = s;
+  }
 }
 
 }  // namespace calib

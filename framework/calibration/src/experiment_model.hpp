@@ -9,6 +9,7 @@
 
 #include "granuflow/calibration.hpp"
 #include "granuflow/simulator.hpp"
+#include "size_fraction.hpp"
 
 namespace granuflow::calib {
 
@@ -54,6 +55,7 @@ class ExperimentModel {
     const Observation* src = nullptr;
     bool state = false;
     int index = 0;
+    int q3 = -1;  // a measured size distribution's point, unit.Q3(size): index into q3_ (size_fraction.hpp)
     std::vector<int> samples, time_index;
   };
 
@@ -66,12 +68,15 @@ class ExperimentModel {
   void central_differences(const double* theta, std::vector<double>& dm);
 
   void extract(const SimResult& r, std::vector<double>& m, std::vector<double>* dm);
+  // Row of an observation unit.Q3(size) at output time `it`: the model m and dm/dp (n values) when dm != nullptr.
+  void q3_row(int k, const SimResult& r, size_t it, const std::vector<double>& dz, double& m, double* dm) const;
 
   Scene scene_;
   const Space& space_;
   const CalibrationOptions& opt_;
   std::string name_;
   std::vector<Obs> obs_;
+  std::vector<SizeFraction> q3_;
   std::vector<double> data_, sigma_abs_, sigma_rel_, t_out_;
   SimOptions sim_;
   bool any_output_ = false;

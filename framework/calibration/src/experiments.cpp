@@ -6,6 +6,7 @@
 
 #include "calibration_internal.hpp"
 #include "granuflow/errors.hpp"
+#include "size_fraction.hpp"
 
 namespace granuflow {
 
@@ -63,6 +64,7 @@ void CalibrationOptions::validate() const {
 }
 
 std::string observable_unit(const Flowsheet& fs, const std::string& name) {
+  if (calib::size_fraction(fs, name)) return "-";  // Q3 at a size: a fraction
   for (const auto& u : fs.units())
     for (const auto& o : u.spec.outputs())
       if (u.name + "." + o.name == name) return o.unit;
@@ -161,6 +163,12 @@ void check_experiments(const Flowsheet& fs, const std::vector<Experiment>& exps,
         throw ConfigError(w + ": observation " + x.what());
       }
       if (measured) check_sign(w + ": observation " + o.name, o, unit);
+      if (measured && calib::size_fraction(fs, o.name))
+        for (size_t i = 0; i < o.value.size(); ++i)
+          if (o.value[i] < 0 || o.value[i] > 1)
+            throw ConfigError(violation(
+                w + ": observation " + o.name + ".value[" + std::to_string(i) + "] at t = " + fmt_num(o.t[i]) + " s",
+                o.value[i], "", "0 <= Q3 <= 1 (a fraction, not %; NaN: not measured)"));
     }
   }
 }

@@ -8,6 +8,7 @@
 
 #include "calibration_internal.hpp"
 #include "granuflow/simulator.hpp"
+#include "size_fraction.hpp"
 
 namespace granuflow {
 
@@ -45,11 +46,13 @@ std::vector<Prediction> predict(const Scene& scene, const Registry<Unit>& reg, c
       p.observable = o.name;
       auto io = std::find(outs.begin(), outs.end(), o.name);
       auto is = std::find(states.begin(), states.end(), o.name);
-      if (io == outs.end() && is == states.end()) observable_unit(fs, o.name);
+      const auto q3 = calib::size_fraction(fs, o.name);
+      if (!q3 && io == outs.end() && is == states.end()) observable_unit(fs, o.name);
       for (size_t j = 0; j < o.t.size(); ++j) {
         const size_t it = std::lower_bound(so.t_out.begin(), so.t_out.end(), o.t[j]) - so.t_out.begin();
-        const double m =
-            io != outs.end() ? r.outputs[it * no + (io - outs.begin())] : r.y[it * ns + (is - states.begin())];
+        const double m = q3 ? calib::size_fraction_value(*q3, &r.outputs[it * no + q3->first_output], nullptr)
+                         : io != outs.end() ? r.outputs[it * no + (io - outs.begin())]
+                                            : r.y[it * ns + (is - states.begin())];
         p.t.push_back(o.t[j]);
         p.data.push_back(o.value[j]);
         p.model.push_back(m);

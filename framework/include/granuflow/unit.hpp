@@ -154,8 +154,10 @@ class UnitSpec {
   OutputId add_output(std::string name, std::string unit, OutputRole role = OutputRole::kValue,
                       std::string quantity = "", int cls = -1);
   // The size distribution of n classes as outputs psd_d_i (pivot diameter, m) then psd_m_i (class mass, kg), with
-  // their roles; returns the ids of psd_d_0 and psd_m_0 (class i is at + i).
-  std::pair<OutputId, OutputId> add_size_distribution(int n);
+  // their roles; returns the ids of psd_d_0 and psd_m_0 (class i is at + i). `diameter_edges` (m, n + 1), when
+  // given, let calibration read Q3 at any size from the class masses (size_edges()).
+  std::pair<OutputId, OutputId> add_size_distribution(int n, std::vector<double> diameter_edges = {});
+  const std::vector<double>& size_edges() const { return size_edges_; }
   // A quantity integrated by the solver's quadrature rule (IDAS quadratures): dQ/dt = Unit::quadrature(). It is
   // not an unknown of the Newton system; it is reported as an output of the same name, unit and role.
   QuadId add_quadrature(std::string name, std::string unit, double scale, OutputRole role = OutputRole::kValue,
@@ -216,6 +218,7 @@ class UnitSpec {
   std::vector<ParamSpec> params_;
   std::vector<PortSpec> ports_;
   std::vector<OutputSpec> outputs_;
+  std::vector<double> size_edges_;  // m, of the size distribution's classes (empty: not declared)
   std::vector<QuadSpec> quads_;
   std::vector<std::string> reductions_;
   ClassLayout classes_;

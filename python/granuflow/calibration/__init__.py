@@ -68,6 +68,7 @@ from .files import (CalibrationError, ConfigError, Experiment, ExperimentSet, Fr
                     StagePlan, check_stage_data, load_experiments, load_stages, save_experiments)
 from .fit import (CalibrationResult, best, calibrate, compare_starts, multi_start, predict, random_starts,
                   stage_bounds)
+from .psd_data import q3_observations
 from .paper001 import D_VALUES, OBSERVABLE_DISPLAY, OBSERVABLE_GROUPS, TABLE1_LEVELS, TABLE5_SIGMA
 from .report import CalibrationReport, fit_statistics, model_errors, report
 from .synthetic import paper001_stages, synthetic_experiments, table1_points
@@ -77,4 +78,4 @@ __all__ = ["D_VALUES", "OBSERVABLE_DISPLAY", "OBSERVABLE_GROUPS", "CalibrationEr
            "load_experiments", "load_stages", "save_experiments", "CalibrationResult", "best", "calibrate",
            "compare_starts", "multi_start", "predict", "random_starts", "stage_bounds", "TABLE1_LEVELS", "TABLE5_SIGMA",
            "CalibrationReport", "fit_statistics", "model_errors", "report", "paper001_stages", "synthetic_experiments",
-           "table1_points"]
+           "table1_points", "q3_observations"]

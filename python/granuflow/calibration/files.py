@@ -307,9 +307,11 @@ def load_experiments(path: str | os.PathLike, flowsheet: Flowsheet | None = None
                     raise ConfigError(f"{at(oname, i)} = {x} at {t_text(i)}: {xs} {si_unit} is not finite")
                 v.append(xs)
             v = np.array(v, dtype=float)
-            if oname not in sig:
+            # a measured distribution's points unit.Q3(size) share one sigma, given as unit.Q3
+            skey = oname if oname in sig else oname.partition("(")[0] if oname.endswith(")") else oname
+            if skey not in sig:
                 raise ConfigError(f"{where}: no sigma for observable {oname} (give it under `sigma:`)")
-            sa, sr = sigma_entry(sig[oname], si_unit, f"{where}: sigma.{oname}")
+            sa, sr = sigma_entry(sig[skey], si_unit, f"{where}: sigma.{skey}")
             keep = np.isfinite(v)
             obs.append(Observation(oname, t[keep], v[keep], sa, sr))
         if not any(len(o.t) for o in obs):

@@ -53,8 +53,11 @@ std::string to_string(JacobianMethod m);
 JacobianMethod jacobian_method_from_string(const std::string& s);  // "sensitivities" | "central_differences"
 
 // One measured quantity of one run, sampled in time. Exactly one of sigma_abs, sigma_rel is > 0.
+// A measured size distribution is one observation per measured size: "unit.Q3(<size>)", e.g. "bed.Q3(500 um)",
+// the cumulative mass fraction below that size (0..1) read from the unit's class masses as d50 is
+// (src/size_fraction.hpp, docs/measured_psd.md), usually with its own sigma_abs.
 struct Observation {
-  std::string name;           // "unit.output" (reported) or "unit.state"
+  std::string name;           // "unit.output" (reported), "unit.state" or "unit.Q3(size)"
   std::vector<double> t;      // s, increasing, >= 0
   std::vector<double> value;  // SI; NaN = not measured at that time
   double sigma_abs = 0.0;     // SI
