@@ -266,14 +266,7 @@ Status ParticleChamber::eval(const Ctx<T>& c) const {
       c.res(sW_ + i) = c.xd(sW_ + i) - (sc.dW[i] + in_w - out_w + dep - dry);
     }
   }
-  for (int k = 1; k < K_; ++k)
-    for (int i = 0; i < n_; ++i) {
-      const size_t j = size_t(k - 1) * n_ + i;
-      T out(0.0);
-      for (int o = 0; o < kOutlets; ++o)
-        if (outlet(o).rate) out += sc.oq[o][j];
-      c.res(sQ_[k - 1] + i) = c.xd(sQ_[k - 1] + i) - (sc.dQ[j] + sc.in_q[j] - out);
-    }
+  if (composed()) composed_residuals(c);
   c.res(sT_) = c.x(sT_) - c.par(p_t_);
   if (sZero_) c.res(sZero_) = c.x(sZero_);
   return Status::kOk;

@@ -117,6 +117,8 @@ class ParticleChamber : public UnitBase<ParticleChamber> {
   template <class T>
   void composed_engine(const Ctx<T>& c, const T* dN, const T* dq, T* dM, T* dQ) const;
   template <class T>
+  void composed_residuals(const Ctx<T>& c) const;
+  template <class T>
   void composed_outputs(const Ctx<T>& c) const;
   void declare_composition(UnitSpec& s, Settings& st);
   bool composed() const { return K_ > 1; }

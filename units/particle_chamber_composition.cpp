@@ -96,6 +96,20 @@ void ParticleChamber::composed_engine(const Ctx<T>& c, const T* dN, const T* dq,
   }
 }
 
+// Q_c,i' = (layering and engine rates) + inflows - outflows, from the workspace's arrays eval() filled.
+template <class T>
+void ParticleChamber::composed_residuals(const Ctx<T>& c) const {
+  const auto& sc = c.template ws<Work>().template scratch<T>();
+  for (int k = 1; k < K_; ++k)
+    for (int i = 0; i < n_; ++i) {
+      const size_t j = size_t(k - 1) * n_ + i;
+      T out(0.0);
+      for (int o = 0; o < kOutlets; ++o)
+        if (outlet(o).rate) out += sc.oq[o][j];
+      c.res(sQ_[k - 1] + i) = c.xd(sQ_[k - 1] + i) - (sc.dQ[j] + sc.in_q[j] - out);
+    }
+}
+
 // Per component its hold-up (and balance) and its mass per class.
 template <class T>
 void ParticleChamber::composed_outputs(const Ctx<T>& c) const {
@@ -130,6 +144,8 @@ template void ParticleChamber::composed_growth(const Ctx<Jet>&, const Jet*, cons
 template void ParticleChamber::composed_engine(const Ctx<double>&, const double*, const double*, double*,
                                                double*) const;
 template void ParticleChamber::composed_engine(const Ctx<Jet>&, const Jet*, const Jet*, Jet*, Jet*) const;
+template void ParticleChamber::composed_residuals(const Ctx<double>&) const;
+template void ParticleChamber::composed_residuals(const Ctx<Jet>&) const;
 template void ParticleChamber::composed_outputs(const Ctx<double>&) const;
 template void ParticleChamber::composed_outputs(const Ctx<Jet>&) const;
 
