@@ -34,7 +34,7 @@ class Mill : public UnitBase<Mill> {
  public:
   std::string type() const override { return "mill"; }
   void declare(UnitSpec& s, Settings& st) override {
-    const ParticleSystem& ps = particle_system(s, st);
+    const ParticleSystem& ps = particle_system(s, st, true);
     grid_ = ps.grid();
     n_ = grid_->size();
     const auto& reg = kernels::registries().comminution;

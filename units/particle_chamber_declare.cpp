@@ -15,7 +15,7 @@ namespace granuflow::units {
 using kernels::Field;
 
 void ParticleChamber::declare(UnitSpec& s, Settings& st) {
-  const ParticleSystem& ps = particle_system(s, st);
+  const ParticleSystem& ps = particle_system(s, st, true);
   pp_ = ps.params();
   grid_ = ps.grid();
   n_ = grid_->size();

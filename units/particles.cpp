@@ -12,6 +12,12 @@
 namespace granuflow::units {
 
 namespace {
+std::string join_components(const ParticleParams& pp) {
+  std::string all;
+  for (const auto& c : pp.components) all += (all.empty() ? "" : ", ") + c;
+  return all;
+}
+
 // n >= 2 diameters from lo to hi (both included), equally spaced in ln d.
 std::vector<double> log_spaced(double lo, double hi, int n) {
   std::vector<double> d(n);
@@ -94,7 +100,7 @@ int ParticleParams::component(const std::string& name) const {
   return -1;
 }
 
-const ParticleSystem& particle_system(UnitSpec& s, Settings& st) {
+const ParticleSystem& particle_system(UnitSpec& s, Settings& st, bool composed) {
   const std::string name =
       st.get_choice("particles", "particles", {}, "the particle system (size grid, product properties) used");
   const UnitInstance* inst = st.unit(name);
@@ -103,6 +109,12 @@ const ParticleSystem& particle_system(UnitSpec& s, Settings& st) {
     throw ConfigError(st.where() + ".particles = '" + name +
                       "': no particle system of that name; declare the size grid and product once in the scene's "
                       "`particles:` section (settings: grid, classes, d_min, d_max; params: rho_s, eps_intra, ...)");
+  if (!composed && ps->params().component_count() > 1)
+    throw ConfigError(st.where() + ": the particle system '" + name +
+                      "' is made of several solids (components: " + join_components(ps->params()) +
+                      ") and this unit carries one solid only; the units that carry composition are granulator, "
+                      "spray_compartment, drying_compartment, solids_feed, sieve, mill, solids_mixer, "
+                      "solids_splitter and solids_product");
   s.use_shared_params(name);
   return *ps;
 }

@@ -60,8 +60,9 @@ class ParticleSystem : public UnitBase<ParticleSystem> {
 };
 
 // The particle system a unit uses (setting `particles` names the instance); marks the unit as reading its
-// parameters (Ctx::sh). ConfigError naming the unit when the flowsheet declares none.
-const ParticleSystem& particle_system(UnitSpec& s, Settings& st);
+// parameters (Ctx::sh). ConfigError naming the unit when the flowsheet declares none, or when the system names
+// several solids (components) and the unit does not carry composition (`composed` false).
+const ParticleSystem& particle_system(UnitSpec& s, Settings& st, bool composed = false);
 
 void register_particles(Registry<Unit>& r);
 

@@ -28,7 +28,7 @@ class Sieve : public UnitBase<Sieve> {
  public:
   std::string type() const override { return "sieve"; }
   void declare(UnitSpec& s, Settings& st) override {
-    const ParticleSystem& ps = particle_system(s, st);
+    const ParticleSystem& ps = particle_system(s, st, true);
     grid_ = ps.grid();
     n_ = grid_->size();
     upper_.declare(s, st, "upper_curve", "plitt", "upper_", "separation curve of the upper deck (oversize)", grid_,

@@ -15,7 +15,7 @@ class SolidsFeed : public UnitBase<SolidsFeed> {
  public:
   std::string type() const override { return "solids_feed"; }
   void declare(UnitSpec& s, Settings& st) override {
-    const ParticleSystem& ps = particle_system(s, st);
+    const ParticleSystem& ps = particle_system(s, st, true);
     pp_ = ps.params();
     grid_ = ps.grid();
     n_ = grid_->size();

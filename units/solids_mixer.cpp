@@ -33,7 +33,7 @@ class SolidsMixer : public UnitBase<SolidsMixer> {
  public:
   std::string type() const override { return "solids_mixer"; }
   void declare(UnitSpec& s, Settings& st) override {
-    const ParticleSystem& ps = particle_system(s, st);
+    const ParticleSystem& ps = particle_system(s, st, true);
     pp_ = ps.params();
     n_ = ps.grid()->size();
     const int inlets = static_cast<int>(st.get_int("inlets", 2, 2, 16, "number of inlet ports in1..inN"));

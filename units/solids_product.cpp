@@ -16,7 +16,7 @@ class SolidsProduct : public UnitBase<SolidsProduct> {
  public:
   std::string type() const override { return "solids_product"; }
   void declare(UnitSpec& s, Settings& st) override {
-    const ParticleSystem& ps = particle_system(s, st);
+    const ParticleSystem& ps = particle_system(s, st, true);
     pp_ = ps.params();
     grid_ = ps.grid();
     n_ = grid_->size();

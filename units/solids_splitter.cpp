@@ -16,7 +16,7 @@ class SolidsSplitter : public UnitBase<SolidsSplitter> {
  public:
   std::string type() const override { return "solids_splitter"; }
   void declare(UnitSpec& s, Settings& st) override {
-    const ParticleSystem& ps = particle_system(s, st);
+    const ParticleSystem& ps = particle_system(s, st, true);
     n_ = ps.grid()->size();
     p_f_ = s.add_param({"fraction", "-", 0.5, 0.0, 1.0, "fraction of the inlet sent to out1", "operating input"});
     const auto& d = ps.grid()->diameter_pivots();

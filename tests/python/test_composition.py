@@ -91,3 +91,10 @@ def test_a_spray_component_the_particles_do_not_have_is_refused():
     text = open(SCENE).read().replace("spray_component: benzoate", "spray_component: sugar")
     with pytest.raises(ValueError, match=r"spray_component = 'sugar'.*alumina, benzoate"):
         gf.load_text(text, "bad")
+
+
+def test_a_unit_that_carries_one_solid_refuses_a_particle_system_of_several():
+    text = open(os.path.join(ROOT, "flowsheets", "pbm_constant_kernel.yaml")).read().replace(
+        "classes: 27}", "classes: 27, components: 'core, layer'}")
+    with pytest.raises(ValueError, match=r"several solids \(components: core, layer\).*carries one solid only"):
+        gf.load_text(text, "bad")
