@@ -20,9 +20,12 @@ class Classifier;
 // A chamber's state as its outlets read it: per class dry-solid and water mass (kg), temperature (K) and the rate
 // of one outlet (1/s).
 StreamKind chamber_holdup();
+// With `components` > 1 (particles.hpp), then per component c >= 1 its class masses (kg).
+StreamKind chamber_holdup(int components);
 namespace holdup_fields {
 using holdup_layout::mass, holdup_layout::water, holdup_layout::T;
 inline int rate(int classes) { return holdup_layout::last(classes); }
+inline int component(int classes, int c, int i) { return 2 * classes + 2 + (c - 1) * classes + i; }
 }  // namespace holdup_fields
 
 struct ChamberOutletSpec {
@@ -30,6 +33,7 @@ struct ChamberOutletSpec {
   bool wet = false;                        // per-class water flows (else the chamber's zero water passes through)
   const Classifier* classifier = nullptr;  // the owner's separation curve, read with the owner's parameters
   std::vector<double> diameters;           // pivot diameters of the size grid (m)
+  int components = 1;                      // named solids: the flows of each after the first, r f_i Q_c,i
 };
 
 std::unique_ptr<Unit> make_chamber_outlet(const std::string& owner, ChamberOutletSpec spec);

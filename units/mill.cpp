@@ -1,6 +1,8 @@
 // Mill without hold-up (explicit): out_i = sum_k P_ik in_k for the dry solids and for the water they carry, P the
 // comminution law's mass-transfer matrix (kernels/comminution/comminution_law.hpp: columns sum to one, so mass is
-// conserved to round-off); the temperature passes through (the grinding energy is not accounted for).
+// conserved to round-off), and likewise for each named solid after the first of a composed particle system
+// (particles.hpp: a fragment keeps its parent's composition); the temperature passes through (the grinding energy is
+// not accounted for).
 //
 // Every outlet class reads every coarser inlet class, so the class-coloured AD of the framework does not apply; the
 // unit supplies its whole Jacobian (the identity on its own states, -P on the inlet), which is the matrix itself.
@@ -32,7 +34,7 @@ class Mill : public UnitBase<Mill> {
  public:
   std::string type() const override { return "mill"; }
   void declare(UnitSpec& s, Settings& st) override {
-    const ParticleSystem& ps = particle_system(s, st);
+    const ParticleSystem& ps = particle_system(s, st, true);
     grid_ = ps.grid();
     n_ = grid_->size();
     const auto& reg = kernels::registries().comminution;
@@ -44,12 +46,15 @@ class Mill : public UnitBase<Mill> {
     sM_ = s.add_states("mdot", n_, StateKind::Algebraic, "kg/s", 1e-2);
     wet_ = ps.water();
     if (wet_) sW_ = s.add_states("water", n_, StateKind::Algebraic, "kg/s", 1e-3);
+    K_ = ps.params().component_count();
+    for (int k = 1; k < K_; ++k)
+      sQ_.push_back(s.add_states(ps.params().components[k], n_, StateKind::Algebraic, "kg/s", 1e-2));
     s.set_explicit();
     s.set_analytic_part(true);
     const auto& d = grid_->diameter_pivots();
-    in_ = s.add_port("in", streams::solids(), PortDir::In, n_);
+    in_ = s.add_port("in", streams::solids(K_), PortDir::In, n_);
     s.set_port_grid(in_, d);
-    const PortId out = s.add_port("out", streams::solids(), PortDir::Out, n_);
+    const PortId out = s.add_port("out", streams::solids(K_), PortDir::Out, n_);
     s.set_port_grid(out, d);
     for (int i = 0; i < n_; ++i) {
       s.provide(out, solids::mdot(i), sM_ + i);
@@ -57,6 +62,8 @@ class Mill : public UnitBase<Mill> {
     }
     if (!wet_) forward_dry_water(s, out, in_, n_);
     s.forward(out, solids::T(n_), in_, solids::T(n_));
+    for (int k = 1; k < K_; ++k)
+      for (int i = 0; i < n_; ++i) s.provide(out, solids::component(n_, k, i), sQ_[k - 1] + i);
     o_m_ = s.add_output("mdot", "kg/s");
     o_d50_in_ = s.add_output("d50_in", "m");
     o_d50_out_ = s.add_output("d50_out", "m");
@@ -96,6 +103,15 @@ class Mill : public UnitBase<Mill> {
     for (int i = 0; i < n_; ++i) c.res(sM_ + i) = c.x(sM_ + i) - f.m[i];
     if (wet_)
       for (int i = 0; i < n_; ++i) c.res(sW_ + i) = c.x(sW_ + i) - f.w[i];
+    for (int k = 1; k < K_; ++k) {  // each further solid by the same matrix, column by column
+      const T* in_q = c.port_array(in_, solids::component(n_, k, 0), n_, f.in_w);
+      f.m.assign(n_, T(0.0));
+      for (int j = 0; j < n_; ++j) {
+        const T* col = P + size_t(j) * n_;
+        for (int i = 0; i <= j; ++i) f.m[i] += col[i] * in_q[j];
+      }
+      for (int i = 0; i < n_; ++i) c.res(sQ_[k - 1] + i) = c.x(sQ_[k - 1] + i) - f.m[i];
+    }
     return Status::kOk;
   }
   void analytic_jacobian(const Ctx<double>& c, double, JacobianSink& sink) const override {
@@ -104,12 +120,17 @@ class Mill : public UnitBase<Mill> {
     for (int i = 0; i < n_; ++i) {
       sink.add(sM_.i + i, c.offset + sM_.i + i, 1.0);
       if (wet_) sink.add(sW_.i + i, c.offset + sW_.i + i, 1.0);
+      for (StateId q : sQ_) sink.add(q.i + i, c.offset + q.i + i, 1.0);
       for (int k = i; k < n_; ++k) {
         const double a = P[size_t(k) * n_ + i];
         if (a == 0.0) continue;
         const int cm = ports[in_.i][solids::mdot(k)], cw = wet_ ? ports[in_.i][solids::water(n_, k)] : -1;
         if (cm >= 0) sink.add(sM_.i + i, cm, -a);
         if (cw >= 0) sink.add(sW_.i + i, cw, -a);
+        for (int q = 1; q < K_; ++q) {
+          const int cq = ports[in_.i][solids::component(n_, q, k)];
+          if (cq >= 0) sink.add(sQ_[q - 1].i + i, cq, -a);
+        }
       }
     }
   }
@@ -118,6 +139,8 @@ class Mill : public UnitBase<Mill> {
     for (int i = 0; i < n_; ++i) c.x(sM_ + i) = T(0.0);
     if (wet_)
       for (int i = 0; i < n_; ++i) c.x(sW_ + i) = T(0.0);
+    for (StateId q : sQ_)
+      for (int i = 0; i < n_; ++i) c.x(q + i) = T(0.0);
   }
   template <class T>
   void outputs(const Ctx<T>& c) const {
@@ -177,6 +200,8 @@ class Mill : public UnitBase<Mill> {
   std::unique_ptr<kernels::ComminutionLaw> law_;
   PortId in_;
   StateId sM_, sW_;
+  int K_ = 1;  // named solids; the flows of each after the first (sQ_[c - 1])
+  std::vector<StateId> sQ_;
   OutputId o_m_, o_d50_in_, o_d50_out_;
 };
 

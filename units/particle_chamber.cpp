@@ -10,37 +10,11 @@
 #include "granuflow/properties.hpp"
 #include "kernels/discretization/psd.hpp"
 #include "kernels/particle_geometry.hpp"
+#include "particle_chamber_work.hpp"
 
 namespace granuflow::units {
 
 using kernels::Field;
-
-struct ParticleChamber::Work : Workspace {
-  kernels::Population::WorkPtr pop;
-  // particle mass, surface per mass and the number floor kMassFloor / m of each class at the run's parameters
-  std::vector<double> pm, spm, floor;
-  Classifier::Cache cls;
-  template <class T>
-  struct Scratch {
-    std::vector<T> pm, spm, N, floor, dM, dW, dN, F, ones, temp, in_m, in_w, gather;
-    std::vector<T> om[kOutlets], ow[kOutlets];  // per outlet the flows of each class, solids and water (outflows())
-    std::vector<int> donor;
-    void resize(int n) {
-      for (auto* v : {&pm, &spm, &N, &floor, &dM, &dW, &dN, &temp, &in_m, &in_w}) v->assign(n, T(0.0));
-      for (int k = 0; k < kOutlets; ++k) om[k].assign(n, T(0.0)), ow[k].assign(n, T(0.0));  // dry: ow stays 0
-      F.assign(n + 1, T(0.0)), ones.assign(n + 1, T(1.0)), donor.assign(n + 1, -1);
-    }
-  };
-  Scratch<double> sd;
-  Scratch<Jet> sj;
-  template <class T>
-  Scratch<T>& scratch() {
-    return per_scalar<T>(sd, sj);
-  }
-  std::vector<double> dF;        // growth flux Jacobian, (n + 1) x n
-  kernels::Population::Map map;  // the engine's inputs and rates in the unit's Jacobian (built on first use)
-  bool mapped = false;
-};
 
 namespace {
 
@@ -73,6 +47,8 @@ std::unique_ptr<Workspace> ParticleChamber::workspace() const {
   w->pop = pop_.make_work();
   w->sd.resize(n_);
   w->sj.resize(n_);
+  w->sd.resize_components(n_, K_ - 1);
+  w->sj.resize_components(n_, K_ - 1);
   return w;
 }
 
@@ -138,6 +114,14 @@ void ParticleChamber::inlet_flows(const Ctx<T>& c, T* in_m, T* in_w, std::vector
     const T* w = c.port_array(p, solids::water(n_, 0), n_, gather);
     for (int i = 0; i < n_; ++i) in_w[i] += w[i];
   }
+  if (!composed()) return;
+  T* in_q = c.template ws<Work>().template scratch<T>().in_q.data();
+  std::fill(in_q, in_q + size_t(n_) * (K_ - 1), T(0.0));
+  for (PortId p : inlets_)
+    for (int k = 1; k < K_; ++k) {
+      const T* q = c.port_array(p, solids::component(n_, k, 0), n_, gather);
+      for (int i = 0; i < n_; ++i) in_q[(k - 1) * n_ + i] += q[i];
+    }
 }
 
 // Paper 003, Eqs. (7.32)-(7.34): the number fluxes F_f through the faces of the cells (fv_growth.hpp), normalized so
@@ -172,6 +156,7 @@ kernels::Population::State<T> ParticleChamber::population_state(const Ctx<T>& c,
   kernels::Population::State<T> st;
   st.N = N;
   if (wet_) st.q[0] = &c.x(sW_);
+  for (int k = 1; k < K_; ++k) st.q[(wet_ ? 1 : 0) + k - 1] = &c.x(sQ_[k - 1]);
   st.floor = floor;
   for (int i = 0; i < n_; ++i) temp[i] = c.x(sT_);
   st.fields[static_cast<int>(Field::kTemperature)] = temp;
@@ -194,6 +179,7 @@ void ParticleChamber::outflows(const Ctx<T>& c, const T* frac) const {
     const T* f = &o == &discharge_out_ ? frac : nullptr;
     outlet_flows(n_, c.x(o.rate), f, &c.x(sM_), sc.om[k].data());
     if (wet_) outlet_flows(n_, c.x(o.rate), f, &c.x(sW_), sc.ow[k].data());
+    for (int q = 1; q < K_; ++q) outlet_flows(n_, c.x(o.rate), f, &c.x(sQ_[q - 1]), sc.oq[k].data() + (q - 1) * n_);
   }
 }
 
@@ -219,16 +205,29 @@ Status ParticleChamber::eval(const Ctx<T>& c) const {
     sc.N[i] = M[i] / pm[i];
     sc.dM[i] = sc.dW[i] = T(0.0);
   }
+  if (composed()) {
+    class_numbers(c, pm, sc.N.data());
+    std::fill(sc.dQ.begin(), sc.dQ.end(), T(0.0));
+  }
   const T m_sus = spray_solids(c);
-  if (!c.in_jacobian()) {  // the analytic part covers layering and the engine's mechanisms
-    if (spray_) growth_rates(c, sc.N.data(), W, T(m_sus / pp_.envelope_density(c.shared)), sc.dM.data(), sc.dW.data());
+  if (composed() || !c.in_jacobian()) {  // the analytic part covers layering and the engine's mechanisms
+    if (spray_ && composed())
+      composed_growth(c, sc.N.data(), W, T(m_sus / pp_.component_density(c.shared, layer_)), sc.dM.data(), sc.dQ.data(),
+                      sc.dW.data());
+    else if (spray_)
+      growth_rates(c, sc.N.data(), W, T(m_sus / pp_.envelope_density(c.shared)), sc.dM.data(), sc.dW.data());
     if (pop_.aggregation() || pop_.breakage()) {
       std::fill(sc.dN.begin(), sc.dN.end(), T(0.0));
       kernels::Population::Rates<T> r;
       r.dN = sc.dN.data();
       if (wet_) r.dq[0] = sc.dW.data();
+      std::fill(sc.eq.begin(), sc.eq.end(), T(0.0));
+      for (int k = 1; k < K_; ++k) r.dq[(wet_ ? 1 : 0) + k - 1] = sc.eq.data() + (k - 1) * n_;
       pop_.rates(*w.pop, population_state(c, sc.N.data(), sc.floor.data(), sc.temp.data()), r);
-      for (int i = 0; i < n_; ++i) sc.dM[i] += pm[i] * sc.dN[i];
+      if (composed())
+        composed_engine(c, sc.dN.data(), sc.eq.data(), sc.dM.data(), sc.dQ.data());
+      else
+        for (int i = 0; i < n_; ++i) sc.dM[i] += pm[i] * sc.dN[i];
     }
   }
   // Outlet rates (fraction of a class leaving per second, times the classifier's fraction f_i).
@@ -275,6 +274,7 @@ Status ParticleChamber::eval(const Ctx<T>& c) const {
       c.res(sW_ + i) = c.xd(sW_ + i) - (sc.dW[i] + in_w - out_w + dep - dry);
     }
   }
+  if (composed()) composed_residuals(c);
   c.res(sT_) = c.x(sT_) - c.par(p_t_);
   if (sZero_) c.res(sZero_) = c.x(sZero_);
   return Status::kOk;
@@ -357,6 +357,7 @@ void ParticleChamber::init(InitCtx<T>& c) const {
     c.x(sM_ + i) = c.par(p_mass_) * (psd_.table ? T(psd_.psd.mass[i]) : upto - below);
     below = upto;
     if (wet_) c.x(sW_ + i) = c.x(sM_ + i) * c.par(p_x0_);
+    for (StateId q : sQ_) c.x(q + i) = T(0.0);  // the initial hold-up is of the first component
   }
   c.x(sT_) = c.par(p_t_);
   if (sZero_) c.x(sZero_) = T(0.0);
@@ -372,10 +373,11 @@ void ParticleChamber::outputs(const Ctx<T>& c) const {
   const T* M = &c.x(sM_);
   const auto& dp = grid_->diameter_pivots();
   T mass(0.0), water(0.0), mu[4] = {T(0.0), T(0.0), T(0.0), T(0.0)};
+  if (composed()) class_numbers(c, pm, sc.N.data());
   for (int i = 0; i < n_; ++i) {
     mass += M[i];
     if (wet_) water += c.x(sW_ + i);
-    const T N = M[i] / pm[i];
+    const T N = composed() ? sc.N[i] : T(M[i] / pm[i]);
     T dk(1.0);
     for (int k = 0; k < 4; ++k) mu[k] += N * dk, dk *= dp[i];
   }
@@ -394,7 +396,8 @@ void ParticleChamber::outputs(const Ctx<T>& c) const {
   const T var = any ? T(mu[2] / mu[0] - mean * mean) : none;
   c.out(o_sigma_) = !any ? none : var > 0.0 ? T(sqrt(var)) : T(0.0);
   if (spray_)  // Eq. (7.33), paper 003, with mu_2 of the class pivots
-    c.out(o_g_) = any ? T(2.0 * spray_solids(c) / (pp_.envelope_density(c.shared) * kernels::kPi * mu[2])) : T(0.0);
+    c.out(o_g_) =
+        any ? T(2.0 * spray_solids(c) / (pp_.component_density(c.shared, layer_) * kernels::kPi * mu[2])) : T(0.0);
   c.out(o_particles_) = mu[0];
   const Boundary<T> b = boundary(c);  // and the outflows, read below
   auto outflow = [&](int k) {
@@ -415,6 +418,7 @@ void ParticleChamber::outputs(const Ctx<T>& c) const {
     c.out(o_psd_m_ + i) = M[i];
   }
   if (o_outside_) c.out(o_outside_) = T(psd_.psd.outside());
+  if (composed()) composed_outputs(c);
 }
 
 // Balance terms that cross the flowsheet's boundary here: the spray's solids, water and enthalpy, the vapour and its
@@ -460,6 +464,7 @@ void ParticleChamber::quad(const Ctx<T>& c) const {
   if (spray_) {
     c.r[q_solids_in_.i] = spray_solids(c);
     c.r[q_water_in_.i] = b.water_in;
+    if (composed()) c.r[q_comp_in_.i] = spray_solids(c);
   }
   c.r[q_water_out_.i] = b.vapour;
   c.r[q_energy_in_.i] = b.energy_in;

@@ -11,6 +11,12 @@
 //    normalized so that the population gains exactly M_sus kg/s; rho is the particles' envelope density, so layer and
 //    core are alike;
 //  * aggregation and breakage by the population engine (settings aggregation, breakage; off by default);
+//  * composition, when the particle system names several solids (particles.hpp): per class the mass Q_c,i of each
+//    component after the first is a state as well (the first's is M_i minus theirs), carried as an extensive property
+//    of the population engine (moved with volume by aggregation and breakage); the number of a class follows from
+//    its volume, N_i = (sum_c m_c,i / rho_c) / x_i. Layering moves every component with the number fluxes from the
+//    donor cell and deposits the sprayed solid (setting spray_component) with its own density, so that each class's
+//    volume changes exactly as the finite-volume scheme moves it. The initial hold-up is of the first component.
 //  * drying: the sprayed water lands on the classes in proportion to their surface and dries at the rate
 //    (W_i - X_eq M_i) / tau_dry (a lumped first-order drying kinetics), or, with drying: none, evaporates at once;
 //  * outlets (every class leaves at a rate r_i, carrying its water, M_i r_i and W_i r_i):
@@ -103,11 +109,29 @@ class ParticleChamber : public UnitBase<ParticleChamber> {
   // What the inlets bring per class (dry solids, water), summed over the inlets in their order.
   template <class T>
   void inlet_flows(const Ctx<T>& c, T* in_m, T* in_w, std::vector<T>& gather) const;
+  // Composition (K_ > 1): class numbers from the component volumes, layering of the sprayed component, the
+  // engine's property rates turned into mass rates (particle_chamber_composition.cpp).
+  template <class T>
+  void class_numbers(const Ctx<T>& c, const T* pm, T* N) const;
+  template <class T>
+  void composed_growth(const Ctx<T>& c, const T* N, const T* W, const T& amount, T* dM, T* dQ, T* dW) const;
+  template <class T>
+  void composed_engine(const Ctx<T>& c, const T* dN, const T* dq, T* dM, T* dQ) const;
+  template <class T>
+  void composed_residuals(const Ctx<T>& c) const;
+  template <class T>
+  void composed_outputs(const Ctx<T>& c) const;
+  void declare_composition(UnitSpec& s, Settings& st);
+  bool composed() const { return K_ > 1; }
   template <class T>
   kernels::Population::State<T> population_state(const Ctx<T>& c, const T* N, const T* floor, T* temp) const;
 
   ChamberRole role_;
   int n_ = 0;
+  int K_ = 1, layer_ = 0;    // components, and the one the spray deposits
+  std::vector<StateId> sQ_;  // per component c >= 1 its class masses (sQ_[c - 1])
+  std::vector<OutputId> o_comp_mass_, o_comp_hold_, o_comp_class_;
+  QuadId q_comp_in_;
   ParticleParams pp_;
   std::shared_ptr<const kernels::Grid> grid_;
   std::unique_ptr<kernels::FvGrowth> fv_;  // layering growth, when the unit sprays

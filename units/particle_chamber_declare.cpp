@@ -15,11 +15,13 @@ namespace granuflow::units {
 using kernels::Field;
 
 void ParticleChamber::declare(UnitSpec& s, Settings& st) {
-  const ParticleSystem& ps = particle_system(s, st);
+  const ParticleSystem& ps = particle_system(s, st, true);
   pp_ = ps.params();
   grid_ = ps.grid();
   n_ = grid_->size();
+  K_ = pp_.component_count();
   declare_options(ps, st);
+  declare_composition(s, st);
   declare_params(s, st);
   declare_mechanisms(s, st);
   declare_states_and_ports(s);
@@ -102,6 +104,7 @@ void ParticleChamber::declare_mechanisms(UnitSpec& s, Settings& st) {
   o.growth = "";
   o.outside = kernels::Outside::kFold;
   if (wet_) o.properties = {"water"};
+  for (int k = 1; k < K_; ++k) o.properties.push_back("m_" + pp_.components[k]);
   pop_.declare(s, st, grid_, o);
   if (pop_.outside() != kernels::Outside::kFold)
     throw ConfigError(st.where() +
@@ -128,23 +131,27 @@ void ParticleChamber::declare_states_and_ports(UnitSpec& s) {
   sT_ = s.add_state("T", StateKind::Algebraic, "K", 300.0);
   if (!wet_) sZero_ = s.add_state("water_out", StateKind::Algebraic, "kg/s", 1e-3);  // dry outlets carry none
   const auto& d = grid_->diameter_pivots();
+  for (int k = 1; k < K_; ++k)
+    sQ_.push_back(s.add_states("m_" + pp_.components[k], n_, StateKind::Differential, "kg", 1.0));
   auto inlet = [&](const std::string& name, bool optional) {
-    const PortId p = s.add_port(name, streams::solids(), PortDir::In, n_, optional);
+    const PortId p = s.add_port(name, streams::solids(K_), PortDir::In, n_, optional);
     s.set_port_grid(p, d);
     inlets_.push_back(p);
   };
   auto outlet = [&](const std::string& name, Outlet& o) {
     o.rate = s.add_state(name + "_rate", StateKind::Algebraic, "1/s", 1e-3);
-    o.holdup = s.add_port(name + "_holdup", chamber_holdup(), PortDir::Out, n_);
+    o.holdup = s.add_port(name + "_holdup", chamber_holdup(K_), PortDir::Out, n_);
     s.set_port_grid(o.holdup, d);
     for (int i = 0; i < n_; ++i) {
       s.provide(o.holdup, holdup_fields::mass(i), sM_ + i);
       s.provide(o.holdup, holdup_fields::water(n_, i), wet_ ? sW_ + i : sZero_);
     }
+    for (int k = 1; k < K_; ++k)
+      for (int i = 0; i < n_; ++i) s.provide(o.holdup, holdup_fields::component(n_, k, i), sQ_[k - 1] + i);
     s.provide(o.holdup, holdup_fields::T(n_), sT_);
     s.provide(o.holdup, holdup_fields::rate(n_), o.rate);
-    ChamberOutletSpec spec{n_, wet_,
-                           &o == &discharge_out_ && discharge_ == Discharge::kClassified ? &classifier_ : nullptr, d};
+    ChamberOutletSpec spec{
+        n_, wet_, &o == &discharge_out_ && discharge_ == Discharge::kClassified ? &classifier_ : nullptr, d, K_};
     s.add_companion(
         {name, [spec](const std::string& owner) { return make_chamber_outlet(owner, spec); }, o.holdup, name});
   };
@@ -157,6 +164,15 @@ void ParticleChamber::declare_states_and_ports(UnitSpec& s) {
 }
 
 void ParticleChamber::declare_structure(UnitSpec& s) {
+  if (composed()) {  // layering and the engine couple the classes: plain forward AD over every column
+    if (spray_ && wet_) r_surface_ = s.add_reduction("particle surface");
+    if (controlled_) {
+      r_mass_ = s.add_reduction("hold-up");
+      if (discharge_ == Discharge::kClassified) r_tm_ = s.add_reduction("classifier-weighted hold-up");
+      r_in_ = s.add_reduction("solids fed");
+    }
+    return;
+  }
   ClassLayout layout{n_, {sM_}, {}};
   if (wet_) layout.state_blocks.push_back(sW_);
   for (PortId p : inlets_) {
@@ -201,6 +217,32 @@ void ParticleChamber::declare_outputs(UnitSpec& s) {
   o_hold_energy_ = s.add_output("balance_energy_hold", "J", OutputRole::kBalanceHold, "energy");
   std::tie(o_psd_d_, o_psd_m_) = s.add_size_distribution(n_, grid_->diameter_edges());
   if (psd_.table) o_outside_ = s.add_output("initial_psd_outside", "-");  // measured mass folded into end classes
+  if (!composed()) return;
+  for (int k = 0; k < K_; ++k) {
+    const std::string& name = pp_.components[k];
+    o_comp_mass_.push_back(s.add_output("mass_" + name, "kg"));
+    o_comp_hold_.push_back(s.add_output("balance_" + name + "_hold", "kg", OutputRole::kBalanceHold, "solids:" + name));
+    o_comp_class_.push_back(s.add_output(name + "_mass_0", "kg", OutputRole::kValue, "", 0));
+    for (int i = 1; i < n_; ++i) s.add_output(name + "_mass_" + std::to_string(i), "kg", OutputRole::kValue, "", i);
+  }
+  if (spray_)
+    q_comp_in_ = s.add_quadrature("balance_" + pp_.components[layer_] + "_in", "kg", 1.0, OutputRole::kBalanceIn,
+                                  "solids:" + pp_.components[layer_]);
+}
+
+void ParticleChamber::declare_composition(UnitSpec&, Settings& st) {
+  if (!spray_) return;
+  const std::string name = st.get_choice("spray_component", "", {},
+                                         "the component of the particle system the sprayed solids are (particles: "
+                                         "settings: components); empty: the first");
+  if (name.empty()) return;
+  layer_ = pp_.component(name);
+  if (layer_ < 0) {
+    std::string known;
+    for (const auto& c : pp_.components) known += (known.empty() ? "" : ", ") + c;
+    throw ConfigError(st.where() + ".spray_component = '" + name + "': the particle system has the components " +
+                      known + " (particles: settings: components)");
+  }
 }
 
 }  // namespace granuflow::units

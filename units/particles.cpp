@@ -1,6 +1,8 @@
 #include "particles.hpp"
 
+#include <cctype>
 #include <cmath>
+#include <string>
 #include <utility>
 
 #include "granuflow/errors.hpp"
@@ -10,6 +12,12 @@
 namespace granuflow::units {
 
 namespace {
+std::string join_components(const ParticleParams& pp) {
+  std::string all;
+  for (const auto& c : pp.components) all += (all.empty() ? "" : ", ") + c;
+  return all;
+}
+
 // n >= 2 diameters from lo to hi (both included), equally spaced in ln d.
 std::vector<double> log_spaced(double lo, double hi, int n) {
   std::vector<double> d(n);
@@ -50,9 +58,49 @@ void ParticleSystem::declare(UnitSpec& s, Settings& st) {
                                "paper 001, Table 9; docs/paper001_decisions.md"});
   params_.cp_s =
       s.add_param({"cp_s", "J/(kg K)", def::kSolidCp, 100.0, 1e4, "heat capacity of the solid", "paper 001, Table 6"});
+  declare_components(s, st);
 }
 
-const ParticleSystem& particle_system(UnitSpec& s, Settings& st) {
+// Components after the first: names from the setting (comma- or space-separated), each with its envelope density.
+void ParticleSystem::declare_components(UnitSpec& s, Settings& st) {
+  namespace def = kernels::paper001::defaults;
+  const std::string given = st.get_choice(
+      "components", "", {},
+      "the named solids a particle is made of, e.g. 'core, layer': the first has rho_s and eps_intra, each further "
+      "one its envelope density rho_<name>; per class the mass of each is carried (empty: one solid)");
+  std::vector<std::string> names;
+  std::string cur;
+  for (char ch : given + ",") {
+    if (ch == ',' || ch == ' ') {
+      if (!cur.empty()) names.push_back(cur), cur.clear();
+    } else {
+      cur += ch;
+    }
+  }
+  if (names.empty()) return;
+  auto bad = [&](const std::string& why) { throw ConfigError(st.where() + ".components = '" + given + "': " + why); };
+  if (names.size() < 2 || names.size() > static_cast<size_t>(streams::kMaxComponents))
+    bad("give 2 to " + std::to_string(streams::kMaxComponents) + " names (one solid needs no list)");
+  for (size_t a = 0; a < names.size(); ++a) {
+    for (char ch : names[a])
+      if (!(std::isalnum(static_cast<unsigned char>(ch)) || ch == '_')) bad("names are letters, digits and _");
+    for (size_t b = 0; b < a; ++b)
+      if (names[a] == names[b]) bad("'" + names[a] + "' is named twice");
+  }
+  params_.components = names;
+  for (size_t c = 1; c < names.size(); ++c)
+    params_.rho.push_back(s.add_param({"rho_" + names[c], "kg/m3", def::kSolidSkeletalDensity, 100.0, 5000.0,
+                                       "envelope density of the component " + names[c],
+                                       "user (the default is paper 001's rho_s, Table 6)"}));
+}
+
+int ParticleParams::component(const std::string& name) const {
+  for (size_t c = 0; c < components.size(); ++c)
+    if (components[c] == name) return static_cast<int>(c);
+  return -1;
+}
+
+const ParticleSystem& particle_system(UnitSpec& s, Settings& st, bool composed) {
   const std::string name =
       st.get_choice("particles", "particles", {}, "the particle system (size grid, product properties) used");
   const UnitInstance* inst = st.unit(name);
@@ -61,6 +109,12 @@ const ParticleSystem& particle_system(UnitSpec& s, Settings& st) {
     throw ConfigError(st.where() + ".particles = '" + name +
                       "': no particle system of that name; declare the size grid and product once in the scene's "
                       "`particles:` section (settings: grid, classes, d_min, d_max; params: rho_s, eps_intra, ...)");
+  if (!composed && ps->params().component_count() > 1)
+    throw ConfigError(st.where() + ": the particle system '" + name +
+                      "' is made of several solids (components: " + join_components(ps->params()) +
+                      ") and this unit carries one solid only; the units that carry composition are granulator, "
+                      "spray_compartment, drying_compartment, solids_feed, sieve, mill, solids_mixer, "
+                      "solids_splitter and solids_product");
   s.use_shared_params(name);
   return *ps;
 }

@@ -6,6 +6,7 @@
 // density of paper 001's closures (Table 9) and the solid heat capacity.
 #pragma once
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "granuflow/registry.hpp"
@@ -16,11 +17,23 @@ namespace granuflow::units {
 
 struct ParticleParams {
   ParamId rho_s, eps_intra, rho_p, cp_s;
+  // The named solids a particle is made of (setting `components`; one, "solid", by default): the first has the
+  // envelope density rho_s (1 - eps_intra), each further one c its own envelope density rho_<name> (rho[c - 1]).
+  std::vector<std::string> components{"solid"};
+  std::vector<ParamId> rho;
   // Envelope density rho_s (1 - eps_intra), kg/m3, from the particle system's parameters `shared`.
   template <class T>
   T envelope_density(const T* shared) const {
     return shared[rho_s.i] * (1.0 - shared[eps_intra.i]);
   }
+  int component_count() const { return static_cast<int>(components.size()); }
+  // Envelope density of component c, kg/m3.
+  template <class T>
+  T component_density(const T* shared, int c) const {
+    return c == 0 ? envelope_density(shared) : T(shared[rho[c - 1].i]);
+  }
+  // Index of the component `name`, or -1.
+  int component(const std::string& name) const;
 };
 
 class ParticleSystem : public UnitBase<ParticleSystem> {
@@ -40,14 +53,16 @@ class ParticleSystem : public UnitBase<ParticleSystem> {
   bool water() const { return water_; }
 
  private:
+  void declare_components(UnitSpec& s, Settings& st);
   std::shared_ptr<const kernels::Grid> grid_;
   ParticleParams params_;
   bool water_ = true;
 };
 
 // The particle system a unit uses (setting `particles` names the instance); marks the unit as reading its
-// parameters (Ctx::sh). ConfigError naming the unit when the flowsheet declares none.
-const ParticleSystem& particle_system(UnitSpec& s, Settings& st);
+// parameters (Ctx::sh). ConfigError naming the unit when the flowsheet declares none, or when the system names
+// several solids (components) and the unit does not carry composition (`composed` false).
+const ParticleSystem& particle_system(UnitSpec& s, Settings& st, bool composed = false);
 
 void register_particles(Registry<Unit>& r);
 

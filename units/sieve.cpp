@@ -3,9 +3,13 @@
 // separation curves averaged over the class, kernels/classification/separation_curve.hpp),
 //     oversize_i = T_up,i in_i,   product_i = T_lo,i (in_i - oversize_i),   undersize_i = in_i - oversize_i -
 //     product_i,
-// so the three outlets add up to the feed class by class (to one rounding), water goes with the solids of its class,
-// and the temperature passes through. With the sharp curve the decks split exactly at their cut sizes.
+// so the three outlets add up to the feed class by class (to one rounding), water and each named solid of a composed
+// particle system (particles.hpp) go with the solids of their class, and the temperature passes through. With the sharp
+// curve the decks split exactly at their cut sizes.
 #include "sieve.hpp"
+
+#include <string>
+#include <vector>
 
 #include "classifier.hpp"
 #include "granuflow/flowsheet.hpp"
@@ -24,25 +28,29 @@ class Sieve : public UnitBase<Sieve> {
  public:
   std::string type() const override { return "sieve"; }
   void declare(UnitSpec& s, Settings& st) override {
-    const ParticleSystem& ps = particle_system(s, st);
+    const ParticleSystem& ps = particle_system(s, st, true);
     grid_ = ps.grid();
     n_ = grid_->size();
     upper_.declare(s, st, "upper_curve", "plitt", "upper_", "separation curve of the upper deck (oversize)", grid_,
                    2e-3);
     lower_.declare(s, st, "lower_curve", "plitt", "lower_", "separation curve of the lower deck (product)", grid_,
                    1e-3);
-    in_ = s.add_port("in", streams::solids(), PortDir::In, n_);
+    K_ = ps.params().component_count();
+    in_ = s.add_port("in", streams::solids(K_), PortDir::In, n_);
     const char* names[3] = {"oversize", "product", "undersize"};
     wet_ = ps.water();
     for (int o = 0; o < 3; ++o) {
       sM_[o] = s.add_states(std::string(names[o]) + "_mdot", n_, StateKind::Algebraic, "kg/s", 1e-2);
       if (wet_) sW_[o] = s.add_states(std::string(names[o]) + "_water", n_, StateKind::Algebraic, "kg/s", 1e-3);
+      for (int k = 1; k < K_; ++k)
+        sQ_[o].push_back(s.add_states(std::string(names[o]) + "_" + ps.params().components[k], n_, StateKind::Algebraic,
+                                      "kg/s", 1e-2));
     }
     s.set_explicit();
     const auto& d = grid_->diameter_pivots();
     s.set_port_grid(in_, d);
     for (int o = 0; o < 3; ++o) {
-      const PortId out = s.add_port(names[o], streams::solids(), PortDir::Out, n_);
+      const PortId out = s.add_port(names[o], streams::solids(K_), PortDir::Out, n_);
       s.set_port_grid(out, d);
       for (int i = 0; i < n_; ++i) {
         s.provide(out, solids::mdot(i), sM_[o] + i);
@@ -50,13 +58,20 @@ class Sieve : public UnitBase<Sieve> {
       }
       if (!wet_) forward_dry_water(s, out, in_, n_);
       s.forward(out, solids::T(n_), in_, solids::T(n_));
+      for (int k = 1; k < K_; ++k)
+        for (int i = 0; i < n_; ++i) s.provide(out, solids::component(n_, k, i), sQ_[o][k - 1] + i);
     }
+    ClassLayout layout;
     if (wet_)
-      s.set_classes({n_,
-                     {sM_[0], sW_[0], sM_[1], sW_[1], sM_[2], sW_[2]},
-                     {{in_, solids::mdot(0)}, {in_, solids::water(n_, 0)}}});
+      layout = {
+          n_, {sM_[0], sW_[0], sM_[1], sW_[1], sM_[2], sW_[2]}, {{in_, solids::mdot(0)}, {in_, solids::water(n_, 0)}}};
     else
-      s.set_classes({n_, {sM_[0], sM_[1], sM_[2]}, {{in_, solids::mdot(0)}}});
+      layout = {n_, {sM_[0], sM_[1], sM_[2]}, {{in_, solids::mdot(0)}}};
+    for (int k = 1; k < K_; ++k) {
+      for (int o = 0; o < 3; ++o) layout.state_blocks.push_back(sQ_[o][k - 1]);
+      layout.field_blocks.push_back({in_, solids::component(n_, k, 0)});
+    }
+    s.set_classes(layout);
     for (int o = 0; o < 3; ++o) o_m_[o] = s.add_output(std::string(names[o]) + "_mdot", "kg/s");
     o_frac_ = s.add_output("product_fraction", "-");
   }
@@ -75,6 +90,10 @@ class Sieve : public UnitBase<Sieve> {
     auto& scratch = per_scalar<T>(w.in_d, w.in_j);
     split(c, tu, tl, c.port_array(in_, solids::mdot(0), n_, scratch), sM_);
     if (wet_) split(c, tu, tl, c.port_array(in_, solids::water(n_, 0), n_, scratch), sW_);
+    for (int k = 1; k < K_; ++k) {
+      const StateId q[3] = {sQ_[0][k - 1], sQ_[1][k - 1], sQ_[2][k - 1]};
+      split(c, tu, tl, c.port_array(in_, solids::component(n_, k, 0), n_, scratch), q);
+    }
     return Status::kOk;
   }
   // One field's three outlets (states s[0..2]) from the feed's array `in`: over = t_u in, product = t_l (in - over),
@@ -100,6 +119,7 @@ class Sieve : public UnitBase<Sieve> {
       for (int i = 0; i < n_; ++i) {
         c.x(sM_[o] + i) = T(0.0);
         if (wet_) c.x(sW_[o] + i) = T(0.0);
+        for (StateId q : sQ_[o]) c.x(q + i) = T(0.0);
       }
   }
   template <class T>
@@ -115,6 +135,8 @@ class Sieve : public UnitBase<Sieve> {
  private:
   int n_ = 0;
   bool wet_ = true;  // the particle system carries water
+  int K_ = 1;        // named solids; per outlet the flows of each after the first (sQ_[o][c - 1])
+  std::vector<StateId> sQ_[3];
   std::shared_ptr<const kernels::Grid> grid_;
   Classifier upper_, lower_;
   PortId in_;

@@ -16,7 +16,7 @@ class SolidsFeed : public UnitBase<SolidsFeed> {
  public:
   std::string type() const override { return "solids_feed"; }
   void declare(UnitSpec& s, Settings& st) override {
-    const ParticleSystem& ps = particle_system(s, st);
+    const ParticleSystem& ps = particle_system(s, st, true);
     pp_ = ps.params();
     grid_ = ps.grid();
     n_ = grid_->size();
@@ -38,10 +38,10 @@ class SolidsFeed : public UnitBase<SolidsFeed> {
                : s.add_state("water", StateKind::Algebraic, "kg/s", 1e-4);
     sT_ = s.add_state("T", StateKind::Algebraic, "K", 300.0);
     s.set_explicit();
-    const PortId out = s.add_port("out", streams::solids(), PortDir::Out, n_);
+    const PortId out = s.add_port("out", streams::solids(pp_.component_count()), PortDir::Out, n_);
     s.set_port_grid(out, grid_->diameter_pivots());
     if (wet_) {
-      s.provide_all(out, sM_);
+      for (int f = 0; f <= 2 * n_; ++f) s.provide(out, f, sM_ + f);  // mdot, water, T: consecutive states
       s.set_classes({n_, {sM_, sW_}, {}});
     } else {
       for (int i = 0; i < n_; ++i) s.provide(out, solids::mdot(i), sM_ + i), s.provide(out, solids::water(n_, i), sW_);
@@ -51,6 +51,18 @@ class SolidsFeed : public UnitBase<SolidsFeed> {
     q_solids_ = s.add_quadrature("balance_solids_in", "kg", 1.0, OutputRole::kBalanceIn, "solids");
     q_water_ = s.add_quadrature("balance_water_in", "kg", 0.1, OutputRole::kBalanceIn, "water");
     q_energy_ = s.add_quadrature("balance_energy_in", "J", 1e5, OutputRole::kBalanceIn, "energy");
+    if (pp_.component_count() > 1) declare_component(s, st, out);
+  }
+  // A composed particle system (particles.hpp): the feed is of one named solid (setting component), the flows of the
+  // others zero.
+  void declare_component(UnitSpec& s, Settings& st, PortId out) {
+    const std::string name =
+        st.get_choice("component", pp_.components[0], pp_.components, "the named solid the feed is made of");
+    const int fed = pp_.component(name);
+    sZero_ = s.add_state("zero", StateKind::Algebraic, "kg/s", 1e-3);
+    for (int k = 1; k < pp_.component_count(); ++k)
+      for (int i = 0; i < n_; ++i) s.provide(out, solids::component(n_, k, i), k == fed ? sM_ + i : sZero_);
+    q_comp_ = s.add_quadrature("balance_" + name + "_in", "kg", 1.0, OutputRole::kBalanceIn, "solids:" + name);
   }
   void check(const UnitSpec&, const double* p) const override {
     if (!wet_ && p[p_x_.i] != 0.0)
@@ -74,6 +86,7 @@ class SolidsFeed : public UnitBase<SolidsFeed> {
       if (wet_) c.res(sW_ + i) = c.x(sW_ + i) - m * c.par(p_x_);
     }
     if (!wet_) c.res(sW_) = c.x(sW_);
+    if (sZero_) c.res(sZero_) = c.x(sZero_);
     c.res(sT_) = c.x(sT_) - c.par(p_t_);
     return Status::kOk;
   }
@@ -83,6 +96,7 @@ class SolidsFeed : public UnitBase<SolidsFeed> {
     for (int i = 0; i < n_; ++i) m += c.x(sM_ + i), w += wet_ ? c.x(sW_ + i) : T(0.0);
     c.r[q_solids_.i] = m;
     c.r[q_water_.i] = w;
+    if (q_comp_) c.r[q_comp_.i] = m;
     c.r[q_energy_.i] = (m * c.sh(pp_.cp_s) + w * c.par(p_cpl_)) * (c.x(sT_) - props::kT0);
   }
   template <class T>
@@ -92,6 +106,7 @@ class SolidsFeed : public UnitBase<SolidsFeed> {
       if (wet_) c.x(sW_ + i) = c.x(sM_ + i) * c.par(p_x_);
     }
     if (!wet_) c.x(sW_) = T(0.0);
+    if (sZero_) c.x(sZero_) = T(0.0);
     c.x(sT_) = c.par(p_t_);
   }
 
@@ -102,8 +117,8 @@ class SolidsFeed : public UnitBase<SolidsFeed> {
   std::shared_ptr<const kernels::Grid> grid_;
   kernels::TablePsd psd_;  // settings psd, psd_file
   ParamId p_m_, p_d50_, p_sigma_, p_x_, p_t_, p_cpl_;
-  StateId sM_, sW_, sT_;
-  QuadId q_solids_, q_water_, q_energy_;
+  StateId sM_, sW_, sT_, sZero_;
+  QuadId q_solids_, q_water_, q_energy_, q_comp_;
 };
 
 }  // namespace

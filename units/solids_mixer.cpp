@@ -1,4 +1,5 @@
-// Adiabatic mixer of solids streams, zero hold-up (explicit): per class, dry solids and water flows add up; the
+// Adiabatic mixer of solids streams, zero hold-up (explicit): per class, dry solids and water flows add up (and those
+// of each named solid of a composed particle system, particles.hpp); the
 // outlet temperature closes the enthalpy balance with constant heat capacities (solid cp_s of the particle system,
 // water cp_l):
 //     T_out - T0 = sum_j C_j (T_j - T0) / sum_j C_j,   C_j = sum_i (m_ji cp_s + w_ji cp_l),
@@ -32,7 +33,7 @@ class SolidsMixer : public UnitBase<SolidsMixer> {
  public:
   std::string type() const override { return "solids_mixer"; }
   void declare(UnitSpec& s, Settings& st) override {
-    const ParticleSystem& ps = particle_system(s, st);
+    const ParticleSystem& ps = particle_system(s, st, true);
     pp_ = ps.params();
     n_ = ps.grid()->size();
     const int inlets = static_cast<int>(st.get_int("inlets", 2, 2, 16, "number of inlet ports in1..inN"));
@@ -42,21 +43,27 @@ class SolidsMixer : public UnitBase<SolidsMixer> {
     sM_ = s.add_states("mdot", n_, StateKind::Algebraic, "kg/s", 1e-2);
     if (wet_) sW_ = s.add_states("water", n_, StateKind::Algebraic, "kg/s", 1e-3);
     sT_ = s.add_state("T", StateKind::Algebraic, "K", 300.0);
+    K_ = pp_.component_count();
+    for (int k = 1; k < K_; ++k) sQ_.push_back(s.add_states(pp_.components[k], n_, StateKind::Algebraic, "kg/s", 1e-2));
     s.set_explicit();
     const auto& d = ps.grid()->diameter_pivots();
     ClassLayout layout{n_, {sM_}, {}};
     if (wet_) layout.state_blocks.push_back(sW_);
+    for (StateId q : sQ_) layout.state_blocks.push_back(q);
     for (int j = 0; j < inlets; ++j) {
-      const PortId p = s.add_port("in" + std::to_string(j + 1), streams::solids(), PortDir::In, n_);
+      const PortId p = s.add_port("in" + std::to_string(j + 1), streams::solids(K_), PortDir::In, n_);
       s.set_port_grid(p, d);
       in_.push_back(p);
       layout.field_blocks.push_back({p, solids::mdot(0)});
       if (wet_) layout.field_blocks.push_back({p, solids::water(n_, 0)});
+      for (int k = 1; k < K_; ++k) layout.field_blocks.push_back({p, solids::component(n_, k, 0)});
     }
-    const PortId out = s.add_port("out", streams::solids(), PortDir::Out, n_);
+    const PortId out = s.add_port("out", streams::solids(K_), PortDir::Out, n_);
     s.set_port_grid(out, d);
+    for (int k = 1; k < K_; ++k)
+      for (int i = 0; i < n_; ++i) s.provide(out, solids::component(n_, k, i), sQ_[k - 1] + i);
     if (wet_) {
-      s.provide_all(out, sM_);
+      for (int f = 0; f <= 2 * n_; ++f) s.provide(out, f, sM_ + f);  // mdot, water, T: consecutive states
     } else {  // every inlet's water is the same zero: the first one's passes on
       for (int i = 0; i < n_; ++i) s.provide(out, solids::mdot(i), sM_ + i);
       forward_dry_water(s, out, in_[0], n_);
@@ -88,6 +95,7 @@ class SolidsMixer : public UnitBase<SolidsMixer> {
     for (int i = 0; i < n_; ++i) {
       c.x(sM_ + i) = T(0.0);
       if (wet_) c.x(sW_ + i) = T(0.0);
+      for (StateId q : sQ_) c.x(q + i) = T(0.0);
     }
     c.x(sT_) = T(props::kT0 + 20.0);
   }
@@ -124,6 +132,15 @@ class SolidsMixer : public UnitBase<SolidsMixer> {
     for (int i = 0; i < n_; ++i) c.res(sM_ + i) = c.x(sM_ + i) - m[i];
     if (wet_)
       for (int i = 0; i < n_; ++i) c.res(sW_ + i) = c.x(sW_ + i) - w[i];
+    for (int k = 1; k < K_; ++k) {  // each further solid: the inlets' flows summed in their order
+      T* r = &c.res(sQ_[k - 1]);
+      const T* x = &c.x(sQ_[k - 1]);
+      for (int i = 0; i < n_; ++i) r[i] = x[i];
+      for (size_t j = 0; j < in_.size(); ++j) {
+        const T* q = c.port_array(in_[j], solids::component(n_, k, 0), n_, f.gm);
+        for (int i = 0; i < n_; ++i) r[i] -= q[i];
+      }
+    }
   }
 
   int n_ = 0;
@@ -132,6 +149,8 @@ class SolidsMixer : public UnitBase<SolidsMixer> {
   ParamId p_cpl_;
   std::vector<PortId> in_;
   StateId sM_, sW_, sT_;
+  int K_ = 1;  // named solids; the flows of each after the first (sQ_[c - 1])
+  std::vector<StateId> sQ_;
   ReductionId r_capacity_, r_enthalpy_;
   OutputId o_m_;
 };

@@ -88,8 +88,10 @@ OutputId UnitSpec::add_output(std::string name, std::string unit, OutputRole rol
   if (!is_known_si_unit(unit)) throw std::logic_error("output '" + name + "' has unknown SI unit '" + unit + "'");
   const bool balance =
       role == OutputRole::kBalanceIn || role == OutputRole::kBalanceOut || role == OutputRole::kBalanceHold;
-  if (balance && quantity != "water" && quantity != "solids" && quantity != "energy")
-    throw std::logic_error("balance output '" + name + "' needs quantity water, solids or energy");
+  // "solids:<component>": the balance of one named solid of a particle system (particles.hpp)
+  if (balance && quantity != "water" && quantity != "solids" && quantity != "energy" &&
+      quantity.rfind("solids:", 0) != 0)
+    throw std::logic_error("balance output '" + name + "' needs quantity water, solids, solids:<component> or energy");
   outputs_.push_back({std::move(name), std::move(unit), role, std::move(quantity), cls, ""});
   return {static_cast<int>(outputs_.size()) - 1};
 }
@@ -188,6 +190,33 @@ StreamKind solids() {
                               return f;
                             }};
   return &t;
+}
+namespace {
+template <int K>
+StreamKind solids_of() {
+  static const StreamType t{"solids/" + std::to_string(K) + " components",
+                            "per class dry-solid and water mass flows, temperature, per class mass flows of the "
+                            "components after the first",
+                            [](int n) {
+                              std::vector<FieldSpec> f = solids()->fields(n);
+                              for (int c = 1; c < K; ++c) append_class_fields(f, "comp" + std::to_string(c), n, "kg/s");
+                              return f;
+                            }};
+  return &t;
+}
+}  // namespace
+StreamKind solids(int components) {
+  static_assert(kMaxComponents == 4);
+  switch (components) {
+    case 2:
+      return solids_of<2>();
+    case 3:
+      return solids_of<3>();
+    case 4:
+      return solids_of<4>();
+    default:
+      return solids();
+  }
 }
 }  // namespace streams
 

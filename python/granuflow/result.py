@@ -314,6 +314,10 @@ class Result:
             a = acc[q]
             scale = max(abs(a["hold0"]), abs(a["hold"]), abs(a["in"]), abs(a["out"]), 1e-300)
             out[f"{q}_rel"] = _finite(abs(a["hold"] - a["hold0"] - (a["in"] - a["out"])) / scale)
+        for q in sorted(k for k in acc if k.startswith("solids:")):  # each named solid of a composed particle system
+            a = acc[q]
+            scale = max(abs(a["hold0"]), abs(a["hold"]), abs(a["in"]), abs(a["out"]), 1e-300)
+            out[f"{q}_rel"] = _finite(abs(a["hold"] - a["hold0"] - (a["in"] - a["out"])) / scale)
         return out
 
     @property

@@ -41,6 +41,10 @@ StreamKind liquid();  // mass flow, temperature, dissolved-solids mass fraction
 StreamKind heat();    // heat flow from the Out side to the In side, temperature of the providing side
 StreamKind vapour();  // water-vapour mass flow and its temperature
 StreamKind solids();  // per class dry-solid mass flows, per class water mass flows, temperature
+// Solids of a particle system with `components` named solids (particles.hpp): the fields of solids(), then per
+// component after the first its per-class mass flows (the first's is mdot_i minus the others). solids(1) is solids().
+inline constexpr int kMaxComponents = 4;
+StreamKind solids(int components);
 }  // namespace streams
 
 namespace gas {
@@ -59,6 +63,8 @@ namespace solids {
 inline int mdot(int i) { return i; }
 inline int water(int classes, int i) { return classes + i; }
 inline int T(int classes) { return 2 * classes; }
+// Mass flow of component c >= 1 in class i (streams::solids(components)).
+inline int component(int classes, int c, int i) { return 2 * classes + 1 + (c - 1) * classes + i; }
 }  // namespace solids
 
 // kg: a class's moisture is W / (M + kMassFloor), finite for an emptied class; every reader of a class inventory
