@@ -349,8 +349,7 @@ class Pbm2D : public UnitBase<Pbm2D> {
     const T left = rho_s * acc(kOut2Solid) + rho_l * acc(kOut2Liquid);
     psd[npsd - 1] += left, mass += left, end += left;
     c.out(o_number_) = number;
-    // Eqs. (15)-(16) of an empty grid are undefined (NaN: null in summaries), not 0
-    const T none = kernels::undefined_size<T>();
+    const T none = kernels::undefined_size<T>();  // Eqs. (15)-(16) of an empty grid: undefined (null), not 0
     c.out(o_davg_) = number > 0.0 ? T(dsum / number) : none;
     c.out(o_xavg_) = number > 0.0 ? T(xsum / number) : none;
     c.out(o_d50_) = characteristic_diameter_of_mass(psd_edges_, psd.data(), 0.5);
