@@ -67,12 +67,11 @@ void Recorder::record(double t, const double* y, const double* yp, const double*
   const int ns = static_cast<int>(sens_ids_.size()), no = static_cast<int>(out_.size());
   if (!q) q = q_zero_.data();
   sys_.extend(t, y, yp, y_full_.data(), yp_full_.data());
-  // An inventory the integrator keeps non-negative at its steps (IDAS constraints) may dip below zero between them,
-  // where an output time is interpolated: within the solver's tolerance that is zero, beyond it a failure.
-  for (const auto& [i, floor] : floors_) {
+  // IDAS keeps the declared non-negative inventories at zero or above at its steps (constraints); an output time
+  // between steps is interpolated and may dip below zero within the tolerance. It is recorded as the integrator
+  // gives it: zeroing it would break the exact conservation of number and mass the schemes guarantee.
+  for (const auto& [i, floor] : floors_)
     if (!(y_full_[i] >= floor)) check_nonnegative(fs_, opt_, t, y_full_);  // throws, naming the state
-    if (y_full_[i] < 0.0) y_full_[i] = 0.0;
-  }
   res_.t.push_back(t);
   res_.y.insert(res_.y.end(), y_full_.begin(), y_full_.end());
   res_.yp.insert(res_.yp.end(), yp_full_.begin(), yp_full_.end());

@@ -87,7 +87,8 @@ TEST(Positivity, IdasKeepsTheBedWaterOfEmptyingClassesNonNegative) {
   for (size_t k = 0; k < r.t.size(); ++k)
     for (int i = 0; i < 10; ++i) {
       const double w = r.state(k, fs.state_id("bed.W_" + std::to_string(i)));
-      EXPECT_GE(w, 0.0) << "t " << r.t[k] << " class " << i;
+      // >= 0 at IDAS's steps; an interpolated output time may dip by round-off (without the constraint: -1.25e-7 kg)
+      EXPECT_GE(w, -1e-8) << "t " << r.t[k] << " class " << i;
       least = std::min(least, w);
     }
   EXPECT_LT(least, 1e-6);  // the classes did empty: there was a zero to overshoot

@@ -4,6 +4,7 @@ equations, tanks in series against Eq. (7.31), grid convergence, and the oscilla
 import json
 import math
 import os
+import re
 
 import numpy as np
 import pytest
@@ -211,7 +212,7 @@ def test_a_dry_particle_system_refuses_water():
     # every unit that holds water on its particles says so: the paper-001 bed and spray zone, the 2-D population
     for scene, unit in (("stoeckl_gf25_batch.yaml", "spray_zone|bed"), ("sen_2d_dem_kernel.yaml", "2-D population")):
         text = open(os.path.join(ROOT, "flowsheets", scene)).read()
-        dry_text = text.replace("particles:\n  settings: {", "particles:\n  settings: {water: false, ")
+        dry_text = re.sub(r"(particles:\n(?:  material: .*\n)?  settings: \{)", r"\1water: false, ", text, count=1)
         assert dry_text != text, scene
         with pytest.raises(gf.ConfigError, match=rf"({unit}).*particle system is dry"):
             gf.load_text(dry_text, "dry")
