@@ -3,6 +3,7 @@ assert on time)."""
 import json
 import math
 import os
+import re
 import subprocess
 import sys
 
@@ -78,7 +79,8 @@ def test_summary_and_speed_ratio_script(records, tmp_path):
                        capture_output=True, text=True, env=package_env(), timeout=60)
     assert p.returncode == 0, p.stderr
     assert len(p.stdout.splitlines()) == len(CASES) * len(bench.PBM_LEVELS)
-    assert "constant  |err_M2| <= 0.05:  granuflow: cell_average" in p.stdout
+    # the cheapest run that meets the target: one of the two schemes, whichever timed faster here
+    assert re.search(r"constant  \|err_M2\| <= 0\.05:  granuflow: (cell_average|fixed_pivot)/", p.stdout), p.stdout
     text = "\n".join(bench.pbm_summary(records))
     for heading in ("Work-precision envelope", "Speed at equal error vs SciPy LSODA", "Same discretization",
                     "What solver.method auto ran", "Targets"):
