@@ -512,55 +512,10 @@ class Flowsheet:
 
 def _with_grid_settings(text: str, settings: dict, label: str, section: tuple = ("particles",)) -> str:
     """The scene text with ``particles: settings:`` (or the ``settings:`` of another ``section``, e.g.
-    ``("units", "granulator")``) holding ``settings`` (keys replaced or added), all else as written: the values are
-    spliced in at the positions of the YAML nodes, so comments, layout and every value the core reads stay byte for
-    byte."""
-    import yaml
+    ``("units", "granulator")``) holding ``settings``, all else as written (:func:`structure.splice_settings`)."""
+    from . import structure
 
-    try:
-        root = yaml.compose(text, Loader=_yaml_loader())
-    except yaml.YAMLError as e:
-        raise ConfigError(f"{label}: cannot refine the size grid of this scene text "
-                          f"({short(' '.join(str(e).split()), 100)})") from None
-
-    def find(node, key):
-        if isinstance(node, yaml.MappingNode):
-            for k, v in node.value:
-                if isinstance(k, yaml.ScalarNode) and k.value == key:
-                    return v
-        return None
-
-    def insertion(node, entries: str):
-        """(index, text) adding ``entries`` ("a: 1, b: 2") to the mapping ``node``."""
-        if not node.value:  # {} : replaced as a whole
-            return node.start_mark.index, node.end_mark.index, "{" + entries + "}"
-        first = node.value[0][0].start_mark
-        if node.flow_style:
-            return first.index, first.index, entries + ", "
-        return first.index, first.index, entries.replace(", ", "\n" + " " * first.column) + "\n" + " " * first.column
-
-    particles = root
-    for key in section:
-        particles = find(particles, key)
-    if not isinstance(particles, yaml.MappingNode):
-        raise ConfigError(f"{label}: no {': '.join(section)}: section to refine")
-    node = find(particles, "settings")
-    edits = []
-    if not isinstance(node, yaml.MappingNode):
-        edits.append(insertion(particles, "settings: {" + ", ".join(f"{k}: {v}" for k, v in settings.items()) + "}"))
-    else:
-        missing = []
-        for k, v in settings.items():
-            value = find(node, k)
-            if isinstance(value, yaml.ScalarNode):
-                edits.append((value.start_mark.index, value.end_mark.index, str(v)))
-            else:
-                missing.append(f"{k}: {v}")
-        if missing:
-            edits.append(insertion(node, ", ".join(missing)))
-    for start, end, new in sorted(edits, reverse=True):
-        text = text[:start] + new + text[end:]
-    return text
+    return structure.splice_settings(text, section[-1], settings, label, loader=_yaml_loader())
 
 
 def _times(values, where: str) -> list[float]:
