@@ -506,6 +506,12 @@ class Flowsheet:
         """The core's predictions of the experiments' observables (use :func:`granuflow.calibration.predict`)."""
         return _core.predict(self._scene, experiments, dict(params), options)
 
+    def diagram(self) -> "diagram.Diagram":  # noqa: F821 - imported when drawn
+        """The flowsheet drawn by Graphviz: shown inline in a notebook; ``.save("fs.svg")`` writes it."""
+        from .diagram import Diagram
+
+        return Diagram(self)
+
     def __repr__(self) -> str:
         return f"<granuflow.Flowsheet {self.name!r}: {len(self.state_names)} states, {len(self.params)} parameters>"
 

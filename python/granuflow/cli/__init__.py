@@ -1,5 +1,5 @@
-"""Command line: ``granuflow run | steady | sweep | contour | calibrate | describe | units | kernels | materials |
-docs | bench``.
+"""Command line: ``granuflow run | steady | draw | sweep | contour | calibrate | describe | units | kernels |
+materials | docs | bench``.
 
 Exit codes: 0 success, 2 bad input (scene, option, parameter), 3 solver failure. A failure prints one line
 on stderr naming what went wrong. Each command's module is imported only when it runs, so that ``granuflow run``
@@ -74,6 +74,10 @@ def main(argv=None) -> int:
     st.add_argument("--no-stability", action="store_true", help="skip the eigenvalues of the linearized dynamics")
     st.add_argument("--quiet", action="store_true", help="no output but errors")
     st.set_defaults(func=_cmd("steady", "cmd_steady"))
+    dr = sub.add_parser("draw", help="draw a scene's flowsheet with Graphviz (units, streams, recycles)")
+    dr.add_argument("scene")
+    dr.add_argument("--out", required=True, help="image file: .svg, .png, .pdf or .dot")
+    dr.set_defaults(func=_cmd("info", "cmd_draw"))
     w = sub.add_parser("sweep", help="run a sweep file; write sweep.csv and sweep.json")
     w.add_argument("sweepfile")
     w.add_argument("--out", required=True, help="output folder (created)")

@@ -91,6 +91,23 @@ def cmd_describe(args) -> int:
     return 0
 
 
+def cmd_draw(args) -> int:
+    """The scene's flowsheet drawn by Graphviz into --out (its extension chooses the format)."""
+    from ..diagram import Diagram
+    from ..flowsheet import load
+
+    diagram = Diagram(load(args.scene))
+    try:
+        path = diagram.save(args.out)
+    except ValueError as e:
+        raise ConfigError(f"--out {e}") from None
+    except RuntimeError as e:
+        print(f"granuflow: draw: {e}", file=sys.stderr)
+        return 1
+    print(f"flowsheet diagram: {path}")
+    return 0
+
+
 def cmd_docs(args) -> int:
     """Write (or, with --check, compare) the generated reference pages under a docs folder."""
     from .. import reference
