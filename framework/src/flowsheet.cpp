@@ -40,13 +40,13 @@ void Flowsheet::add_instance(const std::string& name, std::unique_ptr<Unit> unit
   inst.unit = std::move(unit);
   settings.attach(this);
   inst.unit->declare(inst.spec, settings);
+  settings.check_all_used();  // attached: a setting given to the wrong unit names the unit it belongs to
   settings.attach(nullptr);
   if (!inst.spec.shared_params().empty()) {
     for (size_t k = 0; k < units_.size(); ++k)
       if (units_[k].name == inst.spec.shared_params()) inst.shared = static_cast<int>(k);
     if (inst.shared < 0) throw std::logic_error("unit '" + name + "' reads the parameters of an absent unit");
   }
-  settings.check_all_used();
   inst.settings = settings.declared();
   for (const auto& p : inst.spec.params()) inst.params.push_back(p.value);
   inst.inputs.resize(inst.params.size());
@@ -259,9 +259,19 @@ int Flowsheet::param_id(const std::string& qualified) const {
   for (const auto& u : units_)
     if (dot != std::string::npos && u.name == qualified.substr(0, dot))
       for (const auto& p : u.spec.params()) allowed += (allowed.empty() ? "" : ", ") + p.name;
-  if (!allowed.empty())
+  if (!allowed.empty()) {
+    // A parameter that moved to another unit (the particle system's densities, once the bed's) names its place.
+    const std::string key = qualified.substr(dot + 1);
+    std::string elsewhere;
+    for (const auto& u : units_)
+      for (const auto& p : u.spec.params())
+        if (p.name == key && u.name != qualified.substr(0, dot)) elsewhere += (elsewhere.empty() ? "" : ", ") + u.name;
     throw ConfigError("unknown parameter '" + qualified + "' (parameters of " + qualified.substr(0, dot) + ": " +
-                      allowed + ")");
+                      allowed + ")" +
+                      (elsewhere.empty() ? ""
+                                         : "; '" + key + "' is a parameter of " + elsewhere + ": " +
+                                               elsewhere.substr(0, elsewhere.find(',')) + "." + key));
+  }
   std::string units;
   for (const auto& u : units_) units += (units.empty() ? "" : ", ") + u.name;
   throw ConfigError("unknown parameter '" + qualified + "': expected 'unit.param' with unit one of " + units);
