@@ -1,4 +1,4 @@
-"""Command line: ``granuflow run | steady | draw | sweep | contour | calibrate | describe | units | kernels |
+"""Command line: ``granuflow run | steady | draw | report | sweep | contour | calibrate | describe | units | kernels |
 materials | docs | bench``.
 
 Exit codes: 0 success, 2 bad input (scene, option, parameter), 3 solver failure. A failure prints one line
@@ -19,6 +19,11 @@ _QUICK = {"core": "tank chains of 100 and 1000 states (not 10000)",
           "scene": "10 classes only, SciPy once", "sweep": "a 9 x 9 map, one repeat, no Dask",
           "pbm2d": "20x20 and 40x40 bins, dense LU and SciPy at 20x20, the other sections at 20x20",
           "loop": "50 classes only, one repeat"}
+
+
+# The commands whose output folder records what made it (provenance.json: the command line and the input files'
+# text), which `granuflow report` shows.
+_PROVENANCE = ("run", "steady", "sweep", "contour", "calibrate")
 
 
 def _cmd(module: str, name: str):
@@ -78,6 +83,10 @@ def main(argv=None) -> int:
     dr.add_argument("scene")
     dr.add_argument("--out", required=True, help="image file: .svg, .png, .pdf or .dot")
     dr.set_defaults(func=_cmd("info", "cmd_draw"))
+    rp = sub.add_parser("report", help="write OUT_DIR/report.html: one offline page with the diagram, results, "
+                        "balances, warnings, plots, scene and command of a finished output folder")
+    rp.add_argument("out_dir")
+    rp.set_defaults(func=_cmd("info", "cmd_report"))
     w = sub.add_parser("sweep", help="run a sweep file; write sweep.csv and sweep.json")
     w.add_argument("sweepfile")
     w.add_argument("--out", required=True, help="output folder (created)")
@@ -155,7 +164,12 @@ def main(argv=None) -> int:
     from .. import _core
 
     try:
-        return args.func(args)
+        code = args.func(args)
+        if code == 0 and args.cmd in _PROVENANCE:
+            from .provenance import write_provenance
+
+            write_provenance(args, argv)
+        return code
     except (_core.ConfigError, FileNotFoundError) as e:
         print(f"granuflow: bad input: {one_line(e)}", file=sys.stderr)
         return EXIT_BAD_INPUT

@@ -108,6 +108,14 @@ def cmd_draw(args) -> int:
     return 0
 
 
+def cmd_report(args) -> int:
+    """OUT_DIR/report.html for a finished output folder."""
+    from ..report import write_report
+
+    print(f"report: {write_report(args.out_dir)}")
+    return 0
+
+
 def cmd_docs(args) -> int:
     """Write (or, with --check, compare) the generated reference pages under a docs folder."""
     from .. import reference
