@@ -9,7 +9,7 @@ cd "$(dirname "$0")"
 
 PACKAGES=(cmake ninja-build g++ pkg-config
   libsundials-dev libeigen3-dev libceres-dev pybind11-dev libgtest-dev
-  libyaml-cpp-dev libudunits2-dev graphviz
+  libyaml-cpp-dev libudunits2-dev graphviz chromium
   python3-dev python3-numpy python3-scipy python3-matplotlib python3-pandas python3-yaml python3-pytest
   python3-nbclient python3-nbformat python3-ipykernel jupyter-nbconvert python3-distributed python3-tqdm
   python3-nlopt clang-format-14 flake8)
