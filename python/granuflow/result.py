@@ -125,15 +125,18 @@ class Result:
     def repeated_outputs(self) -> list[str]:
         """Outputs that repeat a state of the same unit over the whole run (a balance term that is the unit's own
         accumulator, a class mass reported again for the size distribution): files list such a quantity once."""
-        by_unit: dict[str, list[int]] = {}
-        for i, n in enumerate(self.state_names):
-            by_unit.setdefault(n.rpartition(".")[0], []).append(i)
-        out = []
-        for j, n in enumerate(self.output_names):
-            col = self.outputs[:, j]
-            if any(np.array_equal(col, self.y[:, i]) for i in by_unit.get(n.rpartition(".")[0], ())):
-                out.append(n)
-        return out
+        # Linear in the size of the result: each column's bytes are looked up among the same unit's state columns
+        # (+ 0.0 makes -0.0 and 0.0 one value, as array_equal has them; a column with NaN never repeats, as there).
+        def keys(block):
+            cols = np.ascontiguousarray(np.asarray(block, dtype=float).T) + 0.0
+            return [None if np.isnan(c).any() else c.tobytes() for c in cols]
+
+        by_unit: dict[str, set] = {}
+        for n, k in zip(self.state_names, keys(self.y)):
+            if k is not None:
+                by_unit.setdefault(n.rpartition(".")[0], set()).add(k)
+        return [n for n, k in zip(self.output_names, keys(self.outputs))
+                if k is not None and k in by_unit.get(n.rpartition(".")[0], ())]
 
     def _display_columns(self):
         """(header, values) of every state and output as files show them: sizes in µm, the rest SI; outputs that
