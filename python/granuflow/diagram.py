@@ -33,10 +33,9 @@ def _scene_graph(fs) -> tuple[dict, list]:
     """``({unit: (type, ports)}, [(src, src_port, dst, dst_port), ...])`` from the flowsheet's scene text."""
     import yaml
 
-    from .flowsheet import _yaml_loader
     from .reference import unit_reference
 
-    doc = yaml.load(fs.text, Loader=_yaml_loader()) or {}
+    doc = yaml.load(fs.text, Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader)) or {}
     units = {}
     for name, spec in (doc.get("units") or {}).items():
         spec = spec or {}
