@@ -80,8 +80,14 @@ Table collision_frequency_table(const std::vector<double>& counts, const std::ve
   return t;
 }
 
+// The population balance's event rate within class i is 1/2 C_ii F_i^2, between i != j C_ij F_i F_j: Eq. (12) as
+// printed gives that when N_ii holds each like collision twice; a file that counts it once has its diagonal doubled.
 Table collision_frequency_table(const CollisionCounts& c) {
-  return collision_frequency_table(c.counts, c.particles, c.dt, c.path);
+  if (c.like_tally == 2) return collision_frequency_table(c.counts, c.particles, c.dt, c.path);
+  std::vector<double> counts = c.counts;
+  const size_t n = c.particles.size();
+  for (size_t i = 0; i < n; ++i) counts[i * n + i] *= 2.0;
+  return collision_frequency_table(counts, c.particles, c.dt, c.path);
 }
 
 void register_dem_collision(Registry<AggregationKernel>& r) {
