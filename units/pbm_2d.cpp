@@ -34,8 +34,8 @@
 
 #include "granuflow/errors.hpp"
 #include "granuflow/flowsheet.hpp"
-#include "kernels/discretization/initial_distribution.hpp"
 #include "kernels/aggregation/dem_collision.hpp"
+#include "kernels/discretization/initial_distribution.hpp"
 #include "kernels/discretization/psd.hpp"
 #include "kernels/population/population2d.hpp"
 #include "particles.hpp"
@@ -279,8 +279,9 @@ class Pbm2D : public UnitBase<Pbm2D> {
     double total = 0.0;
     for (double x : f.particles) total += x;
     if (n0 > total)
-      throw ConfigError(violation("N0", n0, "", "N0 <= " + fmt_num(total) + ", the DEM population of " + f.path +
-                                                    " (its per-pair frequencies, Eq. (12), hold at that population)"));
+      throw ConfigError(violation("N0", n0, "",
+                                  "N0 <= " + fmt_num(total) + ", the DEM population of " + f.path +
+                                      " (its per-pair frequencies, Eq. (12), hold at that population)"));
   }
 
   void configure(const UnitSpec& spec, const double* p, const double* shared, Workspace& ws) const override {
