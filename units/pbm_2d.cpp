@@ -103,7 +103,9 @@ class Pbm2D : public UnitBase<Pbm2D> {
                       "initial solid distribution: one size d0, or exponential in volume (verification)") == "mono"
             ? Initial::kMono
             : Initial::kExponential;
-    p_n0_ = s.add_param({"N0", "-", 1.0, 0.0, 1e30, "initial particle number", "initial state (user)"});
+    p_n0_ = s.add_param({"N0", "-", 1.0, 0.0, 1e30,
+                         "initial particle number (with a DEM collision file: at most its DEM population)",
+                         "initial state (user); bound: docs/pbm_2d.md"});
     if (initial_ == Initial::kMono)
       p_size0_ = s.add_param({"d0", "m", 2e-3, 1e-9, 1.0, "initial particle diameter (solid volume)",
                               "paper 002, section 3.2: 2 mm primary particles"});
