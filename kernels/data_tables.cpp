@@ -232,6 +232,16 @@ CollisionCounts parse_collision_counts(const std::string& text, const std::strin
   read_classes(rows, c);
   read_counts(rows, c);
   read_like_collisions(rows, c);
+  // Eq. (12) of paper 002 must give a number: counts near the largest double over particle numbers near the smallest
+  const size_t n = c.particles.size();
+  for (size_t i = 0; i < n; ++i)
+    for (size_t j = 0; j < n; ++j)
+      if (c.particles[i] > 0 && c.particles[j] > 0 &&
+          !std::isfinite(c.counts[i * n + j] * (i == j ? 2.0 / c.like_tally : 1.0) /
+                         (c.particles[i] * c.particles[j] * c.dt)))
+        throw rows.fail(rows.counts[i].row, static_cast<int>(j) + 2,
+                        "count " + fmt_num(c.counts[i * n + j]) +
+                            ": the collision frequency count / (F_i F_j dt) of Eq. (12) is not a finite number");
   return c;
 }
 

@@ -1,5 +1,7 @@
 #include "aggregation/dem_collision.hpp"
 
+#include <cmath>
+
 #include "granuflow/flowsheet.hpp"
 
 namespace granuflow::kernels {
@@ -76,7 +78,13 @@ Table collision_frequency_table(const std::vector<double>& counts, const std::ve
   Table t{static_cast<int>(n), static_cast<int>(n), std::vector<double>(n * n, 0.0), "1/s", source};
   for (size_t i = 0; i < n; ++i)
     for (size_t j = 0; j < n; ++j)
-      if (numbers[i] > 0 && numbers[j] > 0) t.values[i * n + j] = counts[i * n + j] / (numbers[i] * numbers[j] * dt);
+      if (numbers[i] > 0 && numbers[j] > 0) {
+        const double c = counts[i * n + j] / (numbers[i] * numbers[j] * dt);
+        if (!std::isfinite(c))  // counts near the largest double, particle numbers near the smallest
+          throw ConfigError(source + ": the collision frequency of classes " + std::to_string(i + 1) + " x " +
+                            std::to_string(j + 1) + " (Eq. (12): count / (F_i F_j dt)) is not a finite number");
+        t.values[i * n + j] = c;
+      }
   return t;
 }
 

@@ -98,6 +98,17 @@ TEST(DemCollisionFile, TheFileSaysHowLikeCollisionsAreCounted) {
   for (int i = 0; i < 2; ++i)
     for (int j = 0; j < 2; ++j) EXPECT_EQ(once.at(i, j), (i == j ? 2.0 : 1.0) * twice.at(i, j)) << i << j;
   EXPECT_DOUBLE_EQ(twice.at(0, 0), 10.0 / (100 * 100 * 0.5));  // Eq. (12) as printed
+  // a frequency that overflows (here only once the like collisions are doubled) is named where it comes from
+  const std::string huge = "dt_s,1\nedges_m,1e-3,2e-3\nparticles,1\ncounts,1e308\n";
+  EXPECT_NO_THROW(parse_collision_counts("like_collisions,twice\n" + huge, "my.csv"));
+  try {
+    parse_collision_counts("like_collisions,once\n" + huge, "my.csv");
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("my.csv: row 5, column 2: count 1e+308: the collision frequency"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 // Spreadsheet programs write UTF-8 CSV with a byte-order mark: it is no part of the first key. Binary garbage is
