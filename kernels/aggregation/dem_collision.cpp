@@ -35,9 +35,10 @@ void DemCollisionKernel::declare(Settings& s, const std::string& prefix) {
                                        "data table of DEM collision frequencies C_ij, 1/s (paper 002, Eq. (12)); "
                                        "used when no collisions_file is given");
     if (none)  // nothing to choose from: the setting that is missing is the file
-      throw ConfigError(s.where() + "." + prefix +
-                        "collisions_file: not given, and no table of collision frequencies is loaded; name the DEM "
-                        "collision-count file (CSV: dt_s, edges_m, particles, counts; docs/dem_collisions.md)");
+      throw ConfigError(
+          s.where() + "." + prefix +
+          "collisions_file: not given, and no table of collision frequencies is loaded; name the DEM "
+          "collision-count file (CSV: like_collisions, dt_s, edges_m, particles, counts; docs/dem_collisions.md)");
     frequency_ = &table(t);
   }
 }
