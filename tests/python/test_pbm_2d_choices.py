@@ -74,6 +74,19 @@ def test_continuous_liquid_fills_every_liquid_class_and_narrows_the_liquid_distr
     assert r["granulator.x_avg"][-1] > shipped["granulator.x_avg"][-1]
 
 
+def test_without_aggregation_liquid_arrives_in_quanta_of_a_droplet_or_of_a_liquid_class(tmp_path):
+    # every particle alike: the liquid per particle is a Poisson count of quanta, variance = quantum x mean; droplets
+    # of two liquid classes, the continuous flow's upwind steps of one (docs/pbm_2d.md)
+    for spray, quanta in (("droplets", 2.0), ("continuous", 1.0)):
+        path = scene(tmp_path / spray, {"spray": spray})
+        path.write_text(path.read_text().replace("agg_psi0: 0.01", "agg_psi0: 0"))
+        _, _, ll, N = pbm2d.distribution(gf.load(path).simulate(), 1.0)
+        m = N.sum(axis=0)
+        mean = (m * ll).sum() / m.sum()
+        var = (m * (ll - mean) ** 2).sum() / m.sum()
+        assert var / (ll[1] * mean) == pytest.approx(quanta, rel=1e-6), spray
+
+
 def test_sharing_by_surface_gives_the_larger_particles_more_liquid(shipped, tmp_path):
     for spray in ("droplets", "continuous"):
         by_number = shipped if spray == "droplets" else run(tmp_path / "n", {"spray": spray})
