@@ -37,9 +37,9 @@ units:
     params: {N0: 1, v0: 1 m3, growth_G: 0.01}
 )";
 
-// The 2-D population with every mechanism: DEM kernel (smooth efficiency), droplets split between liquid pivots,
-// cross-section weighting, drying.
-std::string pbm_2d_scene() {
+// The 2-D population with every mechanism: DEM kernel (smooth efficiency), droplets split between liquid pivots
+// (or a continuous flow of liquid), cross-section (or surface) weighting, drying.
+std::string pbm_2d_scene(const std::string& spray = "droplets", const std::string& weight = "cross_section") {
   return R"(
 scene: pbm_2d_all_mechanisms
 t_end: 0.5 s
@@ -54,13 +54,16 @@ units:
       liquid_max: 2.4e-8
       aggregation: dem_collision
       agg_efficiency: smooth
-      spray: droplets
-      spray_weight: cross_section
+      spray: )" +
+         spray + R"(
+      spray_weight: )" +
+         weight + R"(
+      psd_diameter: solid
       drying: surface
       agg_collisions_file: )" +
          testing::repo_path("flowsheets/data/sen2014_collisions_example.csv") + R"(
-    params: {N0: 1000, d0: 2.1 mm, lc0: 0.2, spray_rate: 4e-6 m3/s, d_drop: 1.5 mm, dry_flux: 1e-6 m/s, agg_psi0: 0.5}
-)";
+    params: {N0: 1000, d0: 2.1 mm, lc0: 0.2, spray_rate: 4e-6 m3/s, dry_flux: 1e-6 m/s, agg_psi0: 0.5)" +
+         std::string(spray == "droplets" ? ", d_drop: 1.5 mm}" : "}") + "\n";
 }
 
 // Paper 003's continuous units in one loop: a wet granulator with aggregation and a classified discharge held at its
@@ -147,6 +150,8 @@ std::vector<std::pair<std::string, Scene>> scenes() {
   v.emplace_back("continuous dryer", scene_from_file("flowsheets/continuous_drying_bed.yaml"));
   v.emplace_back("pbm", scene_from_text(kPbmMechanisms));
   v.emplace_back("pbm 2d", scene_from_text(pbm_2d_scene()));
+  v.emplace_back("pbm 2d, surface-weighted droplets", scene_from_text(pbm_2d_scene("droplets", "surface")));
+  v.emplace_back("pbm 2d, continuous liquid", scene_from_text(pbm_2d_scene("continuous", "surface")));
   v.emplace_back("sieve-mill loop", scene_from_text(std::string(kSieveMillLoopHead) + kLoopTail));
   v.emplace_back("dry sieve-mill loop", scene_from_text(std::string(kDrySieveMillLoopHead) + kLoopTail));
   v.emplace_back("two-zone bed", scene_from_text(kTwoZone));
