@@ -78,3 +78,14 @@ def test_bad_python_input_is_a_value_error():
     names = {p["name"]: p for p in mc.params()}
     assert names["F_coll"]["default"] == 10.0 and "paper 003" in names["F_coll"]["source"]
     assert all(p["source"] and p["unit"] for p in names.values())
+
+
+def test_describe_lists_the_declaration_with_the_scene_values():
+    import json
+
+    p = cli("describe", SCENE, "--format", "json")
+    assert p.returncode == 0, p.stderr
+    rows = {r["param"]: r for r in json.loads(p.stdout)}
+    assert rows["monte_carlo.F_coll"]["value"] == 10.0
+    assert rows["monte_carlo.m_spray"]["value"] == pytest.approx(20e-3 / 60)  # 20 g/min in the scene, SI here
+    assert rows["monte_carlo.d0"]["source"].startswith("paper 003")

@@ -17,7 +17,7 @@ import numpy as np
 from .. import _core
 from ..quantity import ConfigError, to_si
 
-__all__ = ["run", "params", "settings", "MonteCarloResult", "analytic_constant_kernel"]
+__all__ = ["run", "params", "settings", "si_params", "MonteCarloResult", "analytic_constant_kernel"]
 
 # Known SI units of the checked table; the declaration's other units (rad, N/m) take plain SI numbers.
 _PLAIN_UNITS = ("rad", "N/m")
@@ -33,7 +33,8 @@ def settings() -> list[dict]:
     return list(_core.montecarlo_settings())
 
 
-def _si_params(values: Mapping[str, Any] | None, where: str) -> dict[str, float]:
+def si_params(values: Mapping[str, Any] | None, where: str) -> dict[str, float]:
+    """Parameters by name in SI (numbers, or "value unit" text); ConfigError naming an unknown one."""
     specs = {p["name"]: p for p in params()}
     out = {}
     for name, value in (values or {}).items():
@@ -177,7 +178,7 @@ def run(params: Mapping[str, Any] | None = None, settings: Mapping[str, Any] | N
         times: Sequence[float] | None = None, *, t_end: Any = None, n_out: int = 31) -> MonteCarloResult:
     """Run the replicas. ``params``: name -> value (SI number or "value unit"); ``settings``: name -> choice or count
     (see settings()); output ``times`` in s, or ``n_out`` evenly spaced times up to ``t_end`` (s or "60 s")."""
-    p_si = _si_params(params, "params")
+    p_si = si_params(params, "params")
     s_text = _settings_text(settings)
     if times is None:
         if t_end is None:

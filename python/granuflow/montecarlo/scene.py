@@ -20,7 +20,7 @@ import numpy as np
 
 from ..quantity import ConfigError, to_si
 from ..textfile import load_yaml, short
-from . import MonteCarloResult, params, run, settings
+from . import MonteCarloResult, params, run, settings, si_params
 
 ENGINE = "monte_carlo"
 _TOP_KEYS = ("scene", "description", "engine", "t_end", "output", "monte_carlo")
@@ -90,6 +90,13 @@ class Scene:
             else:
                 raise ConfigError(f"--set {key}: not a Monte Carlo parameter or setting; parameters: "
                                   f"{', '.join(sorted(p_names))}; settings: {', '.join(sorted(s_names))}")
+
+    def describe_rows(self) -> list[dict]:
+        """The parameters as ``granuflow describe`` lists a flowsheet's: value in SI, default, bounds, source."""
+        given = si_params(self.params, "monte_carlo.params")
+        return [{"param": f"{ENGINE}.{p['name']}", "value": given.get(p["name"], p["default"]), "unit": p["unit"],
+                 "default": p["default"], "lower": p["lower"], "upper": p["upper"], "input": False,
+                 "source": p["source"], "description": p["description"]} for p in params()]
 
     def run(self, t_end: float | None = None) -> MonteCarloResult:
         times = self.times
