@@ -4,7 +4,9 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <string>
 
+#include "granuflow/errors.hpp"
 #include "mc_rng.hpp"
 #include "mc_storage.hpp"
 
@@ -52,6 +54,7 @@ class Replica {
   int32_t block(uint32_t i, double p_block, double t);
   void collide(double t);
   void double_sample();
+  [[noreturn]] void too_many(double t) const;
   void record(double t, double* row, double* psd);
 
   const Config& c_;
@@ -231,6 +234,14 @@ void Replica::collide(double t) {
   successes_ += 1.0;
 }
 
+void Replica::too_many(double t) const {
+  throw SolverError("monte_carlo: the sample holds " + fmt_num(static_cast<double>(st_.droplet_slots())) +
+                        " droplets at t = " + fmt_num(t) + " s (" + fmt_num(primaries_) + " primaries after " +
+                        std::to_string(doublings_) + " doublings), the limit max_droplets; droplets that never dry " +
+                        "pile up: shorten t_end, lower sample_size, or raise max_droplets",
+                    t, "monte_carlo", 0.0);
+}
+
 void Replica::double_sample() {
   st_.duplicate();
   primaries_ *= 2.0;
@@ -311,6 +322,7 @@ ReplicaResult Replica::run(const std::vector<double>& times) {
     if (k == times.size() || t_next == kInf) break;
     t = t_next;
     if (t_drop <= t_coll) {
+      if (st_.droplet_slots() >= static_cast<size_t>(c_.s.max_droplets)) too_many(t);
       st_.deposit(rng_.below(st_.size()), t);  // the wetted particle is chosen at random
       liq_.added += d_.V_drop;
       depositions_ += 1.0;

@@ -195,6 +195,8 @@ const std::vector<SettingSpec>& setting_specs() {
       count("replicas", 16, 2, 1e5, "independent replicas (confidence intervals over them)"),
       count("threads", 0, 0, 1024, "threads running replicas (0: one per core); results do not depend on it"),
       count("seed", 1, 0, 9007199254740992.0, "seed; replica i draws from (seed, i)"),
+      count("max_droplets", 20000000, 1000, 2e9,
+            "droplets one replica may hold (12 bytes each); a run that needs more stops with an error"),
   };
   return v;
 }
@@ -237,6 +239,7 @@ Config make_config(const std::map<std::string, double>& params, const std::map<s
   c.s.replicas = setting_count(settings, ss[9]);
   c.s.threads = setting_count(settings, ss[10]);
   c.s.seed = static_cast<uint64_t>(setting_count(settings, ss[11]));
+  c.s.max_droplets = setting_count(settings, ss[12]);
   if (c.p.eps < c.p.eps_mf)
     throw ConfigError("monte_carlo parameter eps = " + fmt_num(c.p.eps) + " is below eps_mf = " + fmt_num(c.p.eps_mf) +
                       ": an expanded bed is at least as porous as at minimum fluidization (Eq. (7.48))");

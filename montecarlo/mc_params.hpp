@@ -41,6 +41,7 @@ struct Settings {
   long replicas = 16;
   long threads = 0;  // 0: the machine's
   uint64_t seed = 1;
+  long max_droplets = 20000000;  // per replica: beyond it a run stops with an error instead of exhausting memory
 };
 
 // Per-run constants of the equations, from the parameters.

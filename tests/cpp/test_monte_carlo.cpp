@@ -66,7 +66,9 @@ TEST(MonteCarlo, ResultDoesNotDependOnTheThreadCount) {
   const mc::Summary three = mc::run(config({}, s), times);
   ASSERT_EQ(one.per_replica.size(), three.per_replica.size());
   for (size_t k = 0; k < one.per_replica.size(); ++k)
-    if (!std::isnan(one.per_replica[k])) EXPECT_EQ(one.per_replica[k], three.per_replica[k]) << k;
+    if (!std::isnan(one.per_replica[k])) {
+      EXPECT_EQ(one.per_replica[k], three.per_replica[k]) << k;
+    }
   // and the replicas differ from each other (each has its own stream)
   EXPECT_NE(one.per_replica[2 * mc::kQuantities + mc::kNumber],
             one.per_replica[3 * mc::kQuantities + 2 * mc::kQuantities + mc::kNumber]);
@@ -107,8 +109,10 @@ TEST(MonteCarlo, PrimariesAndLiquidAreConservedThroughTheDoublings) {
         const double held = row[mc::kLiquidWet] + row[mc::kLiquidBridges] + row[mc::kLiquidBlocked] +
                             row[mc::kLiquidResidual] + row[mc::kLiquidEvaporated] + row[mc::kLiquidImbibed];
         EXPECT_NEAR(held, row[mc::kLiquidAdded], 1e-12 * row[mc::kLiquidAdded] + 1e-30) << wet << " t " << k;
-        if (k > 0) EXPECT_GT(row[mc::kLiquidImbibed], 0.0);
-        if (k > 0) EXPECT_GT(row[mc::kLiquidEvaporated], 0.0);
+        if (k > 0) {
+          EXPECT_GT(row[mc::kLiquidImbibed], 0.0);
+          EXPECT_GT(row[mc::kLiquidEvaporated], 0.0);
+        }
       }
     }
   }
@@ -135,5 +139,18 @@ TEST(MonteCarlo, BadInputIsRefusedWithOneLine) {
     config({}, {{"stokes_length", "both"}});
   } catch (const granuflow::ConfigError& e) {
     EXPECT_EQ(std::string(e.what()), "monte_carlo setting stokes_length = 'both': allowed are radius, diameter");
+  }
+}
+
+TEST(MonteCarlo, ARunThatOutgrowsItsDropletLimitStopsWithAnError) {
+  // Without drying droplets never leave; a small limit is reached early and named.
+  const mc::Config c =
+      config({}, {{"drying", "off"}, {"sample_size", "200"}, {"replicas", "2"}, {"max_droplets", "1000"}});
+  try {
+    mc::run(c, {0.0, 100.0});
+    FAIL() << "no error";
+  } catch (const granuflow::SolverError& e) {
+    EXPECT_NE(std::string(e.what()).find("max_droplets"), std::string::npos) << e.what();
+    EXPECT_GT(e.t(), 0.0);
   }
 }
