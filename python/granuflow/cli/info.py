@@ -70,8 +70,9 @@ def cmd_describe(args) -> int:
     """Every parameter with every column, never truncated: a text table whose width follows the content (not the
     terminal), or CSV / JSON for a spreadsheet or a script."""
     from ..flowsheet import load
+    from ..montecarlo.scene import Scene, is_scene
 
-    rows = describe_rows(load(args.scene))
+    rows = Scene(args.scene).describe_rows() if is_scene(args.scene) else describe_rows(load(args.scene))
     out = sys.stdout
     if args.format == "json":
         json.dump(rows, out, indent=1)

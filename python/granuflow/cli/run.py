@@ -53,6 +53,12 @@ def _accuracy_option(text):
 
 
 def cmd_run(args) -> int:
+    from ..montecarlo.scene import is_scene as is_monte_carlo
+
+    if is_monte_carlo(args.scene):  # engine: monte_carlo (docs/monte_carlo.md)
+        from .run_montecarlo import cmd_run_monte_carlo
+
+        return cmd_run_monte_carlo(args)
     fs = apply_sets(load(args.scene), parse_sets(args.set))  # settings rebuild the flowsheet
     specs = plot_specs(fs, drawing=not args.no_plots)  # against the scene file's own t_end
     if args.t_end is not None:
