@@ -138,3 +138,25 @@ def test_bad_events_one_line(tmp_path, case):
     path = _variant(tmp_path, old, new)
     p = cli("run", path, "--out", tmp_path / "out", "--no-plots")
     assert_bad_input(p, *needles, path=path)
+
+
+LOOP = os.path.join(ROOT, "flowsheets", "continuous_layering_sieve_mill.yaml")
+LOOP_LOCATED = os.path.join(ROOT, "flowsheets", "continuous_layering_sieve_mill_located_valve.yaml")
+
+
+def test_located_valve_of_the_sieve_mill_loop():
+    """The loop's discharge valve switched by events: at capacity the discharge is exactly mdot_max, following it is
+    exactly the controller's demand (the bed held at M_set without the smoothing's offset), and the product agrees
+    with the smoothed valve's within the smoothing's effect."""
+    res = gf.load(LOOP_LOCATED).simulate(warn=False, grid_check=False, accuracy=False)
+    names = [e["name"] for e in res.events]
+    assert names[0] == "valve_at_capacity" and "valve_follows" in names
+    t_cap, t_follow = res.events[0]["t"], next(e["t"] for e in res.events if e["name"] == "valve_follows")
+    at_cap = (res.t > t_cap) & (res.t < t_follow)
+    assert at_cap.sum() > 3
+    assert np.all(res["gran.discharge_mdot"][at_cap] == pytest.approx(1000.0 / 3600.0, rel=1e-5))
+    following = res.t > t_follow
+    assert np.allclose(res["gran.discharge_mdot"][following], res["gran.discharge_demand"][following], rtol=1e-5)
+    assert res["gran.mass"][-1] == pytest.approx(100.0, rel=1e-9)
+    smooth = gf.load(LOOP).simulate(warn=False, grid_check=False, accuracy=False)
+    assert res.summary["d50_um"] == pytest.approx(smooth.summary["d50_um"], rel=1e-5)
