@@ -183,6 +183,19 @@ void ParticleChamber::outflows(const Ctx<T>& c, const T* frac) const {
   }
 }
 
+// The controlled discharge R for the controller's demand u: min(softplus(u), mdot_max) smoothed, or with a located
+// valve 0, u or mdot_max by the valve's position, which the scene's events switch.
+template <class T>
+T ParticleChamber::valve_flow(const Ctx<T>& c, const T& u, const T& m_set, const T& tau_c) const {
+  if (located_valve_) {
+    const long pos = std::lround(value_of(c.par(p_valve_)));
+    return pos == 0 ? T(0.0) : pos == 1 ? u : T(c.par(p_rmax_));
+  }
+  const T eps = kValveSmoothing * m_set / tau_c;
+  const T open = softplus(u, eps);
+  return open - softplus(T(open - c.par(p_rmax_)), eps);
+}
+
 template <class T>
 Status ParticleChamber::eval(const Ctx<T>& c) const {
   Work& w = c.template ws<Work>();
@@ -248,16 +261,7 @@ Status ParticleChamber::eval(const Ctx<T>& c) const {
       const T& m_set = c.par(p_mset_);
       const T& tau_c = c.par(p_tauc_);
       const T u = fed + m_sus - exch_rate * mass + (mass - m_set) / tau_c;
-      if (located_valve_) {  // the valve's position, switched by events: no smoothing
-        const long pos = std::lround(value_of(c.par(p_valve_)));
-        const T open = pos == 0 ? T(0.0) : pos == 1 ? u : T(c.par(p_rmax_));
-        c.res(discharge_out_.rate) = c.x(discharge_out_.rate) - open / (weighted + kMassFloor);
-      } else {
-        const T eps = kValveSmoothing * m_set / tau_c;
-        const T open = softplus(u, eps);
-        c.res(discharge_out_.rate) =
-            c.x(discharge_out_.rate) - (open - softplus(T(open - c.par(p_rmax_)), eps)) / (weighted + kMassFloor);
-      }
+      c.res(discharge_out_.rate) = c.x(discharge_out_.rate) - valve_flow(c, u, m_set, tau_c) / (weighted + kMassFloor);
     } else {
       c.res(discharge_out_.rate) = c.x(discharge_out_.rate) - c.par(p_k_);
     }

@@ -67,6 +67,8 @@ class ParticleChamber : public UnitBase<ParticleChamber> {
   template <class T>
   Status eval(const Ctx<T>& c) const;
   template <class T>
+  T valve_flow(const Ctx<T>& c, const T& u, const T& m_set, const T& tau_c) const;
+  template <class T>
   void init(InitCtx<T>& c) const;
   template <class T>
   void outputs(const Ctx<T>& c) const;
