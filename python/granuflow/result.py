@@ -326,10 +326,13 @@ class Result:
 
     @property
     def phases(self) -> list[dict]:
-        """The recipe's phases: the first from the start, then one from each event (its ``phase``) to the next."""
+        """The recipe's phases: the first (``start``) from the start, then one from each event (its ``phase``) to the
+        next event or the end of the run."""
         starts = [("start", float(self.t[0]))] + [(e["phase"], float(e["t"])) for e in self.events]
         ends = [t for _, t in starts[1:]] + [float(self.t[-1])]
-        return [{"name": n, "t_start_s": a, "t_end_s": b} for (n, a), b in zip(starts, ends)]
+        # an event that stops the run begins no phase
+        return [{"name": n, "t_start_s": a, "t_end_s": b} for k, ((n, a), b) in enumerate(zip(starts, ends))
+                if b > a or k == 0]
 
     @property
     def summary(self) -> dict:

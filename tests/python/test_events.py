@@ -43,7 +43,8 @@ def test_recipe_events_located_at_their_thresholds():
     # the hot air enters at hot_air: the outlet gas, cooled below 55 degC by the spray and drying, passes it after
     assert res["gas.T"][(res.t > 600.0) & (res.t < t[1])].max() < 273.15 + 55.0 < res["gas.T"][-1]
     phases = res.phases
-    assert [p["name"] for p in phases] == ["start", "drying", "hot drying", "dry"]
+    assert [p["name"] for p in phases] == ["start", "drying", "hot drying"]  # the stop begins none
+    assert phases[-1]["t_end_s"] == t[2]
     assert phases[1]["t_start_s"] == t[0] and phases[0]["t_end_s"] == t[0]
     assert res.summary["events"][0]["name"] == "stop_spray"
 
@@ -53,7 +54,7 @@ def test_recipe_cli_writes_events_and_plots(tmp_path):
     assert p.returncode == 0, p.stderr
     s = strict_json(tmp_path / "out" / "summary.json")
     assert [e["name"] for e in s["events"]] == ["stop_spray", "hot_air", "dry"]
-    assert [ph["name"] for ph in s["phases"]] == ["start", "drying", "hot drying", "dry"]
+    assert [ph["name"] for ph in s["phases"]] == ["start", "drying", "hot drying"]
     assert s["t_end_s"] == s["events"][-1]["t_s"]
     assert (tmp_path / "out" / "moisture.png").stat().st_size > 0
 
