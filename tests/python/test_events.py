@@ -161,3 +161,28 @@ def test_located_valve_of_the_sieve_mill_loop():
     assert res["gran.mass"][-1] == pytest.approx(100.0, rel=1e-9)
     smooth = gf.load(LOOP).simulate(warn=False, grid_check=False, accuracy=False)
     assert res.summary["d50_um"] == pytest.approx(smooth.summary["d50_um"], rel=1e-5)
+
+
+THERMOSTAT = """events:
+  - {name: heater_off, when: tank2.T > 320 K, do: {set: {feed.T: 300 K}}, repeat: true}
+  - {name: heater_on, when: tank2.T < 315 K, do: {set: {feed.T: 350 K}}, repeat: true}
+summary:"""
+
+
+def test_two_position_switch_of_an_input(tmp_path):
+    """A thermostat on the demo tanks: the feed temperature's step input is switched to constants by two repeating
+    events; tank 2 then stays between the thresholds (but for the lag of tank 1), and the run leaves the flowsheet's
+    input as it was (a second run of the same flowsheet gives the same results)."""
+    with open(os.path.join(ROOT, "flowsheets", "demo_tanks.yaml")) as f:
+        text = f.read().replace("summary:", THERMOSTAT, 1)
+    path = tmp_path / "thermostat.yaml"
+    path.write_text(text)
+    fs = gf.load(path)
+    res = fs.simulate(t_end=6000.0, n_out=601, warn=False, grid_check=False, accuracy=False)
+    names = [e["name"] for e in res.events]
+    assert len(names) >= 3 and names[:3] == ["heater_off", "heater_on", "heater_off"]
+    assert all(a != b for a, b in zip(names, names[1:]))  # the switch alternates
+    t2 = res["tank2.T"][res.t > res.events[1]["t"]]
+    assert 312.0 < t2.min() < 315.0 and 320.0 < t2.max() < 323.0
+    again = fs.simulate(t_end=6000.0, n_out=601, warn=False, grid_check=False, accuracy=False)
+    assert np.array_equal(res.y, again.y) and again.events == res.events
