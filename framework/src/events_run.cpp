@@ -64,7 +64,7 @@ int EventMonitor::roots(double t, const double* y, const double* yp, double* g) 
 // dh/dp_k is h's total sensitivity at t* (states' sensitivities and the parameter's own direction), dh/dt its rate
 // along the trajectory (the unknowns' y', the explicit states and outputs differentiated along it by AD).
 std::vector<double> EventMonitor::tau(size_t i, double t, const Sample& s) {
-  const int n = sys_.size(), nf = sys_.full_size(), ns = static_cast<int>(sens_ids_.size());
+  const int nf = sys_.full_size(), ns = static_cast<int>(sens_ids_.size());
   const int nq = sys_.n_quadratures(), no = fs_.n_outputs();
   sys_.extend(t, s.y, s.yp, y_full_.data(), yp_full_.data());
   std::vector<double> dydt(nf);
@@ -104,7 +104,6 @@ std::vector<double> EventMonitor::tau(size_t i, double t, const Sample& s) {
                       t, fs_.units()[fs_.state_unit(std::max(0, state_[i]))].name, 0.0);
   std::vector<double> tau(ns);
   for (int k = 0; k < ns; ++k) tau[k] = -dh[k] / rate;
-  (void)n;
   return tau;
 }
 
