@@ -23,7 +23,7 @@ def _margins(fig) -> None:
 
 
 def _phases(ax, result) -> None:
-    """A recipe's events as dashed vertical lines, every second phase shaded and each named at the top."""
+    """A recipe's events as dashed vertical lines, every second phase shaded and each named at the bottom."""
     events = getattr(result, "events", None)
     if not events:
         return
@@ -33,7 +33,7 @@ def _phases(ax, result) -> None:
             ax.axvspan(a, b, color="0.85", alpha=0.5, lw=0, zorder=0)
         if k > 0:
             ax.axvline(a, color="0.35", ls="--", lw=0.8)
-        ax.text(0.5 * (a + b), 0.99, ph["name"], transform=ax.get_xaxis_transform(), ha="center", va="top",
+        ax.text(0.5 * (a + b), 0.01, ph["name"], transform=ax.get_xaxis_transform(), ha="center", va="bottom",
                 fontsize=7, color="0.3")
 
 
