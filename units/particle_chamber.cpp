@@ -183,6 +183,19 @@ void ParticleChamber::outflows(const Ctx<T>& c, const T* frac) const {
   }
 }
 
+// The controlled discharge R for the controller's demand u: min(softplus(u), mdot_max) smoothed, or with a located
+// valve 0, u or mdot_max by the valve's position, which the scene's events switch.
+template <class T>
+T ParticleChamber::valve_flow(const Ctx<T>& c, const T& u, const T& m_set, const T& tau_c) const {
+  if (located_valve_) {
+    const long pos = std::lround(value_of(c.par(p_valve_)));
+    return pos == 0 ? T(0.0) : pos == 1 ? u : T(c.par(p_rmax_));
+  }
+  const T eps = kValveSmoothing * m_set / tau_c;
+  const T open = softplus(u, eps);
+  return open - softplus(T(open - c.par(p_rmax_)), eps);
+}
+
 template <class T>
 Status ParticleChamber::eval(const Ctx<T>& c) const {
   Work& w = c.template ws<Work>();
@@ -248,10 +261,7 @@ Status ParticleChamber::eval(const Ctx<T>& c) const {
       const T& m_set = c.par(p_mset_);
       const T& tau_c = c.par(p_tauc_);
       const T u = fed + m_sus - exch_rate * mass + (mass - m_set) / tau_c;
-      const T eps = kValveSmoothing * m_set / tau_c;
-      const T open = softplus(u, eps);
-      c.res(discharge_out_.rate) =
-          c.x(discharge_out_.rate) - (open - softplus(T(open - c.par(p_rmax_)), eps)) / (weighted + kMassFloor);
+      c.res(discharge_out_.rate) = c.x(discharge_out_.rate) - valve_flow(c, u, m_set, tau_c) / (weighted + kMassFloor);
     } else {
       c.res(discharge_out_.rate) = c.x(discharge_out_.rate) - c.par(p_k_);
     }
@@ -406,6 +416,13 @@ void ParticleChamber::outputs(const Ctx<T>& c) const {
     return m;
   };
   if (discharge_out_.rate) c.out(o_dis_) = outflow(1);
+  if (located_valve_) {  // the controller's demand u (eval), which the valve's events watch
+    inlet_flows(c, sc.in_m.data(), sc.in_w.data(), sc.gather);
+    T fed(0.0);
+    for (int i = 0; i < n_; ++i) fed += sc.in_m[i];
+    const T exch = exchange_.rate ? T(1.0 / c.par(p_tau_)) : T(0.0);
+    c.out(o_demand_) = fed + spray_solids(c) - exch * mass + (mass - c.par(p_mset_)) / c.par(p_tauc_);
+  }
   if (exchange_.rate) c.out(o_exch_) = outflow(0);
   c.out(o_top_) = mass > 0.0 ? T(M[n_ - 1] / mass) : T(0.0);
   c.out(o_hold_solids_) = mass;

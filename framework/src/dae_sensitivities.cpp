@@ -21,7 +21,9 @@ bool take_directions(const std::vector<Jet>& jets, int n, size_t d0, size_t d1, 
 }  // namespace
 
 // Seeds direction `slot` for parameter `id` and the parameters linked to it, where they belong to unit `u`.
+// id < 0: a direction of the states alone (an event's rate along the trajectory, events_run.cpp).
 void DaeSystem::seed(int id, int u, size_t slot, std::vector<Jet>& pj) const {
+  if (id < 0) return;
   auto [pu, pk] = fs_.param_location(id);
   if (pu == u) pj[pk].v[slot] = 1.0;
   for (int t : fs_.linked_targets(id)) {

@@ -69,6 +69,11 @@ def main(argv=None) -> int:
                         "grid as written")
     r.add_argument("--no-grid-check", action="store_true",
                    help="skip the check of the size grid (one solve on a grid twice as fine)")
+    r.add_argument("--checkpoint-at", metavar="TIMES",
+                   help="write the run's full state at these times to checkpoint_<t>s.gfckpt in --out (comma-"
+                        "separated, e.g. '10 min,30 min'; replaces the scene's checkpoints:)")
+    r.add_argument("--restart", metavar="FILE",
+                   help="resume from a checkpoint file of the same scene (bit-identical to the run that wrote it)")
     r.add_argument("--quiet", action="store_true", help="no output but errors")
     r.set_defaults(func=_cmd("run", "cmd_run"))
     st = sub.add_parser("steady", help="solve a scene's steady state directly; write steady.json and steady_psd.csv")
