@@ -24,6 +24,11 @@ class DryingCurve : public KernelBase {
   virtual void apply(const Jet* eta, int n, const Jet* p, Jet* v) const = 0;
   // True for the linear curve v = eta: a unit then keeps paper 001's Eq. (79) as it is and applies nothing.
   virtual bool identity() const { return false; }
+  ClassNeeds needs() const override {  // a class's moisture, through eta
+    ClassNeeds n;
+    n.moisture = true;
+    return n;
+  }
 };
 
 template <class Derived>

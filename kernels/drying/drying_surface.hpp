@@ -17,6 +17,11 @@ class DryingSurface : public KernelBase {
   virtual void apply(const Jet* area, const Jet* liquid, int n, const Jet* p, Jet* wet) const = 0;
   // True for the continuous film (wet = area): a unit then applies nothing.
   virtual bool identity() const { return false; }
+  ClassNeeds needs() const override {  // the liquid a class holds
+    ClassNeeds n;
+    n.moisture = true;
+    return n;
+  }
 };
 
 template <class Derived>

@@ -93,3 +93,41 @@ def test_a_cubic_breaking_its_rule_is_refused_in_one_line():
         fs.simulate(warn=False)
     msg = str(e.value)
     assert "A + B + C = 1.8" in msg and "\n" not in msg, msg
+
+
+# Paper 003's two-zone bed (spray and drying compartments) holding a wet batch, the spray off: the compartments' drying
+# curve (setting drying_curve) against their first-order drying.
+TWO_ZONE = """
+scene: wet_two_zone_batch
+t_end: 10 min
+output: {n: 21}
+solver: {rtol: 1e-8, atol: 1e-10}
+particles: {settings: {classes: 12, d_min: 5.0e-4, d_max: 4.0e-3}, params: {rho_s: 1040, eps_intra: 0}}
+units:
+  spray: {type: spray_compartment, settings: {drying: first_order, CURVE},
+          params: {bed_mass: 0.08, m_spray: 0, tau: 4 s, X0: 0.2, X_eq: 0.01, tau_dry: 60 s, PARAMS}}
+  dry: {type: drying_compartment, settings: {drying: first_order, CURVE},
+        params: {bed_mass: 3.92, tau: 196 s, X0: 0.2, X_eq: 0.01, tau_dry: 60 s, PARAMS}}
+connections: [spray.out -> dry.in, dry.out -> spray.in]
+"""
+
+
+def two_zone(curve=None, params=""):
+    text = TWO_ZONE.replace("CURVE", f"drying_curve: {curve}" if curve else "drying_curve: none")
+    text = text.replace(", PARAMS", f", {params}" if params else "")
+    return gf.load_text(text).simulate(warn=False)
+
+
+def test_chamber_linear_curve_below_the_critical_moisture_is_first_order_drying():
+    first, linear = two_zone(), two_zone("linear", "X_cr: 1.0")
+    for u in ("spray", "dry"):
+        assert np.allclose(linear[f"{u}.moisture"], first[f"{u}.moisture"], rtol=1e-6, atol=0), u
+
+
+def test_chamber_curves_order_and_the_constant_rate_period():
+    x = {g: two_zone("gamma", f"X_cr: 0.1, drying_gamma: {g}")["dry.moisture"][-1] for g in (0.3, 1.0, 3.0)}
+    assert x[3.0] < x[1.0] < x[0.3], x
+    # above X_cr the bed dries at the constant rate (X_cr - X_eq) M / tau_dry of both compartments together
+    r = two_zone("gamma", "X_cr: 0.1, drying_gamma: 3")
+    rate = r["spray.vapour_mdot"][0] + r["dry.vapour_mdot"][0]
+    assert rate == pytest.approx((0.1 - 0.01) * 4.0 / 60.0, rel=1e-9)
