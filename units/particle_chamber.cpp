@@ -9,6 +9,7 @@
 #include "granuflow/flowsheet.hpp"
 #include "granuflow/properties.hpp"
 #include "kernels/discretization/psd.hpp"
+#include "kernels/drying/paper001_drying.hpp"
 #include "kernels/particle_geometry.hpp"
 #include "particle_chamber_work.hpp"
 
@@ -69,6 +70,7 @@ void ParticleChamber::configure(const UnitSpec&, const double* p, const double* 
 // The spray lands on the particles' surface (paper 003, Eq. (7.33)); the model has no nucleation from the spray, so
 // on an empty bed what is sprayed has nowhere to go and would vanish from the balances (issue 29).
 void ParticleChamber::check(const UnitSpec&, const double* p) const {
+  closures_.check(p, "drying_curve");
   if (spray_ && p[p_mass_.i] == 0.0 && p[p_spray_.i] > 0.0 && (wet_ || p[p_w_.i] > 0.0))
     throw ConfigError(violation("bed_mass", 0.0, "kg",
                                 "bed_mass > 0 while the spray is on (m_spray = " + fmt_num(p[p_spray_.i]) +
@@ -101,6 +103,19 @@ const T* particle_tables(const Ctx<T>& c, const W& w, S& sc, const ParticleParam
 template <class T>
 T ParticleChamber::spray_solids(const Ctx<T>& c) const {
   return spray_ ? T(c.par(p_spray_) * c.par(p_w_)) : T(0.0);
+}
+
+// Without a curve (W - X_eq M) / tau_dry; with one, paper 000, section 5.4.1: the constant rate (X_cr - X_eq) M /
+// tau_dry (the first-order rate at X_cr) times v(eta), eta = (X - X_eq) / (X_cr - X_eq) regularized as in paper 001's
+// Eq. (80); the linear curve is the first-order rate below X_cr.
+template <class T>
+T ParticleChamber::drying_rate(const Ctx<T>& c, const T& m, const T& w) const {
+  if (!closures_.has_curve()) return (w - c.par(p_xeq_) * m) / c.par(p_taudry_);
+  const T &x_eq = c.par(p_xeq_), &x_cr = c.par(p_xcr_);
+  T v = kernels::paper001::normalized_moisture(T(w / (m + kMassFloor)), x_eq, x_cr).value;
+  v = v < 1.0 ? v : T(1.0);
+  closures_.curve(c.p, 1, &v);
+  return (x_cr - x_eq) * m / c.par(p_taudry_) * v;
 }
 
 template <class T>
@@ -280,7 +295,7 @@ Status ParticleChamber::eval(const Ctx<T>& c) const {
     if (wet_) {
       // sprayed water lands in proportion to the class surface; first-order drying towards X_eq
       const T dep = spray_ ? T(m_water * M[i] * sc.spm[i] / (surface + kMassFloor)) : T(0.0);
-      const T dry = (W[i] - c.par(p_xeq_) * M[i]) / c.par(p_taudry_);
+      const T dry = drying_rate(c, M[i], W[i]);
       c.res(sW_ + i) = c.xd(sW_ + i) - (sc.dW[i] + in_w - out_w + dep - dry);
     }
   }
@@ -452,7 +467,7 @@ ParticleChamber::Boundary<T> ParticleChamber::boundary(const Ctx<T>& c) const {
     const T wi = wet_ ? c.x(sW_ + i) : T(0.0);
     capacity += c.x(sM_ + i) * cp_s + wi * cp_l;
     dh += (c.xd(sM_ + i) * cp_s + (wet_ ? c.xd(sW_ + i) : T(0.0)) * cp_l) * (t - props::kT0);
-    if (wet_) vapour += (wi - c.par(p_xeq_) * c.x(sM_ + i)) / c.par(p_taudry_);
+    if (wet_) vapour += drying_rate(c, c.x(sM_ + i), wi);
     for (PortId p : inlets_) {
       const T& wf = c.port(p, solids::water(n_, i));
       h_in += (c.port(p, solids::mdot(i)) * cp_s + wf * cp_l) * (c.port(p, solids::T(n_)) - props::kT0);

@@ -47,6 +47,7 @@
 #include "granuflow/unit.hpp"
 #include "kernels/discretization/fv_growth.hpp"
 #include "kernels/discretization/psd_setting.hpp"
+#include "kernels/drying/drying_closures.hpp"
 #include "kernels/population/population.hpp"
 #include "particles.hpp"
 
@@ -110,6 +111,9 @@ class ParticleChamber : public UnitBase<ParticleChamber> {
   Boundary<T> boundary(const Ctx<T>& c) const;  // computes the outflows (outflows()) for its caller too
   template <class T>
   T spray_solids(const Ctx<T>& c) const;
+  // Water drying off a class of m kg dry solids holding w kg water, kg/s: first order, or along a drying curve.
+  template <class T>
+  T drying_rate(const Ctx<T>& c, const T& m, const T& w) const;
   template <class T>
   void growth_rates(const Ctx<T>& c, const T* N, const T* W, const T& amount, T* dM, T* dW) const;
   // What the inlets bring per class (dry solids, water), summed over the inlets in their order.
@@ -147,6 +151,8 @@ class ParticleChamber : public UnitBase<ParticleChamber> {
   bool controlled_ = false;
   bool located_valve_ = false;  // valve: located (the discharge's switches as events, not smoothed)
   Classifier classifier_;
+  kernels::DryingClosures closures_;  // the drying curve (setting drying_curve), when one is chosen
+  ParamId p_xcr_;                     // its critical moisture
   ParamId p_mass_, p_d50_, p_sigma_, p_x0_, p_t_, p_cpl_;
   ParamId p_spray_, p_w_, p_tspray_, p_taudry_, p_xeq_, p_tau_, p_k_, p_mset_, p_tauc_, p_rmax_, p_valve_;
   StateId sM_, sW_, sT_, sZero_;

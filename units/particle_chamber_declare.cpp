@@ -37,7 +37,7 @@ void ParticleChamber::declare_options(const ParticleSystem& ps, Settings& st) {
                            "residence-time segment)") == "layering";
   wet_ = st.get_choice("drying", "none", {"none", "first_order"},
                        "water on the particles: none (sprayed and fed water evaporates at once) or per-class water "
-                       "drying at (W - X_eq M) / tau_dry") == "first_order";
+                       "drying at (W - X_eq M) / tau_dry (or along drying_curve)") == "first_order";
   if (wet_) require_water(ps, st, "drying: first_order keeps per-class water on the particles");
   if (role_ != ChamberRole::kSprayZone) {
     const std::string d = st.get_choice("discharge", role_ == ChamberRole::kGranulator ? "unclassified" : "none",
@@ -80,6 +80,10 @@ void ParticleChamber::declare_params(UnitSpec& s, Settings& st) {
     p_x0_ = s.add_param({"X0", "kg/kg", 0.0, 0.0, 10.0, "initial moisture, dry basis", init});
     p_taudry_ = s.add_param({"tau_dry", "s", 60.0, 1e-3, 1e7, "drying time constant of the particle water", op});
     p_xeq_ = s.add_param({"X_eq", "kg/kg", 0.0, 0.0, 1.0, "equilibrium moisture, dry basis", op});
+    closures_.declare(s, st, "", false);  // paper 000, section 5.4.1: a drying curve instead of first order
+    if (closures_.has_curve())
+      p_xcr_ = s.add_param({"X_cr", "kg/kg", kernels::paper001::defaults::kCriticalMoisture, 1e-4, 10.0,
+                            "critical moisture content: end of the constant-rate period", "paper 001, Table 8"});
   }
   if (role_ != ChamberRole::kGranulator)
     p_tau_ = s.add_param({"tau", "s", role_ == ChamberRole::kSprayZone ? 4.0 : 196.0, 1e-3, 1e7,

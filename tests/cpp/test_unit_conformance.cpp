@@ -10,8 +10,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <map>
 #include <set>
+#include <sstream>
 #include <string>
 #include <thread>
 
@@ -142,6 +144,36 @@ units:
 connections: [spray.out -> dry.in, dry.out -> spray.in, seed.out -> dry.feed, dry.discharge -> product.in]
 )";
 
+// The review's drying closures (paper 000): the headline with a drying curve and a drying surface other than the
+// defaults in its bed (the bed's moisture stays below the critical one: the curve acts on every class).
+Scene drying_closures_scene(const std::string& settings, const std::string& params) {
+  std::ifstream f(testing::repo_path("flowsheets/stoeckl_gf25_batch.yaml"));
+  std::stringstream ss;
+  ss << f.rdbuf();
+  std::string text = ss.str();
+  const std::string from = "    params: {bed_mass: 15 kg,";
+  const size_t at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  if (at != std::string::npos)
+    text.replace(at, from.size(), "    settings: {" + settings + "}\n    params: {" + params + "bed_mass: 15 kg,");
+  return scene_from_text(text);
+}
+
+// The two-zone bed with a drying curve in both compartments (paper 000, section 5.4.1, in paper 003's chambers).
+std::string two_zone_with_curve(const std::string& two_zone) {
+  std::string text = two_zone;
+  for (const std::string unit : {"spray: {type: spray_compartment, settings: {",
+                                 "dry: {type: drying_compartment, "
+                                 "settings: {"}) {
+    const size_t at = text.find(unit);
+    EXPECT_NE(at, std::string::npos) << unit;
+    text.insert(at + unit.size(), "drying_curve: gamma, ");
+  }
+  const size_t p = text.find("params: {bed_mass: 3.92");
+  text.insert(p + 9, "drying_gamma: 3, X_cr: 0.012, ");
+  return text;
+}
+
 // Scenes and the unit types each one covers.
 std::vector<std::pair<std::string, Scene>> scenes() {
   std::vector<std::pair<std::string, Scene>> v;
@@ -155,6 +187,13 @@ std::vector<std::pair<std::string, Scene>> scenes() {
   v.emplace_back("sieve-mill loop", scene_from_text(std::string(kSieveMillLoopHead) + kLoopTail));
   v.emplace_back("dry sieve-mill loop", scene_from_text(std::string(kDrySieveMillLoopHead) + kLoopTail));
   v.emplace_back("two-zone bed", scene_from_text(kTwoZone));
+  v.emplace_back("drying: gamma curve, coverage",
+                 drying_closures_scene("drying_curve: gamma, drying_surface: coverage", "drying_gamma: 3, "));
+  v.emplace_back("drying: cubic curve, droplet height",
+                 drying_closures_scene("drying_curve: cubic, drying_surface: droplet_height",
+                                       "drying_A: 0.5, drying_B: 0.3, drying_C: 0.2, drying_theta: 1.2, "));
+  v.emplace_back("drying: correction", drying_closures_scene("drying_surface: correction", "drying_f_surface: 0.6, "));
+  v.emplace_back("two-zone bed, gamma curve", scene_from_text(two_zone_with_curve(kTwoZone)));
   return v;
 }
 
