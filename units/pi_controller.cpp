@@ -71,7 +71,6 @@ class PiController : public UnitBase<PiController>, public SignalUnit, public Ho
     sI_ = s.add_state("I", StateKind::Differential, "-", 0.01);
     sU_ = s.add_state("u", StateKind::Algebraic, u.unit,
                       std::max({std::abs(u.value), 1e-6 * (u.upper - u.lower), 1e-30}));
-    o_u_ = s.add_output("u", u.unit);
     o_y_ = s.add_output("measured", ym);
     o_dev_ = s.add_output("deviation", ym);
     o_i_ = s.add_output("integral", "-");
@@ -116,7 +115,6 @@ class PiController : public UnitBase<PiController>, public SignalUnit, public Ho
   }
   template <class T>
   void outputs(const Ctx<T>& c) const {
-    c.out(o_u_) = c.x(sU_);
     c.out(o_y_) = c.par(p_y_);
     c.out(o_dev_) = c.par(p_y_) - c.par(p_sp_);
     c.out(o_i_) = c.x(sI_);
@@ -153,7 +151,7 @@ class PiController : public UnitBase<PiController>, public SignalUnit, public Ho
   bool direct_ = false;
   ParamId p_sp_, p_span_, p_kp_, p_ti_, p_tt_, p_umin_, p_umax_, p_u0_, p_eps_, p_y_;
   StateId sI_, sU_;
-  OutputId o_u_, o_y_, o_dev_, o_i_;
+  OutputId o_y_, o_dev_, o_i_;
 };
 
 }  // namespace

@@ -1,0 +1,86 @@
+"""The PI controller unit (docs/controllers.md): it holds the outlet gas temperature of the headline plant through a
+set-point step and a spray disturbance, its limits hold and unwind, its gains have exact sensitivities, a contour map
+runs over them, and a steady state says when it misses its set point."""
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import granuflow as gf
+from granuflow.steady import steady_report
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+HEADLINE_PI = os.path.join(ROOT, "flowsheets", "stoeckl_gf25_batch_controlled.yaml")
+LOOP_PI = os.path.join(ROOT, "flowsheets", "continuous_layering_sieve_mill_pi.yaml")
+C = 273.15
+
+
+def at(res, name, t):
+    return float(np.interp(t, res.t, res[name]))
+
+
+def test_the_outlet_gas_temperature_follows_its_set_point_and_rejects_the_spray_step():
+    res = gf.load(HEADLINE_PI).simulate(warn=False)
+    # before each change the gas is at the set point of the moment (the integral removes the offset)
+    assert abs(at(res, "gas.T", 19.9 * 60) - (40 + C)) < 0.05
+    assert abs(at(res, "gas.T", 39.9 * 60) - (42 + C)) < 0.05
+    # more water to evaporate from 40 min: the controller heats the inlet air more and brings the gas back
+    assert at(res, "tic.u", 59.9 * 60) > at(res, "tic.u", 39.9 * 60) + 1.0
+    assert abs(at(res, "gas.T", 59.9 * 60) - (42 + C)) < 0.1
+    assert min(res["gas.T"][res.t > 2400]) < 42 + C - 0.1  # the disturbance was felt
+    u = res["tic.u"]
+    assert u.min() > 30 + C and u.max() < 90 + C
+
+
+def test_a_limited_output_stays_within_its_limits_and_does_not_wind_up():
+    fs = gf.load(HEADLINE_PI)
+    fs.set("tic.u_max", 65 + C)  # too little heat for 42 degC once the spray steps up
+    res = fs.simulate(warn=False)
+    u = res["tic.u"]
+    assert u.max() <= 65 + C + 1e-3  # the clamp, to the solver's tolerance
+    assert at(res, "tic.u", 59.9 * 60) > 65 + C - 0.05  # at its limit
+    assert at(res, "gas.T", 59.9 * 60) < 42 + C - 0.3  # the set point is out of reach
+    # back-calculation: the integral tracks the limit instead of growing with the error
+    integral = res["tic.integral"][res.t > 45 * 60]
+    assert np.ptp(integral) < 0.05
+
+
+def test_sensitivities_to_the_gain_and_integral_time_match_finite_differences():
+    fs = gf.load(HEADLINE_PI)
+    t = [0.0, 25 * 60.0]
+    tol = {"rtol": 1e-9, "atol": 1e-9}
+    res = fs.simulate(t_out=t, sensitivities=["tic.Kp", "tic.Ti"], warn=False, **tol)
+    for p, h in (("tic.Kp", 0.02), ("tic.Ti", 0.5)):
+        vals = [gf.load(HEADLINE_PI).set(p, fs.get(p) + d).simulate(t_out=t, warn=False, **tol)["gas.T"][-1]
+                for d in (-h, h)]
+        fd = (vals[1] - vals[0]) / (2 * h)
+        sens = res.sensitivity("gas.T", p)[-1]
+        assert sens == pytest.approx(fd, rel=2e-3, abs=1e-7), (p, sens, fd)
+
+
+def test_a_driven_parameter_cannot_be_set_and_names_its_controller():
+    fs = gf.load(HEADLINE_PI)
+    with pytest.raises(ValueError, match=r"inlet.T .*driven by tic.u \(setting tic.drive\)"):
+        fs.set("inlet.T", 70 + C)
+
+
+def test_a_contour_map_runs_over_the_controller_gain_and_set_point(tmp_path):
+    out = tmp_path / "c"
+    r = subprocess.run([sys.executable, "-m", "granuflow", "contour", HEADLINE_PI, "--x", "tic.Kp:-:1:4:2",
+                        "--y", "tic.Ti:s:60:240:2", "--output", "T_gas_out_K", "--out", str(out), "--workers", "1"],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    text = (out / "contour.csv").read_text()
+    assert text.count("\\n") >= 5, text
+
+
+def test_a_pi_controller_at_its_limit_misses_its_set_point_at_the_steady_state():
+    fs = gf.load(LOOP_PI)
+    rep = steady_report(fs, stability=False)
+    assert not any("set point" in w for w in rep["warnings"]), rep["warnings"]
+    assert rep["bed_mass_kg"] == pytest.approx(100.0, rel=1e-4)
+    fs.set("lic.u_max", 1e-4)  # the discharge cannot carry away what is sprayed: the bed grows past its set point
+    with pytest.raises(Exception):
+        steady_report(fs, stability=False)
