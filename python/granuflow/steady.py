@@ -53,6 +53,8 @@ def _summary(fs: Flowsheet, raw: dict) -> tuple[dict, dict, dict]:
 
 # Flows below this (kg/s, W) are round-off of a steady state with nothing flowing, not a flow to close a balance on.
 NO_FLOW = 1e-15
+# Growth rates below this (1/s, a time scale of 30 000 years) are round-off of a zero eigenvalue.
+NEUTRAL_RATE = 1e-12
 
 
 def boundary_balance(raw: dict) -> dict:
@@ -74,9 +76,14 @@ def _stability(raw: dict) -> dict | None:
     if not s:
         return None
     re, im = s["max_real_eigenvalue"], s["imag_of_max"]
-    return {"max_real_eigenvalue_1_s": re, "imag_1_s": im,
-            "oscillation_period_s": 2.0 * math.pi / im if im > 0 else None,
-            "stable": bool(re < 0.0), "time_s": s["time_s"]}
+    out = {"max_real_eigenvalue_1_s": re, "imag_1_s": im,
+           "oscillation_period_s": 2.0 * math.pi / im if im > 0 else None,
+           "stable": bool(re < 0.0), "time_s": s["time_s"]}
+    if abs(re) < NEUTRAL_RATE and im < NEUTRAL_RATE:  # round-off of a zero eigenvalue is no growth nor decay
+        out["stable"] = None
+        out["note"] = (f"neutral: the largest eigenvalue is zero to round-off (|{re:.3g}| < {NEUTRAL_RATE:g} 1/s): a "
+                       "quantity nothing changes, e.g. a hold-up with nothing flowing in or out")
+    return out
 
 
 def steady_report(fs: Flowsheet, *, t: float = 0.0, stability: bool = True, ftol: float = 1e-10) -> dict:

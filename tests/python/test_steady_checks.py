@@ -35,8 +35,10 @@ def test_a_steady_state_piled_in_the_top_class_warns_as_a_run_does():
 def test_a_loop_with_the_spray_off_has_no_closure_and_says_the_bed_misses_its_set_point():
     fs = gf.load(LOOP)
     fs.set_input("gran.m_spray", [0.0, 1.0], [0.0, 0.0], interp="step")
-    rep = steady_report(fs, stability=False)
+    rep = steady_report(fs, stability=True)
     solids = rep["balance"]["solids"]
+    # nothing changes the bed: its eigenvalue is zero, neither growth nor decay (it was "unstable" at 1e-25 1/s)
+    assert rep["stability"]["stable"] is None and "neutral" in rep["stability"]["note"], rep["stability"]
     assert solids["rel"] is None and "nothing flows" in solids["note"], solids
     missed = [w for w in rep["warnings"] if "misses its set point" in w]
     assert len(missed) == 1, rep["warnings"]
