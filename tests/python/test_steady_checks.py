@@ -2,7 +2,10 @@
 put 100 % of the loop's mass in the top class without a word) and the balance closure, which is |in - out| / max
 where something flows and undefined (null, with a note saying why) where nothing does (in = 0 against out = 6.8e-37
 gave a closure of 1.0); and a controller that misses its set point at the steady state says so (issue 29)."""
+import json
 import os
+import subprocess
+import sys
 
 import granuflow as gf
 from granuflow.steady import NO_FLOW, boundary_balance, steady_report
@@ -49,3 +52,17 @@ def test_a_loop_with_the_spray_off_has_no_closure_and_says_the_bed_misses_its_se
     assert f"gran.mass = {mass:.6g}"[:14] in missed[0], (mass, missed[0])
     # with the spray on, the controller holds its set point and nothing is said
     assert not any("set point" in w for w in steady_report(gf.load(LOOP), stability=False)["warnings"])
+
+
+def test_the_command_line_writes_the_missed_set_point_and_the_undefined_closure(tmp_path):
+    text = open(LOOP).read().replace("values: [200 kg/h, 240 kg/h]", "values: [0 kg/h, 0 kg/h]")
+    assert "values: [0 kg/h, 0 kg/h]" in text
+    scene = tmp_path / "loop_no_spray.yaml"
+    scene.write_text(text)
+    r = subprocess.run([sys.executable, "-m", "granuflow", "steady", str(scene), "--out", str(tmp_path / "o")],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert "warning: unit gran (granulator) misses its set point" in r.stderr and "gran.M_set = 100 kg" in r.stderr
+    rep = json.loads((tmp_path / "o" / "steady.json").read_text())
+    assert rep["balance"]["solids"]["rel"] is None and any("misses its set point" in w for w in rep["warnings"])
+    assert "UNSTABLE" not in r.stdout and "neutral" in r.stdout, r.stdout
