@@ -93,3 +93,17 @@ def test_a_pi_controller_at_its_limit_misses_its_set_point_at_the_steady_state()
     assert "lic.set_point = 100 kg" in missed[0] and "lic.measured = " in missed[0], missed[0]
     assert rep["bed_mass_kg"] < 95.0
     assert rep["k_discharge_1_s"] == pytest.approx(2e-3, rel=1e-2)
+
+
+def test_sensitivities_through_a_measured_output_match_finite_differences():
+    # the loop's controller measures an output (the bed mass, a sum over classes): the Jacobian and the sensitivities
+    # carry the granulator's columns into the controller's equations
+    text = open(LOOP_PI).read().replace("classes: 100,", "classes: 20,")
+    fs = gf.load_text(text, "loop20")
+    t, tol = [0.0, 1800.0], {"rtol": 1e-9, "atol": 1e-10}
+    res = fs.simulate(t_out=t, sensitivities=["lic.Kp", "lic.Ti"], warn=False, **tol)
+    for p, h in (("lic.Kp", 0.02), ("lic.Ti", 2.0)):
+        vals = [gf.load_text(text, "loop20").set(p, fs.get(p) + d).simulate(t_out=t, warn=False, **tol)["gran.M_10"][-1]
+                for d in (-h, h)]
+        fd = (vals[1] - vals[0]) / (2 * h)
+        assert res.sensitivity("gran.M_10", p)[-1] == pytest.approx(fd, rel=1e-4), p
