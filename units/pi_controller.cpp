@@ -48,9 +48,9 @@ class PiController : public UnitBase<PiController>, public SignalUnit, public Ho
     ParamSpec u{"u0", "-", 0.0, -kWide, kWide, "", "docs/controllers.md"};
     if (!drive_.empty()) u = driven_spec(st);
     const std::string src = "docs/controllers.md";
-    p_sp_ = s.add_param({"set_point", ym, 0.0, -kWide, kWide, "set point of the measured quantity", src});
-    p_span_ = s.add_param(
-        {"y_span", ym, 1.0, 1e-12, kWide, "span of the measurement: the error enters as a fraction of it", src});
+    p_sp_ = s.add_param({"set_point", ym, 0.0, -kWide, kWide, "set point, in the unit of the measured quantity", src});
+    p_span_ = s.add_param({"y_span", ym, 1.0, 1e-12, kWide,
+                           "span of the measurement (its unit): the error enters as a fraction of it", src});
     p_kp_ = s.add_param({"Kp", "-", 1.0, 0.0, 1e6,
                          "proportional gain: output change, as a fraction of u_max - u_min, per error as a fraction "
                          "of y_span",
@@ -58,8 +58,10 @@ class PiController : public UnitBase<PiController>, public SignalUnit, public Ho
     p_ti_ = s.add_param({"Ti", "s", 600.0, 1e-3, 1e9, "integral time", src});
     p_tt_ = s.add_param(
         {"Tt", "s", 600.0, 1e-3, 1e9, "tracking time of the anti-windup (back-calculation), of the order of Ti", src});
-    p_umin_ = s.add_param({"u_min", u.unit, u.lower, u.lower, u.upper, "lower limit of the output", src});
-    p_umax_ = s.add_param({"u_max", u.unit, u.upper, u.lower, u.upper, "upper limit of the output", src});
+    p_umin_ = s.add_param({"u_min", u.unit, u.lower, u.lower, u.upper,
+                           "lower limit of the output, in the unit of the driven parameter (bounds: its bounds)", src});
+    p_umax_ = s.add_param({"u_max", u.unit, u.upper, u.lower, u.upper,
+                           "upper limit of the output, in the unit of the driven parameter (bounds: its bounds)", src});
     p_u0_ = s.add_param({"u0", u.unit, u.value, u.lower, u.upper,
                          "output at zero error and zero integral (bias), the output the controller starts from", src});
     p_eps_ = s.add_param({"smoothing", "-", 1e-3, 1e-6, 0.1,
