@@ -89,8 +89,8 @@ std::vector<Drive> resolve_drives(const Flowsheet& fs) {
       if (d.output < 0) fail("'" + r.source + "' is no state or output of the flowsheet");
       if (is_quadrature(units[su].spec, d.output))
         fail("'" + r.source + "' integrates a flow over time (a quadrature): the equations cannot read it");
-      if (units[d.unit].spec.is_explicit())
-        fail(r.param + " belongs to an explicit unit, which can be driven by a state only");
+      if (units[d.unit].spec.is_explicit() || units[d.unit].spec.classes().n > 0)
+        fail(r.param + " belongs to an explicit unit or one with size classes, which can be driven by a state only");
       d.source_unit = su;
     }
     if (d.state >= 0 && units[fs.state_unit(d.state)].spec.is_explicit())
