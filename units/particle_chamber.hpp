@@ -44,6 +44,7 @@
 #include <vector>
 
 #include "classifier.hpp"
+#include "granuflow/signals.hpp"
 #include "granuflow/unit.hpp"
 #include "kernels/discretization/fv_growth.hpp"
 #include "kernels/discretization/psd_setting.hpp"
@@ -55,7 +56,7 @@ namespace granuflow::units {
 
 enum class ChamberRole { kGranulator, kSprayZone, kDryingZone };
 
-class ParticleChamber : public UnitBase<ParticleChamber> {
+class ParticleChamber : public UnitBase<ParticleChamber>, public HoldsSetPoint {
  public:
   explicit ParticleChamber(ChamberRole role) : role_(role) {}
   std::string type() const override;
@@ -64,6 +65,11 @@ class ParticleChamber : public UnitBase<ParticleChamber> {
   void configure(const UnitSpec& spec, const double* p, const double* shared, Workspace& ws) const override;
   void check(const UnitSpec& spec, const double* p) const override;
   void analytic_jacobian(const Ctx<double>& c, double cj, JacobianSink& sink) const override;
+  // With the bed mass held (ideal level controller), its dry mass at M_set (a steady state says when it is not).
+  std::vector<SetPoint> set_points() const override {
+    if (!controlled_) return {};
+    return {{p_mset_, o_mass_}};
+  }
 
   template <class T>
   Status eval(const Ctx<T>& c) const;

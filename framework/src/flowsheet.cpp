@@ -9,6 +9,7 @@
 
 #include "granuflow/dae_system.hpp"
 #include "granuflow/errors.hpp"
+#include "granuflow/signals.hpp"
 
 namespace granuflow {
 
@@ -184,6 +185,7 @@ void Flowsheet::finalize() {
         if (idx[f] >= 0) run[f] = f + 1 < idx.size() && idx[f + 1] == idx[f] + 1 ? run[f + 1] + 1 : 1;
     }
   }
+  resolve_drives(*this);  // refuses a controller's wiring that names nothing or cannot hold
   pool_ = std::make_shared<SystemPool>();
   finalized_ = true;
 }
@@ -311,6 +313,14 @@ double Flowsheet::linked_value(int source) const {
 }
 
 // A link target reports the value it takes in a run (its source's), not the value stored before the last run.
+// A parameter driven by a signal (signals.hpp) takes its source's value in every evaluation: a value given to it would
+// never be used, so it is refused, naming the source.
+static void refuse_driven(const Flowsheet& fs, int id, const std::string& what) {
+  if (const std::string by = driven_by(fs, id); !by.empty())
+    throw ConfigError(what + ": " + fs.qualified_name(id) + " is driven by " + by +
+                      " in every evaluation; change the controller's parameters instead");
+}
+
 double Flowsheet::param_value(int id) const {
   const int src = link_source(id);
   if (src >= 0) return linked_value(src);
@@ -338,6 +348,8 @@ void Flowsheet::set_param_value(int id, double v) {
                       ": cannot be set, it is driven by the time-dependent input " + q + " (inputs: " + q +
                       "); change the input's values, or remove the input to make " + q + " a constant");
   }
+  auto [u, k] = param_location(id);
+  if (!(v == units_[u].params[k])) refuse_driven(*this, id, qualified_name(id) + " = " + fmt_num(v));  // copies pass
   store_param(id, v);
 }
 
@@ -395,6 +407,7 @@ void Flowsheet::set_input(const std::string& qualified, PiecewiseLinear input) {
   const int id = param_id(qualified);
   auto [u, k] = param_location(id);
   const ParamSpec& s = units_[u].spec.params()[k];
+  refuse_driven(*this, id, "input " + qualified);
   if (const int src = link_source(id); src >= 0)
     throw ConfigError("input " + qualified + ": cannot be set, " + qualified + " follows " + qualified_name(src) +
                       " by a link (links: " + qualified + ": " + qualified_name(src) + "); give " +
@@ -422,6 +435,7 @@ void Flowsheet::clear_input(const std::string& qualified) {
 void Flowsheet::link(const std::string& target, const std::string& source) {
   const int t = param_id(target), s = param_id(source);
   if (t == s) throw ConfigError("link " + target + ": a parameter cannot follow itself");
+  for (int id : {t, s}) refuse_driven(*this, id, "link " + target + " -> " + source);
   if (param_spec(t).unit != param_spec(s).unit)
     throw ConfigError("link " + target + " -> " + source + ": units differ (" + param_spec(t).unit + " vs " +
                       param_spec(s).unit + ")");

@@ -125,6 +125,32 @@ units:
   mill: {type: mill, settings: {law: lognormal}, params: {d50: 450 um, sigma_g: 1.5}}
 )";
 
+// The dry loop with its bed mass held by a PI controller on the discharge rate instead of the ideal controller: a
+// parameter driven by a state (k_discharge by the controller's output) and by an output (the controller's measurement
+// by the granulator's mass, a sum over its classes).
+const char* kPiLoopHead = R"(
+scene: pi_sieve_mill_loop
+t_end: 2 h
+output: {n: 5}
+solver: {rtol: 1e-8, atol: 1e-10}
+particles: {settings: {classes: 12, d_min: 2.0e-4, d_max: 3.0e-3, water: false}, params: {rho_s: 1500, eps_intra: 0}}
+units:
+  seed: {type: solids_feed, params: {mdot: 5 kg/h, d50: 400 um, sigma: 1.3, T: 30 degC}}
+  gran:
+    type: granulator
+    settings: {discharge: unclassified, bed_mass: free}
+    params: {bed_mass: 20 kg, d50_0: 800 um, sigma_0: 1.4, m_spray: 60 kg/h, w_spray: 0.3}
+  sieve:
+    type: sieve
+    settings: {upper_curve: plitt, lower_curve: plitt}
+    params: {upper_d_cut: 1.5 mm, lower_d_cut: 1.0 mm}
+  mill: {type: mill, settings: {law: lognormal}, params: {d50: 450 um, sigma_g: 1.5}}
+  lic:
+    type: pi_controller
+    settings: {measure: gran.mass, drive: gran.k_discharge, action: direct}
+    params: {set_point: 22 kg, y_span: 20 kg, Kp: 2, Ti: 20 min, Tt: 20 min, u_min: 0, u_max: 0.02, u0: 1e-3}
+)";
+
 // The two-compartment bed of paper 003 (Eqs. (7.37)-(7.39)) run continuously: spray zone and drying zone exchanging
 // particles, the drying zone fed and discharged (free hold-up), the water of the spray drying in both zones.
 const char* kTwoZone = R"(
@@ -194,6 +220,9 @@ std::vector<std::pair<std::string, Scene>> scenes() {
                                        "drying_A: 0.5, drying_B: 0.3, drying_C: 0.2, drying_theta: 1.2, "));
   v.emplace_back("drying: correction", drying_closures_scene("drying_surface: correction", "drying_f_surface: 0.6, "));
   v.emplace_back("two-zone bed, gamma curve", scene_from_text(two_zone_with_curve(kTwoZone)));
+  v.emplace_back("headline, PI on the gas temperature",
+                 scene_from_file("flowsheets/stoeckl_gf25_batch_controlled.yaml"));
+  v.emplace_back("sieve-mill loop, PI on the bed mass", scene_from_text(std::string(kPiLoopHead) + kLoopTail));
   return v;
 }
 
