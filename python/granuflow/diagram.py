@@ -1,5 +1,6 @@
 """Flowsheet diagrams drawn by Graphviz (Debian's ``graphviz``): units as nodes labelled with their type, streams as
-edges labelled with their kind, recycles drawn apart so a loop is seen at a glance.
+edges labelled with their kind, recycles drawn apart so a loop is seen at a glance, and a controller's measured and
+driven quantities as dashed signal lines.
 
     fs = granuflow.load("flowsheets/continuous_layering_sieve_mill.yaml")
     fs.diagram()                      # inline SVG in a notebook
@@ -26,17 +27,21 @@ ConfigError = _core.ConfigError
 # Stream kinds by colour, so a gas path and a solids path are told apart without reading labels.
 _KIND_COLOURS = {"gas": "#1f77b4", "liquid": "#17becf", "solids": "#8c564b", "heat": "#d62728", "vapour": "#7f7f7f",
                  "wetting": "#2ca02c", "holdup": "#9467bd"}
+# Settings of a controller that name another unit's quantity (pi_controller: measure, drive), drawn as signal lines.
+_SIGNAL_SETTINGS = ("measure", "drive")
+_SIGNAL_COLOUR = "#e377c2"
 _FORMATS = {".svg": "svg", ".png": "png", ".pdf": "pdf", ".dot": "dot"}
 
 
-def _scene_graph(fs) -> tuple[dict, list]:
-    """``({unit: (type, ports)}, [(src, src_port, dst, dst_port), ...])`` from the flowsheet's scene text."""
+def _scene_graph(fs) -> tuple[dict, list, dict]:
+    """``({unit: (type, ports)}, [(src, src_port, dst, dst_port), ...], {(controller, measure|drive): "unit.name"})``
+    from the flowsheet's scene text."""
     import yaml
 
     from .reference import unit_reference
 
     doc = yaml.load(fs.text, Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader)) or {}
-    units = {}
+    units, signals = {}, {}
     for name, spec in (doc.get("units") or {}).items():
         spec = spec or {}
         settings = {k: v for k, v in (spec.get("settings") or {}).items() if not isinstance(v, (dict, list))}
@@ -45,12 +50,13 @@ def _scene_graph(fs) -> tuple[dict, list]:
         except (ConfigError, ValueError):
             ports = {}
         units[str(name)] = (str(spec.get("type", "?")), ports)
+        signals.update({(str(name), k): str(v) for k, v in settings.items() if k in _SIGNAL_SETTINGS})
     edges = []
     for text in doc.get("connections") or []:
         src, _, dst = str(text).partition("->")
         (su, _, sp), (du, _, dp) = src.strip().partition("."), dst.strip().partition(".")
         edges.append((su, sp, du, dp))
-    return units, edges
+    return units, edges, signals
 
 
 def _port(units: dict, unit: str, port: str) -> dict:
@@ -88,7 +94,7 @@ def _back_edges(units: dict, edges: list) -> set[int]:
 
 def dot_source(fs) -> str:
     """The Graphviz text of the flowsheet."""
-    units, edges = _scene_graph(fs)
+    units, edges, signals = _scene_graph(fs)
     back = _back_edges(units, edges)
     q = html.escape
     lines = [f'digraph "{q(fs.name)}" {{', '  rankdir=LR; bgcolor="white"; fontname="Helvetica";',
@@ -110,6 +116,15 @@ def dot_source(fs) -> str:
             if kind == "solids":
                 attrs += ['style="dashed,bold"', 'xlabel="recycle"', 'fontcolor="#d62728"']
         lines.append(f'  "{q(su)}" -> "{q(du)}" [{", ".join(attrs)}];')
+    # Controllers' signals (docs/controllers.md): what a controller measures and the parameter it drives. They are
+    # information, not streams: dashed, and left out of the layout's ranks.
+    for (unit, key), target in sorted(signals.items()):
+        other = target.partition(".")[0]
+        if other not in units:
+            continue
+        src, dst = (other, unit) if key == "measure" else (unit, other)
+        lines.append(f'  "{q(src)}" -> "{q(dst)}" [label="{q(key)} {q(target)}", color="{_SIGNAL_COLOUR}", '
+                     f'fontcolor="{_SIGNAL_COLOUR}", style=dashed, constraint=false];')
     lines.append("}")
     return "\n".join(lines) + "\n"
 

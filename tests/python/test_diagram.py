@@ -71,3 +71,11 @@ def _scenes():
 def test_every_shipped_scene_draws(scene):
     d = gf.load(os.path.join(FLOWSHEETS, scene)).diagram()
     assert d.dot.count("[label=<<b>") >= 1 and "<svg" in d.svg
+
+
+def test_a_controllers_signals_are_drawn_as_dashed_lines():
+    dot = gf.load(os.path.join(FLOWSHEETS, "stoeckl_gf25_batch_controlled.yaml")).diagram().dot
+    signals = [e for e in _edges(dot) if "style=dashed" in e and "constraint=false" in e]
+    assert any(e.startswith('"gas" -> "tic" [label="measure gas.T"') for e in signals)
+    assert any(e.startswith('"tic" -> "inlet" [label="drive inlet.T"') for e in signals)
+    assert len(signals) == 2
