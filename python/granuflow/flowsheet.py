@@ -394,6 +394,7 @@ class Flowsheet:
         res.material = self.material
         res.flowsheet = self
         res.check_balance()  # a unit that loses mass is an error, not a number in a file
+        res.extra_warnings += self._unfired_events(res)
         if error_estimate:
             res.error_estimate = self._error_estimate(res, linear_solver=linear_solver, max_steps=max_steps,
                                                       method=method)
@@ -406,6 +407,20 @@ class Flowsheet:
             res.grid_check = gc.check(self, res, linear_solver=linear_solver, max_steps=max_steps, method=method)
         self._warn(res, warn)
         return res
+
+    def _unfired_events(self, res: Result) -> list[str]:
+        """A declared event that never fired in a run that reached its end is named: an event fires on a crossing,
+        so a condition that already held when it was armed, or never got there, would otherwise pass unnoticed."""
+        if "events:" not in self.text or not len(res.t) or res.t[-1] < res.t[0] + (self.t_end - res.t[0]) * (1 - 1e-12):
+            return []  # no events, or a stop event ended the run early (the later ones had no chance)
+        import yaml
+
+        declared = (yaml.load(self.text, Loader=_yaml_loader()) or {}).get("events") or []
+        fired = {e["name"] for e in res.events}
+        return [f"event {e.get('name')} ({e.get('when')}) never fired: its condition did not cross during the run "
+                "(an event fires on a crossing, not where its condition already holds when it is armed; "
+                "docs/events_and_checkpoints.md)"
+                for e in declared if isinstance(e, dict) and e.get("name") not in fired]
 
     def _warn(self, res: Result, warn: bool) -> None:
         if warn:

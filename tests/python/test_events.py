@@ -186,3 +186,16 @@ def test_two_position_switch_of_an_input(tmp_path):
     assert 312.0 < t2.min() < 315.0 and 320.0 < t2.max() < 323.0
     again = fs.simulate(t_end=6000.0, n_out=601, warn=False, grid_check=False, accuracy=False)
     assert np.array_equal(res.y, again.y) and again.events == res.events
+
+
+def test_an_event_that_never_fires_is_named(tmp_path):
+    # d50 starts at 200 um: "d50 >= 100 um" already holds when the event is armed, so it never crosses; the run goes
+    # to its end without the later events, and the result says which events never fired
+    path = _variant(tmp_path, "when: bed.d50 >= 450 um", "when: bed.d50 >= 100 um")
+    res = gf.load(path).simulate(warn=False, grid_check=False, accuracy=False)
+    assert res.events == []
+    notes = [w for w in res.warnings if "never fired" in w]
+    assert len(notes) == 3 and "event stop_spray (bed.d50 >= 100 um) never fired" in notes[0]
+    # the shipped recipe fires all three, and its stop event ends the run: nothing to say
+    res = gf.load(RECIPE).simulate(warn=False, grid_check=False, accuracy=False)
+    assert len(res.events) == 3 and not [w for w in res.warnings if "never fired" in w]
