@@ -123,6 +123,44 @@ void forward_dry_water(UnitSpec& s, PortId out, PortId in, int classes) {
   for (int i = 0; i < classes; ++i) s.forward(out, solids::water(classes, i), in, solids::water(classes, i));
 }
 
+void SolidsOutlets::declare(UnitSpec& s, const ParticleSystem& ps, PortId in, const std::vector<std::string>& names) {
+  const int n = ps.grid()->size(), K = ps.params().component_count();
+  count = static_cast<int>(names.size());
+  wet = ps.water();
+  for (int o = 0; o < count; ++o) {
+    m[o] = s.add_states(names[o] + "_mdot", n, StateKind::Algebraic, "kg/s", 1e-2);
+    if (wet) w[o] = s.add_states(names[o] + "_water", n, StateKind::Algebraic, "kg/s", 1e-3);
+    for (int k = 1; k < K; ++k)
+      q[o].push_back(s.add_states(names[o] + "_" + ps.params().components[k], n, StateKind::Algebraic, "kg/s", 1e-2));
+  }
+  s.set_explicit();
+  const auto& d = ps.grid()->diameter_pivots();
+  s.set_port_grid(in, d);
+  for (int o = 0; o < count; ++o) {
+    const PortId out = s.add_port(names[o], streams::solids(K), PortDir::Out, n);
+    s.set_port_grid(out, d);
+    for (int i = 0; i < n; ++i) {
+      s.provide(out, solids::mdot(i), m[o] + i);
+      if (wet) s.provide(out, solids::water(n, i), w[o] + i);
+    }
+    if (!wet) forward_dry_water(s, out, in, n);
+    s.forward(out, solids::T(n), in, solids::T(n));
+    for (int k = 1; k < K; ++k)
+      for (int i = 0; i < n; ++i) s.provide(out, solids::component(n, k, i), q[o][k - 1] + i);
+  }
+  ClassLayout layout{n, {}, {{in, solids::mdot(0)}}};
+  for (int o = 0; o < count; ++o) {
+    layout.state_blocks.push_back(m[o]);
+    if (wet) layout.state_blocks.push_back(w[o]);
+  }
+  if (wet) layout.field_blocks.push_back({in, solids::water(n, 0)});
+  for (int k = 1; k < K; ++k) {
+    for (int o = 0; o < count; ++o) layout.state_blocks.push_back(q[o][k - 1]);
+    layout.field_blocks.push_back({in, solids::component(n, k, 0)});
+  }
+  s.set_classes(layout);
+}
+
 void require_water(const ParticleSystem& ps, const Settings& st, const std::string& what) {
   if (!ps.water())
     throw ConfigError(st.where() + ": " + what +

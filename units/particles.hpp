@@ -69,6 +69,27 @@ void register_particles(Registry<Unit>& r);
 // In a dry particle system, the outlet `out`'s per-class water fields pass on those of the inlet `in` (both solids
 // streams): a unit that splits, mills or mixes dry solids computes no water.
 void forward_dry_water(UnitSpec& s, PortId out, PortId in, int classes);
+// The outlets of a zero-hold-up solids unit that splits its inlet (sieve, splitter): per outlet named `names[o]`,
+// algebraic states for the flow of solids, of water (wet systems) and of each named solid after the first, one solids
+// port, and the class layout that keeps every class's states together. The temperature passes through.
+struct SolidsOutlets {
+  static constexpr int kMax = 3;
+  int count = 0;
+  bool wet = true;
+  StateId m[kMax], w[kMax];
+  std::vector<StateId> q[kMax];  // q[o][k - 1]: named solid k (k >= 1) of outlet o
+  // Declares the states (then marks the unit explicit), the ports on the inlet's grid and the class layout.
+  void declare(UnitSpec& s, const ParticleSystem& ps, PortId in, const std::vector<std::string>& names);
+  template <class T>
+  void init(InitCtx<T>& c, int classes) const {
+    for (int o = 0; o < count; ++o)
+      for (int i = 0; i < classes; ++i) {
+        c.x(m[o] + i) = T(0.0);
+        if (wet) c.x(w[o] + i) = T(0.0);
+        for (StateId s : q[o]) c.x(s + i) = T(0.0);
+      }
+  }
+};
 // ConfigError naming the unit when it holds or moves water (`what`) in a dry particle system.
 void require_water(const ParticleSystem& ps, const Settings& st, const std::string& what);
 

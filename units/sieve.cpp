@@ -38,40 +38,7 @@ class Sieve : public UnitBase<Sieve> {
     K_ = ps.params().component_count();
     in_ = s.add_port("in", streams::solids(K_), PortDir::In, n_);
     const char* names[3] = {"oversize", "product", "undersize"};
-    wet_ = ps.water();
-    for (int o = 0; o < 3; ++o) {
-      sM_[o] = s.add_states(std::string(names[o]) + "_mdot", n_, StateKind::Algebraic, "kg/s", 1e-2);
-      if (wet_) sW_[o] = s.add_states(std::string(names[o]) + "_water", n_, StateKind::Algebraic, "kg/s", 1e-3);
-      for (int k = 1; k < K_; ++k)
-        sQ_[o].push_back(s.add_states(std::string(names[o]) + "_" + ps.params().components[k], n_, StateKind::Algebraic,
-                                      "kg/s", 1e-2));
-    }
-    s.set_explicit();
-    const auto& d = grid_->diameter_pivots();
-    s.set_port_grid(in_, d);
-    for (int o = 0; o < 3; ++o) {
-      const PortId out = s.add_port(names[o], streams::solids(K_), PortDir::Out, n_);
-      s.set_port_grid(out, d);
-      for (int i = 0; i < n_; ++i) {
-        s.provide(out, solids::mdot(i), sM_[o] + i);
-        if (wet_) s.provide(out, solids::water(n_, i), sW_[o] + i);
-      }
-      if (!wet_) forward_dry_water(s, out, in_, n_);
-      s.forward(out, solids::T(n_), in_, solids::T(n_));
-      for (int k = 1; k < K_; ++k)
-        for (int i = 0; i < n_; ++i) s.provide(out, solids::component(n_, k, i), sQ_[o][k - 1] + i);
-    }
-    ClassLayout layout;
-    if (wet_)
-      layout = {
-          n_, {sM_[0], sW_[0], sM_[1], sW_[1], sM_[2], sW_[2]}, {{in_, solids::mdot(0)}, {in_, solids::water(n_, 0)}}};
-    else
-      layout = {n_, {sM_[0], sM_[1], sM_[2]}, {{in_, solids::mdot(0)}}};
-    for (int k = 1; k < K_; ++k) {
-      for (int o = 0; o < 3; ++o) layout.state_blocks.push_back(sQ_[o][k - 1]);
-      layout.field_blocks.push_back({in_, solids::component(n_, k, 0)});
-    }
-    s.set_classes(layout);
+    out_.declare(s, ps, in_, {names[0], names[1], names[2]});
     for (int o = 0; o < 3; ++o) o_m_[o] = s.add_output(std::string(names[o]) + "_mdot", "kg/s");
     o_frac_ = s.add_output("product_fraction", "-");
   }
@@ -88,10 +55,10 @@ class Sieve : public UnitBase<Sieve> {
     const T* tu = upper_.fractions(c.p, w.upper);
     const T* tl = lower_.fractions(c.p, w.lower);
     auto& scratch = per_scalar<T>(w.in_d, w.in_j);
-    split(c, tu, tl, c.port_array(in_, solids::mdot(0), n_, scratch), sM_);
-    if (wet_) split(c, tu, tl, c.port_array(in_, solids::water(n_, 0), n_, scratch), sW_);
+    split(c, tu, tl, c.port_array(in_, solids::mdot(0), n_, scratch), out_.m);
+    if (out_.wet) split(c, tu, tl, c.port_array(in_, solids::water(n_, 0), n_, scratch), out_.w);
     for (int k = 1; k < K_; ++k) {
-      const StateId q[3] = {sQ_[0][k - 1], sQ_[1][k - 1], sQ_[2][k - 1]};
+      const StateId q[3] = {out_.q[0][k - 1], out_.q[1][k - 1], out_.q[2][k - 1]};
       split(c, tu, tl, c.port_array(in_, solids::component(n_, k, 0), n_, scratch), q);
     }
     return Status::kOk;
@@ -115,18 +82,13 @@ class Sieve : public UnitBase<Sieve> {
   }
   template <class T>
   void init(InitCtx<T>& c) const {
-    for (int o = 0; o < 3; ++o)
-      for (int i = 0; i < n_; ++i) {
-        c.x(sM_[o] + i) = T(0.0);
-        if (wet_) c.x(sW_[o] + i) = T(0.0);
-        for (StateId q : sQ_[o]) c.x(q + i) = T(0.0);
-      }
+    out_.init(c, n_);
   }
   template <class T>
   void outputs(const Ctx<T>& c) const {
     T m[3] = {T(0.0), T(0.0), T(0.0)};
     for (int o = 0; o < 3; ++o)
-      for (int i = 0; i < n_; ++i) m[o] += c.x(sM_[o] + i);
+      for (int i = 0; i < n_; ++i) m[o] += c.x(out_.m[o] + i);
     for (int o = 0; o < 3; ++o) c.out(o_m_[o]) = m[o];
     const T total = m[0] + m[1] + m[2];
     c.out(o_frac_) = total > 0.0 ? T(m[1] / total) : T(0.0);
@@ -134,13 +96,11 @@ class Sieve : public UnitBase<Sieve> {
 
  private:
   int n_ = 0;
-  bool wet_ = true;  // the particle system carries water
-  int K_ = 1;        // named solids; per outlet the flows of each after the first (sQ_[o][c - 1])
-  std::vector<StateId> sQ_[3];
+  int K_ = 1;  // named solids
   std::shared_ptr<const kernels::Grid> grid_;
   Classifier upper_, lower_;
   PortId in_;
-  StateId sM_[3], sW_[3];
+  SolidsOutlets out_;
   OutputId o_m_[3], o_frac_;
 };
 
