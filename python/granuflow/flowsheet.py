@@ -409,8 +409,10 @@ class Flowsheet:
         return res
 
     def _unfired_events(self, res: Result) -> list[str]:
-        """A declared event that never fired in a run that reached its end is named: an event fires on a crossing,
-        so a condition that already held when it was armed, or never got there, would otherwise pass unnoticed."""
+        """A declared one-shot event that never fired in a run that reached its end is named: an event fires on a
+        crossing, so a recipe step whose condition already held when it was armed, or never got there, would otherwise
+        pass unnoticed. A repeating event is a switching law (a valve's positions): that one of its switches was never
+        needed in this run is not a finding."""
         if "events:" not in self.text or not len(res.t) or res.t[-1] < res.t[0] + (self.t_end - res.t[0]) * (1 - 1e-12):
             return []  # no events, or a stop event ended the run early (the later ones had no chance)
         import yaml
@@ -420,7 +422,7 @@ class Flowsheet:
         return [f"event {e.get('name')} ({e.get('when')}) never fired: its condition did not cross during the run "
                 "(an event fires on a crossing, not where its condition already holds when it is armed; "
                 "docs/events_and_checkpoints.md)"
-                for e in declared if isinstance(e, dict) and e.get("name") not in fired]
+                for e in declared if isinstance(e, dict) and e.get("name") not in fired and not e.get("repeat")]
 
     def _warn(self, res: Result, warn: bool) -> None:
         if warn:
