@@ -8,6 +8,7 @@
 // curve the decks split exactly at their cut sizes.
 #include "sieve.hpp"
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -91,7 +92,8 @@ class Sieve : public UnitBase<Sieve> {
       for (int i = 0; i < n_; ++i) m[o] += c.x(out_.m[o] + i);
     for (int o = 0; o < 3; ++o) c.out(o_m_[o]) = m[o];
     const T total = m[0] + m[1] + m[2];
-    c.out(o_frac_) = total > 0.0 ? T(m[1] / total) : T(0.0);
+    // the share of nothing is undefined, not 0 (NaN in the time series, null in a summary)
+    c.out(o_frac_) = total > 0.0 ? T(m[1] / total) : T(std::nan(""));
   }
 
  private:

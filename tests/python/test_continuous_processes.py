@@ -182,6 +182,18 @@ def test_sieve_and_mill_conserve_mass_class_by_class():
         assert r["mill.d50_out"][-1] < r["mill.d50_in"][-1]  # it grinds
 
 
+def test_the_product_fraction_of_an_empty_sieve_is_undefined():
+    """The sieve's product_fraction is product/(oversize + product + undersize); with nothing on the decks it is
+    undefined (NaN in the time series), never 0, which would read as "all of it is off-spec"."""
+    fs = split_scene(1.7e-3, 0.6e-3)
+    r = fs.simulate()
+    m = {o: r[f"sieve.{o}_mdot"][-1] for o in ("oversize", "product", "undersize")}
+    assert r["sieve.product_fraction"][-1] == pytest.approx(m["product"] / sum(m.values()), rel=1e-14)
+    assert 0 < r["sieve.product_fraction"][-1] < 1
+    r = fs.set("split.fraction", 0.0).simulate()
+    assert r["sieve.product_mdot"][-1] == 0 and np.isnan(r["sieve.product_fraction"][-1])
+
+
 def test_a_dry_particle_system_computes_the_same_flows_without_water():
     """particles: water: false: the sieve, mill, splitter and mixer declare no water states (their outlets pass on the
     feed's one zero), and every flow they compute is bit for bit the one of the same scene carrying zero water."""
