@@ -4,42 +4,11 @@
 #include <cmath>
 #include <exception>
 
-#include "calibration_internal.hpp"
-
 namespace granuflow::calib {
-
-void CostBatch::prefetch(const ExperimentCost& asking, const double* theta, bool jacobian) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  if (asking.has_pending(theta, jacobian)) return;
-  parallel_for(static_cast<int>(costs_.size()), threads_, [&](int i) { costs_[i]->fill_pending(theta, jacobian); });
-}
-
-void ExperimentCost::fill_pending(const double* theta, bool jacobian) const {
-  pending_theta_.assign(theta, theta + n_);
-  pending_J_given_ = jacobian;
-  pending_r_.resize(model_->rows());
-  pending_J_.resize(jacobian ? size_t(model_->rows()) * n_ : 0);
-  pending_error_ = nullptr;
-  try {
-    compute(theta, pending_r_.data(), jacobian ? pending_J_.data() : nullptr);
-  } catch (...) {
-    pending_error_ = std::current_exception();
-  }
-  pending_ = true;
-}
 
 bool ExperimentCost::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
   try {
-    double* J = jacobians && jacobians[0] ? jacobians[0] : nullptr;
-    if (batch_) batch_->prefetch(*this, parameters[0], J != nullptr);
-    if (batch_ && has_pending(parameters[0], J != nullptr)) {
-      pending_ = false;
-      if (pending_error_) std::rethrow_exception(pending_error_);
-      std::copy(pending_r_.begin(), pending_r_.end(), residuals);
-      if (J) std::copy(pending_J_.begin(), pending_J_.end(), J);
-    } else {
-      compute(parameters[0], residuals, J);
-    }
+    compute(parameters[0], residuals, jacobians && jacobians[0] ? jacobians[0] : nullptr);
     return true;
   } catch (const std::exception& e) {
     std::lock_guard<std::mutex> lock(error_mutex_);
@@ -78,7 +47,6 @@ double ExperimentCost::reweight(const double* theta) const {
   double change = 0.0;
   for (size_t i = 0; i < s.size(); ++i) change = std::max(change, std::abs(s[i] / sigma_[i] - 1.0));
   sigma_ = s;
-  pending_ = false;
   weigh(last_m_, &last_dm_, last_r_.data(), last_J_.data());
   return change;
 }

@@ -4,7 +4,6 @@
 #include <ceres/cost_function.h>
 
 #include <algorithm>
-#include <exception>
 #include <mutex>
 #include <string>
 #include <vector>
@@ -12,23 +11,6 @@
 #include "experiment_model.hpp"
 
 namespace granuflow::calib {
-
-class ExperimentCost;
-
-// The experiments of one stage evaluated together. Ceres asks its residual blocks one after another on one
-// thread, so the first block asked at a new θ solves every experiment at θ on `threads` threads and the other
-// blocks take their share: the same numbers as one by one, the experiments' solves in parallel.
-class CostBatch {
- public:
-  CostBatch(std::vector<ExperimentCost*> costs, int threads) : costs_(std::move(costs)), threads_(threads) {}
-  // Every block's result at θ (with its Jacobian if `jacobian`), unless `asking` holds one already.
-  void prefetch(const ExperimentCost& asking, const double* theta, bool jacobian);
-
- private:
-  std::vector<ExperimentCost*> costs_;
-  int threads_;
-  std::mutex mutex_;
-};
 
 // The weighted residuals of one experiment; the residual block of Ceres.
 class ExperimentCost : public ceres::CostFunction {
@@ -52,12 +34,7 @@ class ExperimentCost : public ceres::CostFunction {
   double reweight(const double* theta) const;
 
   const std::vector<double>& sigma() const { return sigma_; }
-  void set_sigma(const std::vector<double>& s) {
-    sigma_ = s;
-    pending_ = false;
-  }
-  // Ceres' requests go through `batch` (nullptr: each block solved when asked).
-  void join(CostBatch* batch) { batch_ = batch; }
+  void set_sigma(const std::vector<double>& s) { sigma_ = s; }
 
   std::string last_error() const {
     std::lock_guard<std::mutex> lock(error_mutex_);
@@ -66,7 +43,6 @@ class ExperimentCost : public ceres::CostFunction {
   ExperimentModel& model() const { return *model_; }
 
  private:
-  friend class CostBatch;
   ExperimentModel* model_;
   int n_;
   SigmaBasis basis_;
@@ -76,17 +52,7 @@ class ExperimentCost : public ceres::CostFunction {
   std::vector<double> sigma_at(const std::vector<double>& m) const;
   void weigh(const std::vector<double>& m, const std::vector<double>* dm, double* r, double* J) const;
 
-  // A result CostBatch computed before this block was asked for it: used once, at the same θ and kind.
-  bool has_pending(const double* theta, bool jacobian) const {
-    return pending_ && pending_J_given_ == jacobian && std::equal(pending_theta_.begin(), pending_theta_.end(), theta);
-  }
-  void fill_pending(const double* theta, bool jacobian) const;
-
   mutable std::vector<double> sigma_, last_theta_, last_m_, last_dm_, last_r_, last_J_;
-  CostBatch* batch_ = nullptr;
-  mutable bool pending_ = false, pending_J_given_ = false;
-  mutable std::vector<double> pending_theta_, pending_r_, pending_J_;
-  mutable std::exception_ptr pending_error_;
   mutable std::mutex error_mutex_;
   mutable std::string last_error_;
 };

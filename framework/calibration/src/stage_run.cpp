@@ -56,21 +56,7 @@ ceres::Solver::Summary StageRun::solve(std::vector<double>& theta, const Calibra
   ceres::Problem problem(po);
   const int n = space.size();
   problem.AddParameterBlock(theta.data(), n);
-  std::vector<ExperimentCost*> blocks;
-  for (auto& c : costs) blocks.push_back(c.get());
-  // Ceres 2.1 evaluates the residual blocks serially here (its pool never starts): the batch runs the experiments
-  // of each evaluation on opt.num_threads threads instead.
-  CostBatch batch(blocks, opt.num_threads);
-  for (auto& c : costs) {
-    if (opt.num_threads > 1) c->join(&batch);
-    problem.AddResidualBlock(c.get(), nullptr, theta.data());
-  }
-  struct Leave {
-    std::vector<ExperimentCost*>& blocks;
-    ~Leave() {
-      for (auto* c : blocks) c->join(nullptr);
-    }
-  } leave{blocks};
+  for (auto& c : costs) problem.AddResidualBlock(c.get(), nullptr, theta.data());
   for (int k = 0; k < n; ++k) {
     problem.SetParameterLowerBound(theta.data(), k, space.theta_lower(k));
     problem.SetParameterUpperBound(theta.data(), k, space.theta_upper(k));
@@ -84,7 +70,7 @@ ceres::Solver::Summary StageRun::solve(std::vector<double>& theta, const Calibra
   so.function_tolerance = opt.function_tolerance;
   so.gradient_tolerance = opt.gradient_tolerance;
   so.parameter_tolerance = opt.parameter_tolerance;
-  so.num_threads = opt.num_threads;  // as before: it sets how Ceres sums the cost, not the experiments
+  so.num_threads = opt.num_threads;
   so.logging_type = ceres::SILENT;
   so.minimizer_progress_to_stdout = false;
   // No line search on bounded problems: each of its trials costs a Jacobian (a sensitivity solve per
