@@ -216,6 +216,8 @@ class Result:
         class (``"bed.bottom_class"``, ``"bed.top_class"``; the top class holds what grew beyond the grid), and
         every output a unit declares as a grid-end fraction (role ``grid_end``) of a unit without one. Each:
         ``{"initial", "final", "max"}`` over the output times, and ``"d_um"``, the pivot of that class."""
+        if getattr(self, "_grid_ends", None) is not None:  # a result never changes; warnings and summary ask again
+            return {k: dict(v) for k, v in self._grid_ends.items()}
         out: dict[str, dict] = {}
         units = self.psd_units()
         for unit in units:
@@ -231,6 +233,7 @@ class Result:
                 col = self.outputs[:, j]
                 out[name] = {"initial": float(col[0]), "final": float(col[-1]), "max": float(np.max(col)),
                              "d_um": None}
+        self._grid_ends = {k: dict(v) for k, v in out.items()}
         return out
 
     @property
@@ -304,6 +307,8 @@ class Result:
     def balance_closure(self) -> dict:
         """Relative closure error per conserved quantity at the final time:
         |hold(t) - hold(0) - (in - out)| / max(|hold(0)|, |hold(t)|, |in|, |out|); None if not tracked."""
+        if getattr(self, "_balance", None) is not None:  # a result never changes
+            return dict(self._balance)
         acc: dict = {}
         for j, q, kind in outputs.balance_terms(self.output_roles):
             acc.setdefault(q, {"in": 0.0, "out": 0.0, "hold0": 0.0, "hold": 0.0})
@@ -325,6 +330,7 @@ class Result:
             a = acc[q]
             scale = max(abs(a["hold0"]), abs(a["hold"]), abs(a["in"]), abs(a["out"]), 1e-300)
             out[f"{q}_rel"] = _finite(abs(a["hold"] - a["hold0"] - (a["in"] - a["out"])) / scale)
+        self._balance = dict(out)
         return out
 
     @property

@@ -58,10 +58,15 @@ def error_column(output: str) -> str:
 def final_values(res, outputs: Sequence[str]) -> dict[str, float]:
     """``outputs`` of a result at its final time: summary keys, else states and reported outputs; NaN where the
     summary has no value (null in summary.json)."""
-    summary = res.summary
+    # The summary's numbers without the rest of Result.summary (a sweep point's Python time is the GIL's): the
+    # core's values, null where a percentile lies in an end class of the size grid (as in summary.json).
+    values, clipped = res.summary_values(), res.end_class_percentiles()
     out = {}
     for o in outputs:
-        v = summary[o] if o in summary and o not in ("units", "balance", "solver") else float(res[o][-1])
+        if o in values or o in roles.STANDARD_SUMMARY_KEYS:
+            v = None if o in clipped else values.get(o)
+        else:
+            v = float(res[o][-1])
         out[o] = math.nan if v is None else float(v)
     return out
 
