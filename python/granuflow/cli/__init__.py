@@ -144,7 +144,7 @@ def main(argv=None) -> int:
     b.add_argument("--repeats", type=int, default=7)
     b.add_argument("--quick", action="store_true",
                    help="a reduced set: " + "; ".join(f"{k}: {v}" for k, v in _QUICK.items()))
-    b.add_argument("--no-scipy", action="store_true", help="scene, pbm2d, loop: time granuflow only")
+    b.add_argument("--no-scipy", action="store_true", help="scene, pbm2d, loop, targets: time granuflow only")
     b.add_argument("--only", action="append", metavar="TARGET",
                    help="targets: measure only this one (repeatable): calibration, contour, classes, two_zone, "
                         "writing, run")

@@ -52,7 +52,7 @@ def _bench(args) -> int:
             if name not in bench_targets.TARGETS:
                 raise ConfigError(f"--only {name}: not a target; the targets are {', '.join(bench_targets.TARGETS)}")
         records = bench_targets.bench_targets(quick=args.quick, repeats=args.repeats, only=args.only,
-                                              progress=progress)
+                                              scipy=not args.no_scipy, progress=progress)
         summary = bench_targets.summary
         if args.write_json:
             with open(args.write_json, "w") as f:
