@@ -234,23 +234,24 @@ def grid_end_columns(roles, output_names) -> list[tuple[int, str]]:
     return [(j, output_names[j]) for j, (r, _, _, _) in enumerate(roles) if r == "grid_end"]
 
 
-_INDEXED = re.compile(r"^(.*_)(\d+)$")  # bed.M_3, spray_zone.m_dep_3, bed.psd_d_3: one per size class
-
-
 def per_class_names(names_a, names_b) -> set[str]:
     """The names (of states and outputs) that stand for one size class each, found by comparing two results of the
     same scene on different grids: a stem ``bed.M_`` whose indices differ between them. The same name means a
     different class on each grid, so such names are not compared."""
+    def split(n):  # "bed.M_3" -> ("bed.M_", 3), as ^(.*_)(\d+)$ would, without a regular expression per name
+        stem, sep, index = n.rpartition("_")
+        return (stem + sep, int(index)) if sep and index.isdecimal() else None
+
     def stems(names):
         out: dict[str, set[int]] = {}
         for n in names:
-            m = _INDEXED.match(n)
+            m = split(n)
             if m:
-                out.setdefault(m.group(1), set()).add(int(m.group(2)))
+                out.setdefault(m[0], set()).add(m[1])
         return out
     a, b = stems(names_a), stems(names_b)
     differ = {s for s in set(a) | set(b) if a.get(s) != b.get(s)}
-    return {n for n in list(names_a) + list(names_b) if (m := _INDEXED.match(n)) and m.group(1) in differ}
+    return {n for n in list(names_a) + list(names_b) if (m := split(n)) and m[0] in differ}
 
 
 def is_size(name: str, si_unit: str = "m") -> bool:

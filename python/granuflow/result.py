@@ -7,7 +7,7 @@ import os
 import numpy as np
 
 from . import _core, outputs
-from .quantity import from_si, is_number, label
+from .quantity import affine, from_si, is_number, label
 from .textfile import short
 
 ConfigError = _core.ConfigError
@@ -129,47 +129,68 @@ class Result:
     def repeated_outputs(self) -> list[str]:
         """Outputs that repeat a state of the same unit over the whole run (a balance term that is the unit's own
         accumulator, a class mass reported again for the size distribution): files list such a quantity once."""
-        # Linear in the size of the result: each column's bytes are looked up among the same unit's state columns
-        # (+ 0.0 makes -0.0 and 0.0 one value, as array_equal has them; a column with NaN never repeats, as there).
-        def keys(block):
-            cols = np.ascontiguousarray(np.asarray(block, dtype=float).T) + 0.0
-            return [None if np.isnan(c).any() else c.tobytes() for c in cols]
+        y, o = np.asarray(self.y, dtype=float), np.asarray(self.outputs, dtype=float)
+        if not y.size or not o.size:
+            return []
+        # Linear in the size of the result: each output is looked up by its unit and last value among the states,
+        # and compared in full only with the few states it meets there (array_equal: -0.0 and 0.0 are one value, a
+        # column with NaN never repeats).
+        by_last: dict[tuple[str, float], list[int]] = {}
+        for i, (n, v) in enumerate(zip(self.state_names, y[-1].tolist())):
+            by_last.setdefault((n.rpartition(".")[0], v), []).append(i)
+        out = []
+        for j, (n, v) in enumerate(zip(self.output_names, o[-1].tolist())):
+            for i in by_last.get((n.rpartition(".")[0], v), ()):
+                if np.array_equal(y[:, i], o[:, j]):
+                    out.append(n)
+                    break
+        return out
 
-        by_unit: dict[str, set] = {}
-        for n, k in zip(self.state_names, keys(self.y)):
-            if k is not None:
-                by_unit.setdefault(n.rpartition(".")[0], set()).add(k)
-        return [n for n, k in zip(self.output_names, keys(self.outputs))
-                if k is not None and k in by_unit.get(n.rpartition(".")[0], ())]
-
-    def _display_columns(self):
-        """(header, values) of every state and output as files show them: sizes in µm, the rest SI; outputs that
-        repeat a state are left out."""
-        cols = []
+    def _display_columns(self) -> tuple[list[str], np.ndarray]:
+        """(headers, values [time, column]) of every state and output as files show them: sizes in µm, the rest
+        SI; outputs that repeat a state are left out. One conversion of the whole block, not one per column."""
         skip = set(self.repeated_outputs())
-        for names, block in ((self.state_names, self.y), (self.output_names, self.outputs)):
+        headers, a, b, cols = [], [], [], []
+        factors: dict[tuple[str, str], tuple[float, float]] = {}
+        for names, offset in ((self.state_names, 0), (self.output_names, len(self.state_names))):
             for j, n in enumerate(names):
                 if n in skip:
                     continue
                 si = self.unit(n)
                 shown = outputs.display_unit(n, si)
-                cols.append((label(n, shown), from_si(block[:, j], shown, si)))
-        return cols
+                headers.append(label(n, shown))
+                if (shown, si) not in factors:
+                    factors[shown, si] = affine(shown, si) if shown and shown != si else (0.0, 1.0)
+                shift, scale = factors[shown, si]
+                a.append(shift)
+                b.append(scale)
+                cols.append(offset + j)
+        block = np.hstack([self.y, self.outputs]) if self.outputs.size else np.asarray(self.y, dtype=float)
+        # from_si per column: (value - a) / b; a = 0, b = 1 leaves a value as it is (also -0.0 and NaN)
+        return headers, (block[:, cols] - np.array(a)) / np.array(b)
+
+    def _file_columns(self) -> tuple[list[str], np.ndarray]:
+        """(headers, values) of :meth:`table` and :meth:`to_csv`: time in s and min, then :meth:`_display_columns`."""
+        headers, values = self._display_columns()
+        t = np.asarray(self.t, dtype=float)
+        return ["t [s]", "t [min]"] + headers, np.column_stack([t, t / 60.0, values])
 
     def table(self):
         """The time series as people read them: headers with units (``bed.d50 [um]``), sizes in µm, time in s and
         min, each quantity once (:meth:`repeated_outputs` are left out); a DataFrame (what :meth:`to_csv` writes)."""
         import pandas as pd
 
-        cols = [("t [s]", self.t), ("t [min]", self.t / 60.0)] + self._display_columns()
-        return pd.DataFrame({h: v for h, v in cols})
+        headers, data = self._file_columns()
+        return pd.DataFrame({h: data[:, k] for k, h in enumerate(headers)})
 
     def to_csv(self, path: str) -> str:
-        """Write :meth:`table` as CSV (no pandas needed: the command line writes it on every run)."""
-        cols = [("t [s]", self.t), ("t [min]", self.t / 60.0)] + self._display_columns()
-        header = ",".join('"' + h + '"' if "," in h else h for h, _ in cols)
-        data = np.column_stack([v for _, v in cols])
-        np.savetxt(path, data, delimiter=",", header=header, comments="", fmt="%.10g")
+        """Write :meth:`table` as CSV (no pandas needed: the command line writes it on every run). Each value as
+        ``%.10g``, as NumPy's savetxt writes it, formatted from a row of Python floats at once."""
+        headers, data = self._file_columns()
+        row = ",".join(["%.10g"] * data.shape[1]) + "\n"
+        with open(path, "w") as f:
+            f.write(",".join('"' + h + '"' if "," in h else h for h in headers) + "\n")
+            f.writelines(row % tuple(r) for r in data.tolist())
         return path
 
     # -- particle size distribution -------------------------------------------------------------

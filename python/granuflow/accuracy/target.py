@@ -21,7 +21,6 @@ from __future__ import annotations
 import math
 import re
 import time
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 
 from .. import _core
@@ -245,6 +244,8 @@ def _start(fs, base, run: dict, goals: dict, s0: dict, notes: list):
         except ConfigError as e:  # a coarser grid the scene does not allow (a pivot it needs): refine instead
             notes.append(f"no coarser grid ({' '.join(str(e).split())}): refined 2 and 3 times")
             first = [(f, fs.regridded(f)) for f in (2, 3)]
+    from concurrent.futures import ThreadPoolExecutor  # only a run with an accuracy target: not on run's path
+
     with ThreadPoolExecutor(max_workers=2) as ex:
         futures = [ex.submit(f.simulate, **run) for _, f in first]
         loose = fs.simulate(**loose_run).summary_values()

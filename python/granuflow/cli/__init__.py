@@ -18,7 +18,8 @@ _QUICK = {"core": "tank chains of 100 and 1000 states (not 10000)",
           "pbm": "q 1, 2, 4; rtol 1e-2, 1e-4, 1e-6; integrators auto, ida, adams, erk",
           "scene": "10 classes only, SciPy once", "sweep": "a 9 x 9 map, one repeat, no Dask",
           "pbm2d": "20x20 and 40x40 bins, dense LU and SciPy at 20x20, the other sections at 20x20",
-          "loop": "50 classes only, one repeat"}
+          "loop": "50 classes only, one repeat",
+          "targets": "no calibration or two-zone study, a 5x5 map, the 2-D scene at 20x20, one repeat"}
 
 
 # The commands whose output folder records what made it (provenance.json: the command line and the input files'
@@ -138,12 +139,16 @@ def main(argv=None) -> int:
     g.add_argument("--quiet", action="store_true")
     g.set_defaults(func=_cmd("info", "cmd_docs"))
     b = sub.add_parser("bench", help="benchmarks: speed against error (never pass/fail on time)")
-    b.add_argument("what", choices=["core", "pbm", "pbm2d", "scene", "sweep", "loop"])
+    b.add_argument("what", choices=["core", "pbm", "pbm2d", "scene", "sweep", "loop", "targets"])
     b.add_argument("--json", action="store_true", help="print JSON records")
     b.add_argument("--repeats", type=int, default=7)
     b.add_argument("--quick", action="store_true",
                    help="a reduced set: " + "; ".join(f"{k}: {v}" for k, v in _QUICK.items()))
-    b.add_argument("--no-scipy", action="store_true", help="scene, pbm2d, loop: time granuflow only")
+    b.add_argument("--no-scipy", action="store_true", help="scene, pbm2d, loop, targets: time granuflow only")
+    b.add_argument("--only", action="append", metavar="TARGET",
+                   help="targets: measure only this one (repeatable): calibration, contour, classes, two_zone, "
+                        "writing, run")
+    b.add_argument("--write-json", metavar="FILE", help="targets: also write the records to FILE (JSON)")
     b.add_argument("--quiet", action="store_true", help="no progress lines")
     b.set_defaults(func=_cmd("bench", "cmd_bench"))
     c = sub.add_parser("calibrate", help="staged calibration against experiments; report, tables, parity plots")

@@ -1,12 +1,13 @@
-"""granuflow bench core|pbm|pbm2d|scene|sweep|loop: speed against error, never pass/fail on time. Every subcommand
-honours --quick (a reduced set, stated in its help) and --repeats; progress goes to stderr on a terminal only."""
+"""granuflow bench core|pbm|pbm2d|scene|sweep|loop|targets: speed against error, never pass/fail on time. Every
+subcommand honours --quick (a reduced set, stated in its help) and --repeats; progress goes to stderr on a terminal
+only."""
 from __future__ import annotations
 
 import json
 import sys
 
 from .. import progress as progress_bars
-from .common import check_at_least, one_line, progress_option
+from .common import ConfigError, check_at_least, one_line, progress_option
 
 
 def cmd_bench(args) -> int:
@@ -44,6 +45,18 @@ def _bench(args) -> int:
                                         repeats=1 if args.quick else max(1, min(3, args.repeats)),
                                         scipy=not args.no_scipy, progress=progress)
         summary = bench_loop.loop_summary
+    elif args.what == "targets":  # issue 32: every speed target beside its baseline
+        from .. import bench_targets
+
+        for name in args.only or []:
+            if name not in bench_targets.TARGETS:
+                raise ConfigError(f"--only {name}: not a target; the targets are {', '.join(bench_targets.TARGETS)}")
+        records = bench_targets.bench_targets(quick=args.quick, repeats=args.repeats, only=args.only,
+                                              scipy=not args.no_scipy, progress=progress)
+        summary = bench_targets.summary
+        if args.write_json:
+            with open(args.write_json, "w") as f:
+                json.dump(records, f, indent=1)
     elif args.what == "pbm":
         records = bench.bench_pbm(quick=args.quick, repeats=args.repeats, progress=progress)
         summary = bench.pbm_summary

@@ -73,8 +73,6 @@ def check_out_dir(out: str, option: str = "--out") -> None:
     file), that this process can write to: a probe file is written and removed in the folder, or where it would be
     created (nothing is created for a run that then refuses its input). An answer computed for an hour must not be
     lost to a typo."""
-    import tempfile
-
     if not out:
         raise ConfigError(f"{option} = '': expected a folder to write to")
     if os.path.exists(out) and not os.path.isdir(out):
@@ -84,12 +82,18 @@ def check_out_dir(out: str, option: str = "--out") -> None:
         parent = os.path.dirname(parent.rstrip(os.sep))
     if parent and not os.path.isdir(parent):
         raise ConfigError(f"{option} = '{out}': '{parent}' is a file, not a folder (give a folder to write to)")
-    try:
-        with tempfile.TemporaryFile(dir=parent or ".", prefix=".granuflow-write-check-"):
-            pass
-    except OSError as e:
-        raise ConfigError(f"{option} = '{out}': cannot write there ({e.strerror}); give a folder this user can "
-                          "write to") from None
+    # os.open, not tempfile: that module (and the random one it imports) would cost every run's start-up
+    for k in range(100):
+        probe = os.path.join(parent or ".", f".granuflow-write-check-{os.getpid()}-{k}")
+        try:
+            os.close(os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600))
+        except FileExistsError:  # a probe left by a killed run with this process id
+            continue
+        except OSError as e:
+            raise ConfigError(f"{option} = '{out}': cannot write there ({e.strerror}); give a folder this user can "
+                              "write to") from None
+        os.unlink(probe)
+        return
 
 
 def json_value(v):

@@ -52,13 +52,25 @@ def _accuracy_option(text):
     return text
 
 
+def _may_be_monte_carlo(path: str) -> bool:
+    """False when the scene file cannot ask for the Monte Carlo engine: its text does not name it (nor escapes a
+    character, which could spell it), so its YAML need not be parsed twice, once here in pure Python."""
+    try:
+        with open(path, "rb") as f:
+            data = f.read()
+    except OSError:
+        return True  # the loader names what is wrong with it
+    return b"monte_carlo" in data or b"\\" in data
+
+
 def cmd_run(args) -> int:
-    from ..montecarlo.scene import is_scene as is_monte_carlo
+    if _may_be_monte_carlo(args.scene):
+        from ..montecarlo.scene import is_scene as is_monte_carlo
 
-    if is_monte_carlo(args.scene):  # engine: monte_carlo (docs/monte_carlo.md)
-        from .run_montecarlo import cmd_run_monte_carlo
+        if is_monte_carlo(args.scene):  # engine: monte_carlo (docs/monte_carlo.md)
+            from .run_montecarlo import cmd_run_monte_carlo
 
-        return cmd_run_monte_carlo(args)
+            return cmd_run_monte_carlo(args)
     fs = apply_sets(load(args.scene), parse_sets(args.set))  # settings rebuild the flowsheet
     specs = plot_specs(fs, drawing=not args.no_plots)  # against the scene file's own t_end
     if args.t_end is not None:

@@ -1,0 +1,351 @@
+"""``granuflow bench targets [--quick] [--only NAME] [--json] [--repeats N]``: every speed target of issue 32 measured
+in one run beside its baseline (medians of the repeats and ratios; never pass/fail on time):
+
+* ``calibration``: wall time and CPU/wall of the three-stage calibration of the shipped synthetic Table-1 data with
+  two workers, beside the same calibration with one (target: <= 2 s wall, both cores busy, the same estimates);
+* ``contour``: simulations/s per core of the 25x25 contour map of the headline scene with one and two worker threads,
+  beside the solver's own time per simulation (target: >= 350 per core with both cores busy);
+* ``classes``: the headline scene's solve at 80 size classes against its solve at 20 (target: <= 3x);
+* ``two_zone``: the two-zone layering scene's sigma against a fine-grid reference at growing class counts, with the
+  cost of each, with the scene's scheme and with fv_koren, beside tests/bench/scipy_two_zone.py (SciPy BDF, Koren)
+  at the coarsest grid each needs for a sigma error of 1e-4 (target: >= 20x);
+* ``writing``: the 2-D scene (paper 002) at 80x80 bins: writing summary.json and timeseries.csv against the solve,
+  and the whole ``granuflow run --no-plots --no-grid-check`` process against its solve plus the start-up (target:
+  writing within 1.5x the solve plus a fixed start-up);
+* ``run``: wall time of ``granuflow run flowsheets/stoeckl_gf25_batch.yaml --out DIR --no-plots`` as a whole process,
+  beside the interpreter alone and the interpreter importing NumPy (target: <= 0.1 s).
+
+``--quick`` (a few seconds): no calibration and no two-zone study, a 5x5 map, the 2-D scene at 20x20, one repeat of
+each process. Progress goes to stderr on a terminal only.
+"""
+from __future__ import annotations
+
+import json
+import math
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+from . import bench
+
+TARGETS = ("calibration", "contour", "classes", "two_zone", "writing", "run")
+QUICK_SKIPS = ("calibration", "two_zone")
+# The figures issue 32 starts from (measured by the session that filed it, on this machine), beside each target.
+ISSUE_BEFORE = {
+    "calibration": "6-7 s CPU on one core; --workers 2 changes nothing",
+    "contour": "259 simulations/s with one worker, 406 with two: 203 per core",
+    "classes": "10 to 80 classes: time grows tenfold",
+    "two_zone": "6.6x SciPy BDF (14x LSODA) at equal sigma accuracy; default limiter needs 200 classes",
+    "writing": "2-D scene at 80x80: 3.26 s for a 0.135 s solve (1.56 s for 0.51 s at the start of this work)",
+    "run": "0.42 s as a whole process",
+}
+GOAL = {"calibration": "<= 2 s wall, both cores busy", "contour": ">= 350 simulations/s per core, both cores busy",
+        "classes": "80 classes <= 3x the 20-class time", "two_zone": ">= 20x SciPy BDF Koren at equal sigma accuracy",
+        "writing": "run wall <= 1.5 x solve + fixed start-up", "run": "<= 0.1 s wall"}
+
+
+def _say(progress: bool, text: str) -> None:
+    if progress:
+        print(f"targets: {text}", file=sys.stderr, flush=True)
+
+
+def launcher() -> list[str]:
+    """The command that runs this package's CLI: the build's launcher next to it, else ``python -m granuflow``."""
+    pkg = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    script = os.path.join(os.path.dirname(pkg), "granuflow")
+    return [script] if os.access(script, os.X_OK) else [sys.executable, "-m", "granuflow"]
+
+
+def timed_process(cmd: list[str], repeats: int) -> dict:
+    """Median wall and CPU (user + system of the child) of ``repeats`` runs of ``cmd``; RuntimeError naming the
+    command when it fails."""
+    walls, cpus = [], []
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [
+        os.path.dirname(os.path.dirname(os.path.abspath(__file__))), os.environ.get("PYTHONPATH")])))
+    for _ in range(max(1, repeats)):
+        c0, t0 = os.times(), time.perf_counter()
+        p = subprocess.run(cmd, capture_output=True, text=True, env=env)
+        wall, c1 = time.perf_counter() - t0, os.times()
+        if p.returncode != 0:
+            raise RuntimeError(f"{' '.join(cmd)} exited {p.returncode}: {p.stderr.strip()[-300:]}")
+        walls.append(wall)
+        cpus.append(c1.children_user - c0.children_user + c1.children_system - c0.children_system)
+    return {"wall_s": statistics.median(walls), "cpu_s": statistics.median(cpus), "wall_s_all": walls}
+
+
+def _record(target: str, value: float, unit: str, baseline: float | None, baseline_what: str, ratio: float | None,
+            ratio_what: str, **extra) -> dict:
+    return {"target": target, "value": value, "unit": unit, "baseline": baseline, "baseline_what": baseline_what,
+            "ratio": ratio, "ratio_what": ratio_what, "goal": GOAL[target], "issue_before": ISSUE_BEFORE[target],
+            **extra}
+
+
+def target_run(repeats: int, progress: bool) -> dict:
+    """``granuflow run`` of the headline scene as a whole process, beside Python alone and Python importing NumPy."""
+    scene = os.path.join(bench.repo_root(), "flowsheets", "stoeckl_gf25_batch.yaml")
+    with tempfile.TemporaryDirectory(prefix="granuflow-bench-") as out:
+        _say(progress, "run --no-plots of the headline scene")
+        run = timed_process(launcher() + ["run", scene, "--out", out, "--no-plots", "--quiet"], repeats)
+        with open(os.path.join(out, "summary.json")) as f:
+            summary = json.load(f)
+    python = timed_process([sys.executable, "-c", "pass"], repeats)
+    numpy = timed_process([sys.executable, "-c", "import numpy"], repeats)
+    return _record("run", run["wall_s"], "s", python["wall_s"], "python3 -c pass", run["wall_s"] / 0.1,
+                   "wall / 0.1 s", cpu_s=run["cpu_s"], numpy_import_wall_s=numpy["wall_s"],
+                   numpy_import_cpu_s=numpy["cpu_s"], python_cpu_s=python["cpu_s"],
+                   solve_and_grid_check_s=summary["wall_time_s"] + summary.get("grid_check", {}).get("wall_time_s", 0),
+                   d50_um=summary["d50_um"], repeats=repeats,
+                   command="granuflow run flowsheets/stoeckl_gf25_batch.yaml --out DIR --no-plots")
+
+
+def target_writing(size: int, repeats: int, progress: bool) -> dict:
+    """The 2-D scene at size x size: writing its files against its solve, in this process and as a whole run."""
+    from . import bench_2d
+    from .flowsheet import load_text
+
+    text = bench_2d.scene_text(size)
+    fs = load_text(text, bench_2d.scene_path())
+    solves, writes = [], []
+    with tempfile.TemporaryDirectory(prefix="granuflow-bench-") as out:
+        for _ in range(max(1, repeats)):
+            _say(progress, f"writing: 2-D scene {size}x{size}, solve and write")
+            res = fs.simulate(warn=False, grid_check=False)
+            t0 = time.perf_counter()
+            with open(os.path.join(out, "summary.json"), "w") as f:
+                json.dump(res.summary, f, indent=2, allow_nan=False)
+            res.to_csv(os.path.join(out, "timeseries.csv"))
+            writes.append(time.perf_counter() - t0)
+            solves.append(res.wall_time_s)
+        csv_bytes = os.path.getsize(os.path.join(out, "timeseries.csv"))
+        # the whole command on the same scene (the file sits beside the shipped one: its data path resolves)
+        scene = os.path.join(os.path.dirname(bench_2d.scene_path()), f".bench_sen_2d_{size}_{os.getpid()}.yaml")
+        with open(scene, "w") as f:
+            f.write(text)
+        try:
+            _say(progress, f"writing: granuflow run of the 2-D scene {size}x{size}")
+            proc = timed_process(launcher() + ["run", scene, "--out", out, "--no-plots", "--no-grid-check",
+                                               "--quiet"], repeats)
+        finally:
+            os.remove(scene)
+        with open(os.path.join(out, "summary.json")) as f:
+            proc_solve = json.load(f)["wall_time_s"]
+    startup = timed_process(launcher() + ["--version"], repeats)["wall_s"]
+    solve, write = statistics.median(solves), statistics.median(writes)
+    rest = proc["wall_s"] - startup - proc_solve  # what the process spends beyond its start-up and its solve
+    return _record("writing", write, "s", solve, f"solve of the 2-D scene at {size}x{size}", write / solve,
+                   "writing / solve", run_wall_s=proc["wall_s"], run_solve_s=proc_solve, startup_s=startup,
+                   run_beyond_startup_over_solve=(proc["wall_s"] - startup) / proc_solve,
+                   run_rest_over_solve=rest / proc_solve, states=int(res.stats["states"]), csv_bytes=csv_bytes,
+                   size=size, repeats=repeats,
+                   command=f"granuflow run <2-D scene at {size}x{size}> --out DIR --no-plots --no-grid-check")
+
+
+def target_classes(repeats: int, progress: bool) -> dict:
+    """The headline scene's solve at 80 classes against 20 (the scene's own grid refined; no grid check)."""
+    from .flowsheet import load
+
+    fs = load(os.path.join(bench.repo_root(), "flowsheets", "stoeckl_gf25_batch.yaml"))
+    walls = {}
+    for n in (20, 80):
+        _say(progress, f"classes: headline scene at {n} classes")
+        g = fs.with_settings({"particles.classes": n})
+        g.simulate(warn=False, grid_check=False, accuracy=False)  # warm-up: the first solve sets up the solver
+        walls[n] = statistics.median(g.simulate(warn=False, grid_check=False, accuracy=False).wall_time_s
+                                     for _ in range(max(1, repeats)))
+    return _record("classes", walls[80], "s", walls[20], "solve at 20 classes", walls[80] / walls[20],
+                   "80 / 20 classes", repeats=repeats, command="granuflow bench targets --only classes")
+
+
+def target_contour(n: int, repeats: int, progress: bool) -> dict:
+    """The n x n contour map with one and two worker threads (bench.bench_sweep, no Dask)."""
+    _say(progress, f"contour: {n}x{n} map with 1 and 2 threads")
+    recs = {r["mode"]: r for r in bench.bench_sweep(n=n, repeats=max(1, repeats), workers=2, dask=False)}
+    one, two = recs["threads"], recs["threads_2"]
+    return _record("contour", two["sims_per_s"] / 2, "simulations/s per core", one["sims_per_s"],
+                   "simulations/s with one worker", two["sims_per_s"] / (2 * one["sims_per_s"]),
+                   "per-core rate with 2 workers / rate with 1",
+                   solver_only_per_s=1e3 / one["solve_ms_per_sim_median"], sims_per_s_2_workers=two["sims_per_s"],
+                   same_values=two["same_values_as_1_worker"], grid=f"{n}x{n}", repeats=repeats,
+                   command=f"granuflow contour (bench sweep, {n}x{n}, --workers 1 and 2)")
+
+
+def _max_rel_diff(text_a: str, text_b: str) -> float | None:
+    """The largest relative difference between the numbers of two CSV texts of the same layout (None if the layouts
+    differ): the estimates of two calibrations."""
+    import csv
+
+    rows_a, rows_b = list(csv.reader(text_a.splitlines())), list(csv.reader(text_b.splitlines()))
+    if [len(r) for r in rows_a] != [len(r) for r in rows_b]:
+        return None
+    worst = 0.0
+    for ra, rb in zip(rows_a, rows_b):
+        for a, b in zip(ra, rb):
+            try:
+                x, y = float(a), float(b)
+            except ValueError:
+                continue
+            if x != y:
+                worst = max(worst, abs(x - y) / max(abs(x), abs(y)))
+    return worst
+
+
+def target_calibration(repeats: int, progress: bool) -> dict:
+    """The three-stage calibration of the shipped synthetic Table-1 data with two workers and with one."""
+    cal = os.path.join(bench.repo_root(), "flowsheets", "calibration")
+    runs = {}
+    for workers in (2, 1):
+        with tempfile.TemporaryDirectory(prefix="granuflow-bench-") as out:
+            _say(progress, f"calibration with {workers} worker(s)")
+            runs[workers] = timed_process(launcher() + [
+                "calibrate", os.path.join(cal, "synthetic_gf25_table1.yaml"), "--stages",
+                os.path.join(cal, "stages_paper001.yaml"), "--out", out, "--workers", str(workers), "--quiet"],
+                repeats)
+            with open(os.path.join(out, "estimates.csv")) as f:
+                runs[workers]["estimates"] = f.read()
+    two, one = runs[2], runs[1]
+    return _record("calibration", two["wall_s"], "s", one["wall_s"], "wall with --workers 1",
+                   two["wall_s"] / one["wall_s"], "wall with 2 workers / with 1", cpu_over_wall=two["cpu_s"] /
+                   two["wall_s"], cpu_s=two["cpu_s"], cpu_over_wall_1_worker=one["cpu_s"] / one["wall_s"],
+                   estimates_max_rel_diff=_max_rel_diff(two["estimates"], one["estimates"]), repeats=repeats,
+                   command="granuflow calibrate flowsheets/calibration/synthetic_gf25_table1.yaml --stages "
+                           "flowsheets/calibration/stages_paper001.yaml --out DIR --workers 2")
+
+
+REF_CLASSES = 400  # the two-zone study's reference grid
+
+
+def _two_zone_rows(fs, settings: dict, repeats: int, progress: bool) -> tuple[dict, float]:
+    """({classes: wall, sigma, relative error}, reference sigma) of the two-zone scene with ``settings``."""
+    rows = {}
+    for n in (REF_CLASSES, 50, 100, 200):
+        _say(progress, f"two_zone: {n} classes {settings or ''}")
+        g = fs.with_settings({"particles.classes": n, **settings})
+        times = max(1, repeats) if n < REF_CLASSES else 1
+        res = [g.simulate(warn=False, grid_check=False, accuracy=False) for _ in range(times)]
+        rows[n] = {"wall_s": statistics.median(r.wall_time_s for r in res),
+                   "sigma_um": res[-1].summary_values()["sigma_drying_zone_um"]}
+    ref = rows.pop(REF_CLASSES)["sigma_um"]
+    for r in rows.values():
+        r["sigma_rel_error"] = abs(r["sigma_um"] - ref) / abs(ref)
+    return rows, ref
+
+
+def _scipy_two_zone(progress: bool) -> tuple[dict, float]:
+    """({classes: wall, sigma, relative error}, reference sigma) of tests/bench/scipy_two_zone.py (BDF, Koren) at 50,
+    100 and 200 cells. Its reference is its own Richardson extrapolation from 100 and 200 cells with the order seen
+    from 50, 100, 200 (400 cells would take minutes; its grid and ends differ from granuflow's, so each code is
+    measured against its own converged sigma)."""
+    script = bench.bench_script("scipy_two_zone.py", "the SciPy two-zone model", "leave out --only two_zone")
+    rows = {}
+    for n in (50, 100, 200):
+        _say(progress, f"two_zone: SciPy BDF Koren, {n} cells")
+        p = subprocess.run([sys.executable, script, "--classes", str(n)], capture_output=True, text=True)
+        if p.returncode != 0:
+            raise RuntimeError(f"{script} --classes {n}: {p.stderr.strip()[-300:]}")
+        r = json.loads(p.stdout)
+        rows[n] = {"wall_s": r["wall_s"], "sigma_um": r["sigma_um"]}
+    s50, s100, s200 = (rows[n]["sigma_um"] for n in (50, 100, 200))
+    ratio = (s100 - s50) / (s200 - s100) if s200 != s100 else float("inf")
+    order = math.log2(abs(ratio)) if math.isfinite(ratio) and abs(ratio) > 1 else 2.0
+    ref = s200 + (s200 - s100) / (2 ** order - 1)
+    for r in rows.values():
+        r["sigma_rel_error"] = abs(r["sigma_um"] - ref) / abs(ref)
+    return rows, ref
+
+
+def _first_at(rows: dict, tol: float = 1e-4):
+    """The coarsest grid of a study whose sigma error is at most ``tol`` (None if none)."""
+    ok = [n for n, r in rows.items() if r["sigma_rel_error"] <= tol]
+    return min(ok) if ok else None
+
+
+def target_two_zone(repeats: int, progress: bool, scipy: bool = True) -> dict:
+    """The two-zone scene's sigma at 50, 100 and 200 classes against 400 (cost of each solve; at 800 the solver fails
+    in the spray zone), with the scene's growth scheme and with fv_koren, beside the SciPy BDF Koren model
+    (tests/bench/scipy_two_zone.py): the ratio of their times at the coarsest grid each needs for a sigma error of
+    1e-4."""
+    from .flowsheet import load
+
+    fs = load(os.path.join(bench.repo_root(), "flowsheets", "two_zone_layering.yaml"))
+    koren = {f"{u}.growth_scheme": "fv_koren" for u in ("spray", "onezone")}  # only these grow
+    rows, ref = _two_zone_rows(fs, {}, repeats, progress)
+    koren_rows, koren_ref = _two_zone_rows(fs, koren, repeats, progress)
+    sp_rows, sp_ref = _scipy_two_zone(progress) if scipy else ({}, None)
+    at, at_k, at_sp = _first_at(rows), _first_at(koren_rows), _first_at(sp_rows)
+    value = rows[at]["wall_s"] if at else None
+    base = sp_rows[at_sp]["wall_s"] if at_sp else None
+    return _record("two_zone", value, "s", base, f"SciPy BDF Koren at {at_sp} cells" if base else
+                   "SciPy BDF Koren: no grid up to 200 cells within 1e-4" if scipy else "SciPy not run",
+                   base / value if base and value else None, "SciPy / granuflow at sigma error <= 1e-4",
+                   classes_at_target=at, by_classes=rows, sigma_reference_um=ref, koren_classes_at_target=at_k,
+                   koren_by_classes=koren_rows, koren_sigma_reference_um=koren_ref,
+                   koren_ratio=base / koren_rows[at_k]["wall_s"] if base and at_k else None,
+                   scipy_by_cells=sp_rows, scipy_sigma_reference_um=sp_ref, reference_classes=REF_CLASSES,
+                   repeats=repeats, command="granuflow bench targets --only two_zone")
+
+
+def bench_targets(*, quick: bool = False, repeats: int = 5, only=None, scipy: bool = True,
+                  progress: bool = False) -> list[dict]:
+    """One record per target (module docstring), with machine metadata and the load average around the run."""
+    chosen = [t for t in TARGETS if (not only or t in only) and not (quick and t in QUICK_SKIPS and not only)]
+    reps = 1 if quick else repeats
+    load_before = os.getloadavg()
+    run = {"calibration": lambda: target_calibration(1 if quick else min(reps, 3), progress),
+           "contour": lambda: target_contour(5 if quick else 25, 1 if quick else min(reps, 3), progress),
+           "classes": lambda: target_classes(reps, progress),
+           "two_zone": lambda: target_two_zone(1 if quick else min(reps, 3), progress, scipy),
+           "writing": lambda: target_writing(20 if quick else 80, 1 if quick else min(reps, 5), progress),
+           "run": lambda: target_run(reps, progress)}
+    records = [run[t]() for t in chosen]
+    meta = {**bench.meta(), "loadavg_before": list(load_before), "loadavg_after": list(os.getloadavg()),
+            "quick": quick}
+    return [{**r, **meta} for r in records]
+
+
+def _num(v, unit: str = "") -> str:
+    if v is None:
+        return "-"
+    return f"{v:.4g}{' ' + unit if unit else ''}"
+
+
+def _detail(v) -> str:
+    """A detail of the table: numbers to 4 digits; a study by class count as 'N: error E in W s' per grid."""
+    if isinstance(v, dict):
+        return "{" + "; ".join(f"{n}: sigma error {_num(r['sigma_rel_error'])} in {_num(r['wall_s'])} s"
+                               for n, r in v.items()) + "}"
+    return _num(v) if isinstance(v, float) else str(v)
+
+
+def summary(records) -> list[str]:
+    """The table: each target's value, its baseline measured in this run, their ratio, the goal and the figure the
+    issue started from."""
+    lines = [f"{'target':12s} {'value':>22s}  {'baseline (this run)':>34s}  {'ratio':>24s}  goal"]
+    for r in records:
+        lines.append(f"{r['target']:12s} {_num(r['value'], r['unit']):>22s}  "
+                     f"{_num(r['baseline']) + ' (' + r['baseline_what'] + ')':>34s}  "
+                     f"{_num(r['ratio']) + ' (' + r['ratio_what'] + ')' if r['ratio'] is not None else '-':>24s}  "
+                     f"{r['goal']}")
+    lines.append("details:")
+    for r in records:
+        extra = {k: v for k, v in r.items() if k in DETAILS.get(r["target"], ())}
+        shown = [f"{k} {_detail(v)}" for k, v in extra.items()]
+        lines.append(f"  {r['target']}: " + ", ".join(shown))
+        lines.append(f"    before (issue 32): {r['issue_before']}; command: {r['command']}")
+    r0 = records[0] if records else {}
+    if r0:
+        la, lb = r0["loadavg_before"], r0["loadavg_after"]
+        lines.append(f"load average before {la[0]:.2f}, after {lb[0]:.2f} ({r0['cores']} cores, commit "
+                     f"{r0['commit']}); times are for information only, never pass/fail.")
+    return lines
+
+
+DETAILS = {"run": ("cpu_s", "numpy_import_wall_s", "numpy_import_cpu_s", "solve_and_grid_check_s", "d50_um"),
+           "writing": ("run_wall_s", "run_solve_s", "startup_s", "run_beyond_startup_over_solve", "states",
+                       "csv_bytes"),
+           "classes": (), "contour": ("solver_only_per_s", "sims_per_s_2_workers", "same_values"),
+           "calibration": ("cpu_s", "cpu_over_wall", "cpu_over_wall_1_worker", "estimates_max_rel_diff"),
+           "two_zone": ("classes_at_target", "by_classes", "sigma_reference_um", "koren_classes_at_target",
+                        "koren_by_classes", "koren_ratio", "scipy_by_cells", "scipy_sigma_reference_um")}

@@ -1,0 +1,30 @@
+"""`granuflow bench targets` (issue 32) in its quick mode: each target's record beside its baseline, the ratio
+computed from them, the headline's answer from the timed process, a table and the JSON file (correctness only;
+benchmarks never assert on time)."""
+import json
+import math
+
+from conftest import cli
+
+
+def test_quick_targets_report_value_baseline_ratio_and_answer(tmp_path):
+    out = tmp_path / "targets.json"
+    p = cli("bench", "targets", "--quick", "--only", "writing", "--only", "run", "--quiet", "--write-json", out,
+            timeout=120)
+    assert p.returncode == 0, p.stderr
+    records = json.loads(out.read_text())
+    assert [r["target"] for r in records] == ["writing", "run"]
+    for r in records:
+        assert r["value"] > 0 and r["baseline"] > 0 and r["goal"] and r["issue_before"] and r["command"]
+        assert math.isclose(r["ratio"], r["value"] / (r["baseline"] if r["target"] == "writing" else 0.1))
+        assert r["quick"] is True and r["cores"] >= 1
+    writing, run = records
+    assert writing["size"] == 20 and writing["states"] > 20 * 20  # one state per bin of the 2-D population, and more
+    assert writing["csv_bytes"] > 0 and writing["run_solve_s"] > 0 and writing["startup_s"] > 0
+    assert run["d50_um"] == 499.701648945565  # the timed process computes the headline answer
+    assert run["numpy_import_wall_s"] > 0 and run["cpu_s"] > 0
+    lines = p.stdout.splitlines()
+    assert lines[0].split()[:2] == ["target", "value"]
+    assert any(line.startswith("writing ") for line in lines) and any(line.startswith("run ") for line in lines)
+    bad = cli("bench", "targets", "--only", "speed")
+    assert bad.returncode == 2 and "--only speed: not a target" in bad.stderr

@@ -1,0 +1,65 @@
+"""The time-series file is written in one pass over the result (issue 32): the same bytes as the per-column writer
+it replaced (each column converted by quantity.from_si, NumPy's savetxt at %.10g), and repeated_outputs() the
+outputs that equal a state of their unit at every time, found without comparing every output with every state."""
+import numpy as np
+import pytest
+from conftest import SCENE
+
+import granuflow as gf
+from granuflow import outputs
+from granuflow.quantity import from_si, label
+
+
+@pytest.fixture(scope="module")
+def res():
+    return gf.load(SCENE).simulate(warn=False, grid_check=False)
+
+
+def repeated_by_pairs(res):
+    """The definition: an output equal (array_equal) to some state of the same unit over the whole run."""
+    unit = lambda n: n.rpartition(".")[0]  # noqa: E731
+    return [o for j, o in enumerate(res.output_names)
+            if any(unit(s) == unit(o) and np.array_equal(res.y[:, i], res.outputs[:, j])
+                   for i, s in enumerate(res.state_names))]
+
+
+def per_column_csv(res, path):
+    """The writer before issue 32: one from_si per column, then np.savetxt."""
+    skip = set(repeated_by_pairs(res))
+    cols = [("t [s]", res.t), ("t [min]", res.t / 60.0)]
+    for names, block in ((res.state_names, res.y), (res.output_names, res.outputs)):
+        for j, n in enumerate(names):
+            if n not in skip:
+                shown = outputs.display_unit(n, res.unit(n))
+                cols.append((label(n, shown), from_si(block[:, j], shown, res.unit(n))))
+    header = ",".join('"' + h + '"' if "," in h else h for h, _ in cols)
+    np.savetxt(path, np.column_stack([v for _, v in cols]), delimiter=",", header=header, comments="", fmt="%.10g")
+
+
+def test_repeated_outputs_are_those_equal_to_a_state_of_their_unit(res):
+    found = res.repeated_outputs()
+    assert found == repeated_by_pairs(res)
+    assert any(".psd_m_" in n for n in found)  # the class masses, reported again for the size distribution
+    # an output made equal to a state of its own unit repeats it (also with -0.0 for 0.0); with a NaN, never
+    other = gf.load(SCENE).simulate(warn=False, grid_check=False)
+    o = other.outputs.copy()
+    j = other.output_names.index("bed.d50")
+    i = next(k for k, n in enumerate(other.state_names) if n.startswith("bed.") and other.y[0, k] == 0)
+    o[:, j] = other.y[:, i]
+    o[0, j] = -0.0
+    other.outputs = o
+    assert "bed.d50" in other.repeated_outputs()
+    o[-1, j] = np.nan
+    assert "bed.d50" not in other.repeated_outputs()
+
+
+def test_csv_has_the_bytes_of_the_per_column_writer(res, tmp_path):
+    fresh = gf.load(SCENE).simulate(warn=False, grid_check=False)
+    per_column_csv(fresh, tmp_path / "old.csv")
+    fresh.to_csv(str(tmp_path / "new.csv"))
+    old, new = (tmp_path / "old.csv").read_bytes(), (tmp_path / "new.csv").read_bytes()
+    assert new == old
+    assert b"bed.d50 [um]" in new  # sizes in um: the conversion ran
+    table = fresh.table()
+    assert list(table.columns) == new.decode().splitlines()[0].split(",")
+    assert table.shape[0] == len(fresh.t)
