@@ -7,9 +7,10 @@
 namespace granuflow {
 
 StateId UnitSpec::add_state(std::string name, StateKind kind, std::string unit, double scale) {
-  if (state_index(name) >= 0) throw std::logic_error("state '" + name + "' declared twice");
+  if (state_at_.count(name)) throw std::logic_error("state '" + name + "' declared twice");
   if (!is_known_si_unit(unit)) throw std::logic_error("state '" + name + "' has unknown SI unit '" + unit + "'");
   if (!(scale > 0) || !std::isfinite(scale)) throw std::logic_error("state '" + name + "' needs a positive scale");
+  state_at_.emplace(name, static_cast<int>(states_.size()));
   states_.push_back({std::move(name), kind, std::move(unit), scale, false});
   return {static_cast<int>(states_.size()) - 1};
 }
@@ -132,9 +133,8 @@ void UnitSpec::set_classes(ClassLayout layout) {
 }
 
 int UnitSpec::state_index(const std::string& name) const {
-  for (size_t i = 0; i < states_.size(); ++i)
-    if (states_[i].name == name) return static_cast<int>(i);
-  return -1;
+  const auto it = state_at_.find(name);
+  return it == state_at_.end() ? -1 : it->second;
 }
 
 int UnitSpec::param_index(const std::string& name) const {

@@ -21,6 +21,7 @@
 #include <memory>
 #include <string>
 #include <type_traits>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -215,6 +216,7 @@ class UnitSpec {
 
  private:
   std::vector<StateSpec> states_;
+  std::unordered_map<std::string, int> state_at_;  // name -> index: a 2-D population declares 10^4 states
   std::vector<ParamSpec> params_;
   std::vector<PortSpec> ports_;
   std::vector<OutputSpec> outputs_;
