@@ -14,8 +14,8 @@ namespace granuflow::detail {
 struct JacobianCache {
   long max_age = 20;  // Ida::tune_refactoring() raises it for large blocks
   // The Newton matrix's storage still holds the kept Jacobian everywhere but on the differential diagonal, where a
-  // reuse writes diag + (cj - cj_kept): copying all n^2 entries out and back cost 7 % of the two-zone scene at 200
-  // classes (600 unknowns), and the result is the same to the bit.
+  // reuse writes diag + (cj - cj_kept): copying all n^2 entries out and back cost about 4 % of the two-zone scene at
+  // 200 classes (600 unknowns), and the result is the same to the bit.
   const double* held = nullptr;   // that storage (a fresh evaluation not kept clears it)
   std::vector<double> diag;       // the kept Jacobian's differential diagonal, in the order of `differential`
   std::vector<int> differential;  // indices of the differential states
