@@ -76,7 +76,9 @@ void check_contract(DaeSystem& sys, double t, const double* y, const double* yp,
 }
 
 void JacobianCache::keep(const double* a, int n, double cj_at, long step_at, long fails_at) {
-  jac.assign(a, a + size_t(n) * n);
+  held = a;
+  diag.resize(differential.size());
+  for (size_t d = 0; d < differential.size(); ++d) diag[d] = a[size_t(differential[d]) * n + differential[d]];
   cj = cj_at;
   step = step_at;
   conv_fails = fails_at;
@@ -100,11 +102,14 @@ int ida_jac(realtype t, realtype cj, N_Vector y, N_Vector yp, N_Vector, SUNMatri
           fails += sens_fails;
       }
       if (u->mem && !u->fresh_only && k.valid && k.reusable == 1 && fails == k.conv_fails &&
-          step - k.step < k.max_age) {
-        std::copy(k.jac.begin(), k.jac.end(), a);
-        for (int i : k.differential) a[size_t(i) * n + i] += cj - k.cj;
+          step - k.step < k.max_age && k.held == a) {
+        for (size_t d = 0; d < k.differential.size(); ++d) {
+          const int i = k.differential[d];
+          a[size_t(i) * n + i] = k.diag[d] + (cj - k.cj);
+        }
         return 0;
       }
+      k.held = nullptr;  // overwritten below; kept again if reusable
       u->sys->jacobian(t, N_VGetArrayPointer(y), N_VGetArrayPointer(yp), cj, a, nullptr);
       if (!u->mem) return 0;
       if (k.reusable < 0) check_contract(*u->sys, t, N_VGetArrayPointer(y), N_VGetArrayPointer(yp), k);

@@ -114,6 +114,14 @@ TEST(LinearSolvers, DenseSolverFactorsIndependentGroupsSeparately) {
   // a group that is singular on its own (one state whose equation does not depend on it)
   a(4, 4) = 0.0;
   EXPECT_NE(SUNLinSolSetup(s, A), 0);
+  // a coupling that lands between a group's states (row 3 inside the span 1..6 of {1, 2, 6}) joins two groups
+  a(4, 4) = 2.0, a(3, 2) = 0.5;
+  ASSERT_EQ(SUNLinSolSetup(s, A), 0);
+  EXPECT_EQ(detail::eigen_dense_groups(s), 3);
+  EXPECT_EQ(detail::eigen_dense_largest_block(s), 7);
+  ASSERT_EQ(SUNLinSolSolve(s, A, x, b, 0.0), 0);
+  const Eigen::MatrixXd joined = a;
+  EXPECT_LT((joined * xv - bv).cwiseAbs().maxCoeff(), 1e-13);
   // coupled groups are one: the whole matrix is factored as before
   a(4, 4) = 2.0, a(0, 1) = 0.5, a(4, 7) = 0.25, a(2, 4) = -0.5;
   ASSERT_EQ(SUNLinSolSetup(s, A), 0);
