@@ -7,7 +7,8 @@
 // the gas (Li et al.'s assumption, paper 000, section 5.5): their water leaves with the bed's vapour, its latent
 // heat drawn from the bed's enthalpy (the solids replenish it from the gas by heat transfer), so that water and energy
 // balances close as before. Their dissolved solids dry to dust the bed collects, layered like the deposit's.
-// The slip |u_f - u_p| is the interstitial gas velocity u0 / phi_f (the particles at rest on average).
+// The slip |u_f - u_p| is the interstitial gas velocity u0 / phi_f (the particles at rest on average); the classes
+// share one envelope density, so a class's share of the solids volume is its share of the dry mass.
 #pragma once
 #include <string>
 
