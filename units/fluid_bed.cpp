@@ -20,6 +20,8 @@
 #include "kernels/population/population.hpp"
 #include "kernels/simd_math.hpp"
 #include "kernels/transfer/fluid_bed_transfer.hpp"
+#include "kernels/wetting/spray_deposition.hpp"
+#include "kernels/wetting/stokes_report.hpp"
 #include "paper001_streams.hpp"
 #include "particles.hpp"
 
@@ -67,8 +69,7 @@ class FluidBed : public UnitBase<FluidBed> {
     pp_ = ps.params();
     grid_ = ps.grid();
     n_ = grid_->size();
-    const std::string t7 = "paper 001, Table 7", t6 = "paper 001, Table 6", t8 = "paper 001, Table 8",
-                      dec = "docs/paper001_decisions.md";
+    const std::string t6 = "paper 001, Table 6", t8 = "paper 001, Table 8", dec = "docs/paper001_decisions.md";
     p_mass_ = s.add_param({"bed_mass", "kg", 15.0, 1e-3, 1e4, "initial wet bed mass", "paper 001, section 3.1.3"});
     p_x0_ = s.add_param({"X0", "kg/kg", 0.03 / 0.97, 0.0, 1.0, "initial moisture, dry basis", dec});
     psd_ = kernels::declare_table_psd(st, *grid_, "initial_", "initial bed");
@@ -89,6 +90,7 @@ class FluidBed : public UnitBase<FluidBed> {
     p_dv_ = s.add_param({"D_v", "m2/s", def::kVapourDiffusivity, 1e-7, 1e-3, "vapour diffusivity", t6});
     p_lambda_ = s.add_param({"lambda_g", "W/(m K)", def::kGasConductivity, 1e-3, 1.0, "gas thermal conductivity", t6});
     closures_.declare(s, st, "linear", true);  // paper 000, sections 5.2, 5.4.1 (default: paper 001's Eq. (79), film)
+    deposition_.declare(s, st), stokes_.declare(s, st);  // paper 000, sections 5.1.4, 5.5, 5.6 (default: neither)
     declare_population(s, st);
     declare_binder(st);
     const bool discharge = declare_states(s, st);
@@ -214,6 +216,7 @@ class FluidBed : public UnitBase<FluidBed> {
     r_capacity_ = s.add_reduction("heat capacity");
     r_feed_ = s.add_reduction("solids fed");
     r_feed_water_ = s.add_reduction("water fed");
+    deposition_.declare_reductions(s);
     s.set_analytic_part();  // the population balance's terms (engine)
   }
 
@@ -225,8 +228,7 @@ class FluidBed : public UnitBase<FluidBed> {
     o_particles_ = s.add_output("particles", "-");
     o_top_ = s.add_output("top_class_fraction", "-", OutputRole::kGridEnd);
     o_reg_eta_ = s.add_output("reg_eta", "-", OutputRole::kRegularization);
-    // water activity < 0.99 in Eq. (81), p_sat < 0.9 p in Eq. (72)
-    o_reg_a_ = s.add_output("reg_activity_cap", "-", OutputRole::kRegularization);
+    o_reg_a_ = s.add_output("reg_activity_cap", "-", OutputRole::kRegularization);  // a < 0.99, p_sat < 0.9 p
     o_water_ = s.add_output("balance_water_hold", "kg", OutputRole::kBalanceHold, "water");
     o_solids_ = s.add_output("balance_solids_hold", "kg", OutputRole::kBalanceHold, "solids");
     o_energy_ = s.add_output("balance_energy_hold", "J", OutputRole::kBalanceHold, "energy");
@@ -302,12 +304,15 @@ class FluidBed : public UnitBase<FluidBed> {
     const T w_dep = wet ? c.port(wet_, wetting::w(n_)) : T(0.0);
     const bool layering = !c.in_jacobian() && wet && !carries_nothing(T(w_dep * dep));  // in the Jacobian: analytic
     if (layering) layering_rates(c, sc, pm, T(w_dep * dep));
+    const bool filter = deposition_.active();  // the share of the deposit the particles filter; the rest evaporates
+    const T kept = filter ? deposition_.filtered_share(c, g.u0, g.t_g, c.port(gas_, gas::kP), g.y, M, d, n_) : T(1.0);
     for (int i = 0; i < n_; ++i) {
       T in_m(0.0), in_w(0.0), out_m(0.0), out_w(0.0);
       if (fed) in_m = c.port(feed_, solids::mdot(i)), in_w = c.port(feed_, solids::water(n_, i));
       if (sRate_) out_m = k_out * M[i], out_w = k_out * W[i];  // a well-mixed outlet: every class alike
       T rate_m = pm[i] * sc.dN[i] + in_m - out_m;              // Eq. (20), paper 001, in mass
-      T rate_w = deposit(c, i, wet) * (1.0 - w_dep) - sc.dry[i] + sc.dW[i] + in_w - out_w;  // Eq. (58)
+      const T dep_i = filter ? T(kept * deposit(c, i, wet)) : deposit(c, i, wet);
+      T rate_w = dep_i * (1.0 - w_dep) - sc.dry[i] + sc.dW[i] + in_w - out_w;  // Eq. (58)
       if (layering) rate_m += sc.lay_m[i], rate_w += sc.lay_w[i];
       c.res(sM_ + i) = c.xd(sM_ + i) - rate_m;
       c.res(sW_ + i) = c.xd(sW_ + i) - rate_w;
@@ -324,7 +329,7 @@ class FluidBed : public UnitBase<FluidBed> {
                               c.x(sVap_) * props::vapour_enthalpy(t_s) + c.x(sQ_) + h_flow);
     c.res(sT_) = c.x(sH_) - capacity * (t_s - props::kT0);  // Eq. (60), paper 001
     c.res(sU0_) = c.x(sU0_) - inlet_velocity(c);
-    c.res(sVap_) = c.x(sVap_) - m_vap;
+    c.res(sVap_) = c.x(sVap_) - (filter ? T(m_vap + (1.0 - kept) * dep * (1.0 - w_dep)) : m_vap);
     c.res(sQ_) = c.x(sQ_) - q_sum;
     return Status::kOk;
   }
@@ -394,6 +399,7 @@ class FluidBed : public UnitBase<FluidBed> {
     T dq[std::size(q)];
     kernels::characteristic_diameters_of_mass(grid_->diameter_edges(), M, q, static_cast<int>(o_quantiles_.size()), dq);
     for (size_t k = 0; k < o_quantiles_.size(); ++k) c.out(o_quantiles_[k]) = dq[k];
+    stokes_.outputs(c, dq[1], T(pp_.envelope_density(c.shared)));  // paper 000, section 5.6
     c.out(o_moisture_) = water / m;
     c.out(o_moisture_wet_) = water / (m + water);
     c.out(o_particles_) = number;
@@ -401,6 +407,7 @@ class FluidBed : public UnitBase<FluidBed> {
     T surface(0.0);
     for (int i = 0; i < n_; ++i) surface += M[i] * sc.spm[i];
     const GasSide<T> g = gas_side(c, c.x(sT_), tr::bed_area_ratio(surface, c.par(p_abed_)));
+    deposition_.outputs(c, g.u0, g.t_g, c.port(gas_, gas::kP), g.y, M, grid_->diameter_pivots().data(), n_);
     int reg_eta = 0;  // the classes whose Eq. (80) class_transfer() regularizes, without its transfer coefficients
     for (int i = 0; i < n_; ++i)
       reg_eta += p1::normalized_moisture(T(W[i] / (M[i] + kMassFloor)), g.x_eq, c.par(p_xcr_)).active;
@@ -569,6 +576,8 @@ class FluidBed : public UnitBase<FluidBed> {
   kernels::Population pop_;
   BedLayering layering_;
   kernels::DryingClosures closures_;  // drying curve and drying surface
+  kernels::SprayDeposition deposition_;
+  kernels::StokesReport stokes_;
   ParamId p_mass_, p_x0_, p_d50_, p_sigma_, p_t0_, p_cpl_, p_abed_, p_xcr_, p_sh_, p_betmm_, p_betn_, p_dv_, p_lambda_;
   StateId sM_, sW_, sH_, sT_, sU0_, sVap_, sQ_;
   PortId wet_, gas_, inlet_, feed_;

@@ -107,15 +107,26 @@ T ParticleChamber::spray_solids(const Ctx<T>& c) const {
 
 // Without a curve (W - X_eq M) / tau_dry; with one, paper 000, section 5.4.1: the constant rate (X_cr - X_eq) M /
 // tau_dry (the first-order rate at X_cr) times v(eta), eta = (X - X_eq) / (X_cr - X_eq) regularized as in paper 001's
-// Eq. (80); the linear curve is the first-order rate below X_cr.
+// Eq. (80); the linear curve is the first-order rate below X_cr. A drying surface other than the film (paper 000,
+// section 5.2) scales either rate by the wetted share A_wet / A of class i's surface A = N_i pi d_i^2.
 template <class T>
-T ParticleChamber::drying_rate(const Ctx<T>& c, const T& m, const T& w) const {
-  if (!closures_.has_curve()) return (w - c.par(p_xeq_) * m) / c.par(p_taudry_);
-  const T &x_eq = c.par(p_xeq_), &x_cr = c.par(p_xcr_);
-  T v = kernels::paper001::normalized_moisture(T(w / (m + kMassFloor)), x_eq, x_cr).value;
-  v = v < 1.0 ? v : T(1.0);
-  closures_.curve(c.p, 1, &v);
-  return (x_cr - x_eq) * m / c.par(p_taudry_) * v;
+T ParticleChamber::drying_rate(const Ctx<T>& c, const T& m, const T& w, int i) const {
+  T rate;
+  if (!closures_.has_curve()) {
+    rate = (w - c.par(p_xeq_) * m) / c.par(p_taudry_);
+  } else {
+    const T &x_eq = c.par(p_xeq_), &x_cr = c.par(p_xcr_);
+    T v = kernels::paper001::normalized_moisture(T(w / (m + kMassFloor)), x_eq, x_cr).value;
+    v = v < 1.0 ? v : T(1.0);
+    closures_.curve(c.p, 1, &v);
+    rate = (x_cr - x_eq) * m / c.par(p_taudry_) * v;
+  }
+  if (!closures_.surface_active()) return rate;
+  const double d = grid_->diameter_pivots()[i];
+  const T area = m / (pp_.envelope_density(c.shared) * grid_->pivot(i)) * kernels::sphere_surface(d);
+  T wet = area;
+  closures_.surface(c.p, &w, 1, &wet);
+  return area > 0.0 ? T(rate * wet / area) : rate;
 }
 
 template <class T>
@@ -295,7 +306,7 @@ Status ParticleChamber::eval(const Ctx<T>& c) const {
     if (wet_) {
       // sprayed water lands in proportion to the class surface; first-order drying towards X_eq
       const T dep = spray_ ? T(m_water * M[i] * sc.spm[i] / (surface + kMassFloor)) : T(0.0);
-      const T dry = drying_rate(c, M[i], W[i]);
+      const T dry = drying_rate(c, M[i], W[i], i);
       c.res(sW_ + i) = c.xd(sW_ + i) - (sc.dW[i] + in_w - out_w + dep - dry);
     }
   }
@@ -467,7 +478,7 @@ ParticleChamber::Boundary<T> ParticleChamber::boundary(const Ctx<T>& c) const {
     const T wi = wet_ ? c.x(sW_ + i) : T(0.0);
     capacity += c.x(sM_ + i) * cp_s + wi * cp_l;
     dh += (c.xd(sM_ + i) * cp_s + (wet_ ? c.xd(sW_ + i) : T(0.0)) * cp_l) * (t - props::kT0);
-    if (wet_) vapour += drying_rate(c, c.x(sM_ + i), wi);
+    if (wet_) vapour += drying_rate(c, c.x(sM_ + i), wi, i);
     for (PortId p : inlets_) {
       const T& wf = c.port(p, solids::water(n_, i));
       h_in += (c.port(p, solids::mdot(i)) * cp_s + wf * cp_l) * (c.port(p, solids::T(n_)) - props::kT0);

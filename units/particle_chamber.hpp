@@ -117,9 +117,10 @@ class ParticleChamber : public UnitBase<ParticleChamber>, public HoldsSetPoint {
   Boundary<T> boundary(const Ctx<T>& c) const;  // computes the outflows (outflows()) for its caller too
   template <class T>
   T spray_solids(const Ctx<T>& c) const;
-  // Water drying off a class of m kg dry solids holding w kg water, kg/s: first order, or along a drying curve.
+  // Water drying off class i of m kg dry solids holding w kg water, kg/s: first order, or along a drying curve;
+  // over the surface a drying_surface closure wets.
   template <class T>
-  T drying_rate(const Ctx<T>& c, const T& m, const T& w) const;
+  T drying_rate(const Ctx<T>& c, const T& m, const T& w, int i) const;
   template <class T>
   void growth_rates(const Ctx<T>& c, const T* N, const T* W, const T& amount, T* dM, T* dW) const;
   // What the inlets bring per class (dry solids, water), summed over the inlets in their order.

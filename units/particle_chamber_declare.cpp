@@ -80,7 +80,7 @@ void ParticleChamber::declare_params(UnitSpec& s, Settings& st) {
     p_x0_ = s.add_param({"X0", "kg/kg", 0.0, 0.0, 10.0, "initial moisture, dry basis", init});
     p_taudry_ = s.add_param({"tau_dry", "s", 60.0, 1e-3, 1e7, "drying time constant of the particle water", op});
     p_xeq_ = s.add_param({"X_eq", "kg/kg", 0.0, 0.0, 1.0, "equilibrium moisture, dry basis", op});
-    closures_.declare(s, st, "", false);  // paper 000, section 5.4.1: a drying curve instead of first order
+    closures_.declare(s, st, "", true);  // paper 000, sections 5.2, 5.4.1: a drying curve and surface
     if (closures_.has_curve())
       p_xcr_ = s.add_param({"X_cr", "kg/kg", kernels::paper001::defaults::kCriticalMoisture, 1e-4, 10.0,
                             "critical moisture content: end of the constant-rate period", "paper 001, Table 8"});

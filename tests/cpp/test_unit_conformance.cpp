@@ -185,7 +185,8 @@ Scene drying_closures_scene(const std::string& settings, const std::string& para
   return scene_from_text(text);
 }
 
-// The two-zone bed with a drying curve in both compartments (paper 000, section 5.4.1, in paper 003's chambers).
+// The two-zone bed with a drying curve and surface in both compartments (paper 000, sections 5.2, 5.4.1, in paper
+// 003's chambers).
 std::string two_zone_with_curve(const std::string& two_zone) {
   std::string text = two_zone;
   for (const std::string unit : {"spray: {type: spray_compartment, settings: {",
@@ -193,7 +194,7 @@ std::string two_zone_with_curve(const std::string& two_zone) {
                                  "settings: {"}) {
     const size_t at = text.find(unit);
     EXPECT_NE(at, std::string::npos) << unit;
-    text.insert(at + unit.size(), "drying_curve: gamma, ");
+    text.insert(at + unit.size(), "drying_curve: gamma, drying_surface: coverage, ");
   }
   const size_t p = text.find("params: {bed_mass: 3.92");
   text.insert(p + 9, "drying_gamma: 3, X_cr: 0.012, ");
@@ -218,8 +219,11 @@ std::vector<std::pair<std::string, Scene>> scenes() {
   v.emplace_back("drying: cubic curve, droplet height",
                  drying_closures_scene("drying_curve: cubic, drying_surface: droplet_height",
                                        "drying_A: 0.5, drying_B: 0.3, drying_C: 0.2, drying_theta: 1.2, "));
-  v.emplace_back("drying: correction", drying_closures_scene("drying_surface: correction", "drying_f_surface: 0.6, "));
-  v.emplace_back("two-zone bed, gamma curve", scene_from_text(two_zone_with_curve(kTwoZone)));
+  v.emplace_back("drying: correction, spray filtration, Stokes report",
+                 drying_closures_scene("drying_surface: correction, spray_deposition: filtration, "
+                                       "stokes_deformation: report",
+                                       "drying_f_surface: 0.6, filtration_length: 1e-3, "));
+  v.emplace_back("two-zone bed, gamma curve, coverage", scene_from_text(two_zone_with_curve(kTwoZone)));
   v.emplace_back("headline, PI on the gas temperature",
                  scene_from_file("flowsheets/stoeckl_gf25_batch_controlled.yaml"));
   v.emplace_back("sieve-mill loop, PI on the bed mass", scene_from_text(std::string(kPiLoopHead) + kLoopTail));
