@@ -46,12 +46,12 @@ def test_settings_event_equals_a_restart_with_the_setting_changed(tmp_path):
                  .replace("mdot: 90 g/min", "mdot: 0 g/min"))
     stitched = gf.load(str(b)).simulate(checkpoints=[t_ev], restart=first.checkpoint_files[0], **opts)
     d50 = event_run.output_names.index("bed.d50")
-    assert np.allclose(stitched.outputs[:, d50], event_run.outputs[:, d50], rtol=1e-6, atol=0)
+    assert np.allclose(stitched.outputs[:, d50], event_run.outputs[:, d50], rtol=1e-7, atol=0)  # 8e-9 measured
     # without the switch (the spray stopped only) the bed ends elsewhere, by far more than that tolerance
     c = tmp_path / "c.yaml"
     c.write_text(_text("bed.breakage_scheme: cell_average", "bed.outside: fold"))
     fixed = gf.load(str(c)).simulate(**opts)
-    assert np.max(np.abs(fixed.outputs[:, d50] / event_run.outputs[:, d50] - 1)) > 5e-4
+    assert np.max(np.abs(fixed.outputs[:, d50] / event_run.outputs[:, d50] - 1)) > 1e-2  # 5.4 % measured
     # the flowsheet is given back with its own setting: a second run of it is the first again
     again = gf.load(SETTINGS)
     again.simulate(**opts)
@@ -117,9 +117,9 @@ def _fd(fs, param, rel=1e-4):
 
 
 def test_two_events_in_one_step_are_each_located_at_their_own_time(tmp_path):
-    """T rises at Q/(m cp): a at 310 K (Q 20 -> 40 kW), b 0.05 K later (Q -> 10 kW), 0.52 s apart in a step of
-    tens of seconds. t_a = 10 m cp / Q1, t_b = t_a + 0.05 m cp / Q2, and T(t_end) = T_b + (t_end - t_b) Q3 / (m cp),
-    so dT_end/dT0 = Q3/Q1 and dT_end/dm = -t_end Q3 / (m^2 cp)."""
+    """T rises at Q/(m cp): a at 310 K (Q 20 -> 40 kW), b 0.05 K later (Q -> 10 kW), 0.52 s apart, closer than the
+    integrator's typical step there (101 steps over the run). t_a = 10 m cp / Q1, t_b = t_a + 0.05 m cp / Q2 and
+    T(t_end) = T_b + (t_end - t_b) Q3 / (m cp), so dT_end/dT0 = Q3/Q1 and dT_end/dm = -t_end Q3 / (m^2 cp)."""
     fs, r = _ramp(tmp_path, "tank.Q: 40 kW", "tank.Q: 10 kW", "310.05 K", sensitivities=["tank.T0", "tank.mass"])
     m, cp = 100.0, fs.get("tank.cp")
     t_a = 10 * m * cp / 20e3
