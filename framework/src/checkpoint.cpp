@@ -10,7 +10,7 @@ namespace granuflow::detail {
 
 namespace {
 
-constexpr char kMagic[] = "granuflow checkpoint 1\n";
+constexpr char kMagic[] = "granuflow checkpoint 2\n";
 
 class Writer {
  public:
@@ -111,6 +111,8 @@ void write_checkpoint(const std::string& path, const Checkpoint& c) {
   w.vec(r.t), w.vec(r.y), w.vec(r.yp), w.vec(r.outputs), w.vec(r.sens), w.vec(r.output_sens);
   w.u64(r.events.size());
   for (const auto& e : r.events) w.str(e.name), w.str(e.phase), w.num(e.t);
+  w.u64(c.settings.size());
+  for (const auto& s : c.settings) w.str(s);
   if (!f) throw ConfigError("checkpoint " + path + ": writing failed (disk full?)");
 }
 
@@ -140,6 +142,8 @@ Checkpoint read_checkpoint(const std::string& path, const Flowsheet& fs, const S
     e.name = r.str(), e.phase = r.str(), e.t = r.num();
     p.events.push_back(e);
   }
+  const uint64_t nset = r.u64();
+  for (uint64_t i = 0; i < nset && i < 1000000; ++i) c.settings.push_back(r.str());
   if (!(s.t > 0) || !(s.t < opt.t_end))
     throw ConfigError("restart " + path + ": written at t = " + fmt_num(s.t) + " s, which is not before this run's " +
                       "t_end = " + fmt_num(opt.t_end) + " s");

@@ -3,7 +3,8 @@
 // its API, so a checkpoint time is a breakpoint of every run that names it: the run stops there and restarts its
 // integrator from the values it reached, and a restart from the file does exactly that. The file holds what the
 // next segment starts from (the integrator's unknowns, derivatives, quadratures and sensitivities), the results
-// recorded so far and the events that fired; doubles are stored as their bytes, so nothing is rounded.
+// recorded so far, the events that fired and the settings they switched; doubles are stored as their bytes, so nothing
+// is rounded.
 #pragma once
 #include <string>
 #include <vector>
@@ -20,6 +21,9 @@ struct Checkpoint {
   size_t next_output = 0;  // index of the first output time not yet recorded
   StepperState state;
   SimResult partial;  // t, y, yp, outputs, sens, output_sens and events up to state.t
+  // The settings of the units events switched, as in use at state.t ("unit.setting=value"): a restart re-applies
+  // the events that fired and must arrive at the same.
+  std::vector<std::string> settings;
 };
 
 // What a checkpoint must match to be restarted: the structure of the flowsheet and the sensitivities of the run.

@@ -155,6 +155,8 @@ void DaeSystem::check_explicit_residuals() {
   }
 }
 
+void DaeSystem::unit_replaced(int u) { ws_[u] = fs_.units()[u].unit->workspace(); }
+
 void DaeSystem::reconfigure() {
   const auto& units = fs_.units();
   for (size_t u = 0; u < units.size(); ++u) pconst_[u] = fs_.run_params(static_cast<int>(u));

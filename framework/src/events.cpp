@@ -5,6 +5,7 @@
 #include <regex>
 #include <set>
 
+#include "events_settings.hpp"
 #include "granuflow/errors.hpp"
 #include "granuflow/quantity.hpp"
 
@@ -46,7 +47,32 @@ void parse_when(const Flowsheet& fs, const std::string& text, const std::string&
   e.threshold = value_in(m[3], q.unit, where + " (" + e.quantity + ")");
 }
 
-void parse_do(const Flowsheet& fs, const YAML::Node& d, const std::string& where, EventSpec& e) {
+// "unit.setting": a setting the unit declares, switched by rebuilding the unit (events_settings.hpp); the new value and
+// the layout it gives are checked here, so that a run never meets a switch it cannot make.
+EventAction setting_action(const Flowsheet& fs, const Registry<Unit>& units, const std::string& target,
+                           const std::string& text, const std::string& at) {
+  const auto dot = target.find('.');
+  int u = -1;
+  for (size_t k = 0; k < fs.units().size() && dot != std::string::npos; ++k)
+    if (fs.units()[k].name == target.substr(0, dot) && fs.units()[k].owner < 0) u = static_cast<int>(k);
+  bool declared = false;
+  if (u >= 0)
+    for (const auto& st : fs.units()[u].settings) declared = declared || st.name == target.substr(dot + 1);
+  if (!declared)
+    throw ConfigError(at +
+                      ": neither a parameter nor a setting of the flowsheet (an event sets unit.param or "
+                      "unit.setting; `granuflow describe` lists them)");
+  EventAction a;
+  a.target = target, a.text = text;
+  const std::string type = fs.units()[u].unit->type();
+  const Registry<Unit>* reg = &units;
+  a.make = [reg, type] { return reg->create(type); };
+  rebuild_unit(fs, u, a, at);  // refuses a value or a layout the run cannot switch to
+  return a;
+}
+
+void parse_do(const Flowsheet& fs, const Registry<Unit>& units, const YAML::Node& d, const std::string& where,
+              EventSpec& e) {
   if (d.IsScalar()) {
     if (d.Scalar() != "stop") throw ConfigError(where + " = '" + d.Scalar() + "': expected stop or {set: {...}}");
     e.stop = true;
@@ -66,10 +92,10 @@ void parse_do(const Flowsheet& fs, const YAML::Node& d, const std::string& where
         const std::string target = p.first.Scalar(), at = where + ".set." + target;
         const std::string text = scalar_text(p.second, at);
         const auto names = fs.param_names();
-        if (std::find(names.begin(), names.end(), target) == names.end())
-          throw ConfigError(at +
-                            ": not a parameter of the flowsheet (an event sets parameters; settings shape the "
-                            "flowsheet and cannot change during a run; `granuflow describe` lists parameters)");
+        if (std::find(names.begin(), names.end(), target) == names.end()) {
+          e.set.push_back(setting_action(fs, units, target, text, at));
+          continue;
+        }
         const int id = fs.param_id(target);
         if (const int src = fs.link_source(id); src >= 0)
           throw ConfigError(at + ": follows " + fs.qualified_name(src) + " by a link; set " + fs.qualified_name(src) +
@@ -85,7 +111,8 @@ void parse_do(const Flowsheet& fs, const YAML::Node& d, const std::string& where
       throw ConfigError(where + "." + k + ": unknown key (allowed: set, stop)");
     }
   }
-  if (!e.stop && e.set.empty()) throw ConfigError(where + ": an event must set a parameter or stop the run");
+  if (!e.stop && e.set.empty())
+    throw ConfigError(where + ": an event must set a parameter or a setting, or stop the run");
 }
 
 }  // namespace
@@ -116,7 +143,8 @@ EventQuantity find_event_quantity(const Flowsheet& fs, const std::string& name, 
                     "(`granuflow describe` lists them)");
 }
 
-std::vector<EventSpec> load_events(const YAML::Node& node, const Flowsheet& fs, const std::string& label) {
+std::vector<EventSpec> load_events(const YAML::Node& node, const Flowsheet& fs, const std::string& label,
+                                   const Registry<Unit>& units) {
   if (!node.IsSequence())
     throw ConfigError(label +
                       ": events: expected a list of {name, when, do} (e.g. [{name: stop_spray, when: "
@@ -140,7 +168,7 @@ std::vector<EventSpec> load_events(const YAML::Node& node, const Flowsheet& fs, 
     for (const char* k : {"when", "do"})
       if (!n[k]) throw ConfigError(at + ": missing key '" + k + "'");
     parse_when(fs, scalar_text(n["when"], at + ".when"), at + ".when", e);
-    parse_do(fs, n["do"], at + ".do", e);
+    parse_do(fs, units, n["do"], at + ".do", e);
     if (n["phase"]) e.phase = scalar_text(n["phase"], at + ".phase");
     if (n["after"]) {
       e.after = scalar_text(n["after"], at + ".after");
@@ -171,7 +199,7 @@ void check_events(const Flowsheet& fs, const std::vector<EventSpec>& events, con
   for (const auto& e : events)
     for (const auto& a : e.set)
       for (const auto& p : sens)
-        if (fs.param_id(p) == fs.param_id(a.target))
+        if (!a.is_setting() && fs.param_id(p) == fs.param_id(a.target))
           throw ConfigError("sensitivity parameter '" + p + "' is set by event '" + e.name +
                             "': its value after the event no longer depends on it; ask for another parameter");
 }

@@ -8,10 +8,13 @@
 
 #include "granuflow/events.hpp"
 #include "granuflow/flowsheet.hpp"
+#include "granuflow/registry.hpp"
 
 namespace granuflow::detail {
 
-std::vector<EventSpec> load_events(const YAML::Node& node, const Flowsheet& fs, const std::string& label);
+// `units`: where an event that switches a setting makes the unit anew (it must outlive the events).
+std::vector<EventSpec> load_events(const YAML::Node& node, const Flowsheet& fs, const std::string& label,
+                                   const Registry<Unit>& units);
 std::vector<double> load_checkpoints(const YAML::Node& node, const std::string& label);
 
 // Where an event's quantity lives: a state (index into the full state vector) or a reported output.

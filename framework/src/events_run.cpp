@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "events.hpp"
+#include "events_settings.hpp"
 #include "granuflow/errors.hpp"
 
 namespace granuflow::detail {
@@ -20,8 +21,12 @@ EventMonitor::EventMonitor(Flowsheet& fs, DaeSystem& sys, const std::vector<Even
 }
 
 EventMonitor::~EventMonitor() {
-  if (saved_values_.empty()) return;
+  if (saved_values_.empty() && saved_units_.empty()) return;
   try {
+    for (auto& [u, saved] : saved_units_) {
+      fs_.units()[u].unit = std::move(saved.unit), fs_.units()[u].settings = std::move(saved.settings);
+      sys_.unit_replaced(u);
+    }
     for (const auto& [id, v] : saved_values_) fs_.set_param_value(id, v);
     for (const auto& [name, input] : saved_inputs_) fs_.set_input(name, *input);
     sys_.reconfigure();
@@ -107,8 +112,33 @@ std::vector<double> EventMonitor::tau(size_t i, double t, const Sample& s) {
   return tau;
 }
 
+// The unit is declared anew with the setting and takes the old one's place; its layout is the old one's (checked at
+// load), so the unknowns, parameters and sensitivities carry over as they are and the restart after the event (a
+// consistent start, as after any event) gives the algebraic states and rates their values under the new setting.
+void EventMonitor::switch_setting(const EventAction& a, const std::string& event) {
+  const int u = fs_.unit_index(a.target.substr(0, a.target.find('.')));
+  RebuiltUnit r = rebuild_unit(fs_, u, a, "event '" + event + "': set." + a.target);
+  UnitInstance& inst = fs_.units()[u];
+  if (!saved_units_.count(u)) saved_units_[u] = {std::move(inst.unit), inst.settings};
+  inst.unit = std::move(r.unit), inst.settings = std::move(r.settings);
+  sys_.unit_replaced(u);
+}
+
+std::vector<std::string> EventMonitor::switched_settings() const {
+  std::vector<std::string> out;
+  for (const auto& [u, saved] : saved_units_) {
+    const UnitInstance& inst = fs_.units()[u];
+    for (const auto& s : inst.settings) out.push_back(inst.name + "." + s.name + "=" + setting_text(s));
+  }
+  return out;
+}
+
 void EventMonitor::apply(const EventSpec& e) {
   for (const auto& a : e.set) {
+    if (a.is_setting()) {
+      switch_setting(a, e.name);
+      continue;
+    }
     const int id = fs_.param_id(a.target);
     if (!saved_values_.count(id)) saved_values_[id] = fs_.param_value(id);
     if (fs_.has_input(id)) {  // the event switches the input to a constant for the rest of the run
@@ -122,10 +152,33 @@ void EventMonitor::apply(const EventSpec& e) {
 
 EventMonitor::Outcome EventMonitor::fire(double t, const std::vector<int>& found, const Sample& s,
                                          std::vector<EventRecord>& log) {
-  Outcome o;
   std::vector<size_t> firing;
   for (size_t i = 0; i < events_.size(); ++i)
     if (found[i] != 0 && armed(i)) firing.push_back(i);
+  pending_.clear();
+  bool stop = false;
+  for (size_t i : firing) stop = stop || events_[i].stop;
+  // Without sensitivities the actions of simultaneous events compose in declaration order whatever happens between
+  // them; a run that stops there integrates no further, so no jump is needed either.
+  if (!sens_ids_.empty() && firing.size() > 1 && !stop) {
+    pending_.assign(firing.begin() + 1, firing.end());
+    firing.resize(1);
+  }
+  return fire_events(t, firing, s, log);
+}
+
+EventMonitor::Outcome EventMonitor::fire_pending(double t, const Sample& s, std::vector<EventRecord>& log) {
+  std::vector<size_t> firing;
+  while (firing.empty() && !pending_.empty()) {
+    if (armed(pending_.front())) firing.push_back(pending_.front());
+    pending_.erase(pending_.begin());
+  }
+  return fire_events(t, firing, s, log);
+}
+
+EventMonitor::Outcome EventMonitor::fire_events(double t, const std::vector<size_t>& firing, const Sample& s,
+                                                std::vector<EventRecord>& log) {
+  Outcome o;
   if (firing.empty()) return o;
   o.fired = true;
   if (!sens_ids_.empty()) {  // from the values before any action changes the system

@@ -32,14 +32,25 @@ class EventMonitor {
     SensitivityJump jump;  // tau empty without sensitivities
   };
   // At a root t located by the integrator (`found`: its root info), with the integrator's values there: the armed
-  // events that crossed fire in declaration order (recorded in `log`), their actions are applied.
+  // events that crossed fire in declaration order (recorded in `log`), their actions are applied. With sensitivities,
+  // events that cross at the same time fire one at a time: each one's event time and jump are taken on the
+  // trajectory the previous one left (the consistent values after its actions), so only the first fires here and
+  // the others wait for fire_pending() once the integrator has restarted at t.
   Outcome fire(double t, const std::vector<int>& found, const Sample& s, std::vector<EventRecord>& log);
+  bool pending() const { return !pending_.empty(); }
+  // The next event that crossed at the same time as the last one fired, with the integrator's values after it.
+  Outcome fire_pending(double t, const Sample& s, std::vector<EventRecord>& log);
   // For a restart from a checkpoint: the events that had fired (in time order) fire again, without a root.
   void restore(const std::vector<EventRecord>& log);
+  // The settings events switched, as in use now ("unit.setting=value", in the order of the units): a checkpoint
+  // records them and a restart checks that its events switched the same.
+  std::vector<std::string> switched_settings() const;
 
  private:
   bool armed(size_t i) const;
+  Outcome fire_events(double t, const std::vector<size_t>& firing, const Sample& s, std::vector<EventRecord>& log);
   void apply(const EventSpec& e);
+  void switch_setting(const EventAction& a, const std::string& event);
   std::vector<double> tau(size_t i, double t, const Sample& s);
 
   Flowsheet& fs_;
@@ -48,8 +59,14 @@ class EventMonitor {
   std::vector<int> sens_ids_;
   std::vector<int> state_, output_;  // per event: its quantity's index (-1 where the other one applies)
   std::vector<int> fired_;
-  std::map<int, double> saved_values_;                                  // parameter id -> value before the run
+  std::vector<size_t> pending_;         // events that crossed with the last one fired, to fire after it (in this order)
+  std::map<int, double> saved_values_;  // parameter id -> value before the run
   std::map<std::string, std::optional<PiecewiseLinear>> saved_inputs_;  // "unit.param" -> its input before the run
+  struct SavedUnit {
+    std::unique_ptr<Unit> unit;
+    std::vector<SettingSpec> settings;
+  };
+  std::map<int, SavedUnit> saved_units_;  // unit index -> the unit a setting event replaced, put back when the run ends
   std::vector<double> y_full_, yp_full_, out_, q_zero_;
 };
 

@@ -51,9 +51,10 @@ bool is_checkpoint(const SimOptions& opt, double t) {
   return std::find(opt.checkpoints.begin(), opt.checkpoints.end(), t) != opt.checkpoints.end();
 }
 
-std::string save_checkpoint(const SimOptions& opt, const Flowsheet& fs, Stepper& stepper, const SimResult& res,
-                            double t, size_t seg, size_t iout) {
+std::string save_checkpoint(const SimOptions& opt, const Flowsheet& fs, Stepper& stepper, const EventMonitor& events,
+                            const SimResult& res, double t, size_t seg, size_t iout) {
   Checkpoint c;
+  c.settings = events.switched_settings();
   c.scene = fs.name(), c.structure = structure_signature(fs, opt), c.states = fs.n_states();
   c.segment = seg, c.next_output = iout;
   stepper.save(c.state);
@@ -77,6 +78,18 @@ void restart(const SimOptions& opt, const Flowsheet& fs, const DaeSystem& sys, S
   res.outputs = std::move(c.partial.outputs), res.sens = std::move(c.partial.sens);
   res.output_sens = std::move(c.partial.output_sens), res.events = c.partial.events;
   events.restore(c.partial.events);
+  // The settings the writing run's events had switched are those this run's events switch again (the same events by
+  // name, checked with the structure; a scene that gives them other values is refused).
+  if (const auto now = events.switched_settings(); now != c.settings) {
+    auto list = [](const std::vector<std::string>& v) {
+      std::string s;
+      for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
+      return s.empty() ? std::string("none") : s;
+    };
+    throw ConfigError("restart " + opt.restart_file + ": written with the settings " + list(c.settings) +
+                      " switched by events, this run's events switch " + list(now) +
+                      ": restart with the events of the writing run");
+  }
   stepper.restore(c.state);
   t0 = c.state.t, seg = c.segment, iout = c.next_output;
 }
@@ -124,7 +137,9 @@ SimResult drive(Flowsheet& fs, DaeSystem& sys, const SimOptions& opt, const std:
     }
     double t = t0;
     EventMonitor::Outcome event;
-    while (t < t1) {
+    // An event that crossed with the one that ended the last segment fires now, from the values after that one.
+    if (events.pending()) event = events.fire_pending(t0, stepper.sample(t0), res.events);
+    while (t < t1 && !event.fired) {
       const bool to_output = iout < t_out.size() && t_out[iout] <= t1;
       const int flag = stepper.advance(to_output ? t_out[iout] : t1, t);
       check_flag(flag);
@@ -149,7 +164,7 @@ SimResult drive(Flowsheet& fs, DaeSystem& sys, const SimOptions& opt, const std:
       continue;
     }
     if (is_checkpoint(opt, t1) && !opt.checkpoint_dir.empty())
-      res.checkpoint_files.push_back(save_checkpoint(opt, fs, stepper, res, t1, seg, iout));
+      res.checkpoint_files.push_back(save_checkpoint(opt, fs, stepper, events, res, t1, seg, iout));
     t0 = t1;
     ++iend;
   }

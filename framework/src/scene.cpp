@@ -81,7 +81,7 @@ class Loader {
     s.options.t_end = quantity(required(root, "t_end", ""), "t_end", "s");
     if (root["output"]) load_output(root["output"], s.options);
     if (root["solver"]) load_solver(root["solver"], s.options);
-    if (root["events"]) s.options.events = detail::load_events(root["events"], fs, label_);
+    if (root["events"]) s.options.events = detail::load_events(root["events"], fs, label_, units_);
     if (root["checkpoints"]) s.options.checkpoints = detail::load_checkpoints(root["checkpoints"], label_);
     try {
       s.options.validate(true);

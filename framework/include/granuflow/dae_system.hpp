@@ -40,6 +40,9 @@ class DaeSystem {
   explicit DaeSystem(const Flowsheet& fs, bool inline_explicit = true);
   ~DaeSystem();
   void reconfigure();
+  // Unit `u` was replaced by one of the same layout (a setting switched by an event, events_settings.hpp): its
+  // workspace is made anew; reconfigure() before the next evaluation.
+  void unit_replaced(int u);
   // For a system kept from an earlier run (Flowsheet::take_system): reconfigure(), segment start 0, counters 0.
   void begin_run();
   // A run that ends normally says so; only such systems are kept for the next run (one a unit or the integrator

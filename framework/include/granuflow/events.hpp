@@ -1,17 +1,25 @@
 // State events of a recipe (scene key `events`, docs/events_and_checkpoints.md): a condition on a state or a reported
 // output, located by the integrator's root finding, and what happens there (parameters set, an input switched to a
-// constant, the run stopped). Checkpoints (scene key `checkpoints`): times at which a run stops, writes its full
-// state and restarts, so that a later run can resume from the file bit-identically.
+// constant, a unit's setting switched, the run stopped). Checkpoints (scene key `checkpoints`): times at which a run
+// stops, writes its full state and restarts, so that a later run can resume from the file bit-identically.
 #pragma once
+#include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
 namespace granuflow {
 
+class Unit;
+
 struct EventAction {
-  std::string target;  // "unit.param"
-  double value = 0.0;  // SI
-  std::string text;    // as written, for messages and results
+  std::string target;  // "unit.param", or "unit.setting"
+  double value = 0.0;  // SI (a parameter)
+  std::string text;    // as written, for messages and results; a setting's new value
+  // A setting: makes a new unit of the same type, which the event declares with the new value and puts in the old
+  // one's place (the layout unchanged, checked when the scene is loaded). Empty for a parameter.
+  std::function<std::unique_ptr<Unit>()> make;
+  bool is_setting() const { return static_cast<bool>(make); }
 };
 
 struct EventSpec {
