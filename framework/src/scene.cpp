@@ -14,6 +14,7 @@
 
 #include "granuflow/errors.hpp"
 #include "granuflow/materials.hpp"
+#include "granuflow/plugin.hpp"
 #include "granuflow/quantity.hpp"
 #include "yaml_text.hpp"
 
@@ -43,7 +44,7 @@ class Loader {
     if (!root.IsMap()) fail("", "the file must be a mapping of scene keys, got " + kind_name(root));
     check_keys(root, "",
                {"scene", "description", "t_end", "output", "solver", "particles", "units", "connections", "inputs",
-                "summary", "plots", "sweep", "notes", "links", "accuracy"});
+                "summary", "plots", "sweep", "notes", "links", "accuracy", "plugins"});
     Scene s;
     s.path = label_;
     s.name = scalar(required(root, "scene", ""), "scene");
@@ -53,6 +54,7 @@ class Loader {
 
     Params params;
     std::map<std::string, std::string> given;  // unit.param -> scene key that set it (params or inputs)
+    if (root["plugins"]) load_plugins(root["plugins"]);
     load_units(root, fs, params);
     if (root["connections"]) load_connections(root["connections"], fs);
     try {
@@ -97,6 +99,24 @@ class Loader {
 
  private:
   using Params = std::vector<std::pair<std::string, YAML::Node>>;  // unit name, its params node
+
+  // Plugins before the units that may name their types (granuflow/plugin.hpp); a relative path is taken from the
+  // scene file's folder.
+  void load_plugins(const YAML::Node& p) const {
+    if (!p.IsSequence()) fail("plugins", "expected a list of shared-library paths, got " + kind_name(p));
+    const size_t slash = label_.rfind('/');
+    const std::string dir = slash == std::string::npos ? "" : label_.substr(0, slash + 1);
+    for (size_t i = 0; i < p.size(); ++i) {
+      const std::string at = "plugins[" + std::to_string(i) + "]";
+      std::string file = scalar(p[i], at);
+      if (!file.empty() && file[0] != '/') file = dir + file;
+      try {
+        load_plugin(file);
+      } catch (const ConfigError& e) {
+        fail(at, e.what());
+      }
+    }
+  }
 
   // One unit per entry; the `particles` section is the unit "particles" of type particles (the size grid and
   // product shared by every particle unit), declared first so that the others find it.
