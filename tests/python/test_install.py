@@ -4,10 +4,10 @@ into a fresh virtual environment (system site packages, no network: --no-build-i
 against the installed package's CMake files.
 
 The install test (marker `install`, part of the README's test command) costs one CMake build with ccache: its
-folders live under the build folder (build/pip-test), so paths, and with them ccache's entries, stay the same from
-run to run, and it configures the pip build as the build folder is configured (GRANUFLOW_NATIVE, tests), so the
-objects are ccache hits of that build. What a plain `pip install .` changes, the portable default
-GRANUFLOW_NATIVE=OFF, is measured in docs/install_and_plugins.md."""
+CMake folder sits beside the build folder (build-pip-test) and its environment under it (build/pip-test), so paths,
+and with them ccache's entries, stay the same from run to run, and it configures the pip build as the build folder
+is configured (GRANUFLOW_NATIVE, tests), so the objects are ccache hits of that build. What a plain
+`pip install .` changes, the portable default GRANUFLOW_NATIVE=OFF, docs/install_and_plugins.md discusses."""
 import json
 import os
 import re
@@ -64,7 +64,9 @@ def test_pip_install_into_a_fresh_venv_and_run_from_another_folder(tmp_path):
     shutil.rmtree(venv, ignore_errors=True)
     run(["/usr/bin/python3", "-m", "venv", "--system-site-packages", venv], timeout=300)
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "GRANUFLOW_PLUGIN_PATH")}
-    env["GRANUFLOW_PIP_BUILD_DIR"] = os.path.join(HERE, "cmake")
+    # beside the build folder, at its depth: ccache configured with base_dir hashes include paths relative to the
+    # build folder, so only a folder at the same depth hits the build's entries
+    env["GRANUFLOW_PIP_BUILD_DIR"] = BUILD + "-pip-test"
     launcher = cache_value("CMAKE_CXX_COMPILER_LAUNCHER")
     if launcher:
         env["CMAKE_CXX_COMPILER_LAUNCHER"] = launcher
