@@ -68,7 +68,7 @@ int CollisionCounts::class_of(double d) const {
 }
 
 namespace {
-constexpr const char* kCollisionKeys = "dt_s, edges_m, particles, counts";
+constexpr const char* kCollisionKeys = "like_collisions, dt_s, edges_m, particles, counts";
 
 // A collision file's rows: the single rows dt_s, edges_m and particles by key, and the counts rows in order.
 struct CollisionRows {
@@ -111,7 +111,7 @@ CollisionRows collision_rows(const std::string& text, const std::string& path) {
     const std::string key = line.fields.front();
     if (key == "counts") {
       r.counts.push_back(std::move(line));
-    } else if (key == "dt_s" || key == "edges_m" || key == "particles") {
+    } else if (key == "dt_s" || key == "edges_m" || key == "particles" || key == "like_collisions") {
       if (r.single.count(key))
         throw r.fail(row, 1, "'" + key + "' given twice (first on row " + std::to_string(r.single[key].row) + ")");
       r.single[key] = std::move(line);
@@ -205,6 +205,24 @@ void read_counts(CollisionRows& r, CollisionCounts& c) {
       }
     }
 }
+// How the file counts a collision of two particles of one class: the diagonal of Eq. (12) differs by a factor of
+// two between the readings and no default is safe, so a file must say (docs/dem_collisions.md).
+void read_like_collisions(CollisionRows& r, CollisionCounts& c) {
+  const auto it = r.single.find("like_collisions");
+  if (it == r.single.end())
+    throw ConfigError(r.path +
+                      ": no 'like_collisions' row: say how a collision of two particles of one class is counted in "
+                      "N_ii, 'like_collisions,twice' (once by each partner) or 'like_collisions,once' "
+                      "(docs/dem_collisions.md)");
+  const Line& l = it->second;
+  const std::string v = l.fields.size() == 2 ? l.fields[1] : std::string();
+  if (v != "twice" && v != "once")
+    throw r.fail(l.row, 2,
+                 "like_collisions takes one value, 'twice' or 'once' (got '" +
+                     shown(l.fields.size() > 1 ? l.fields[1] : std::string()) + (l.fields.size() > 2 ? "', ..." : "'") +
+                     ")");
+  c.like_tally = v == "twice" ? 2 : 1;
+}
 }  // namespace
 
 CollisionCounts parse_collision_counts(const std::string& text, const std::string& path) {
@@ -213,6 +231,17 @@ CollisionCounts parse_collision_counts(const std::string& text, const std::strin
   c.path = path;
   read_classes(rows, c);
   read_counts(rows, c);
+  read_like_collisions(rows, c);
+  // Eq. (12) of paper 002 must give a number: counts near the largest double over particle numbers near the smallest
+  const size_t n = c.particles.size();
+  for (size_t i = 0; i < n; ++i)
+    for (size_t j = 0; j < n; ++j)
+      if (c.particles[i] > 0 && c.particles[j] > 0 &&
+          !std::isfinite(c.counts[i * n + j] * (i == j ? 2.0 / c.like_tally : 1.0) /
+                         (c.particles[i] * c.particles[j] * c.dt)))
+        throw rows.fail(rows.counts[i].row, static_cast<int>(j) + 2,
+                        "count " + fmt_num(c.counts[i * n + j]) +
+                            ": the collision frequency count / (F_i F_j dt) of Eq. (12) is not a finite number");
   return c;
 }
 

@@ -34,6 +34,7 @@ struct CollisionCounts {
   std::vector<double> edges;      // m, n + 1 increasing class edges in particle diameter
   std::vector<double> particles;  // F_i, particles of class i in the window (time average), n
   std::vector<double> counts;     // N_coll,ij, n x n row-major, symmetric
+  int like_tally = 2;             // times a collision within one class appears in N_ii (file key like_collisions)
   int classes() const { return static_cast<int>(particles.size()); }
   // Class holding diameter d (m): edges[c] <= d < edges[c + 1]; the last edge belongs to the last class; -1 outside.
   int class_of(double d) const;

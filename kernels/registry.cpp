@@ -16,6 +16,8 @@
 #include "comminution/comminution_laws.hpp"
 #include "discretization/cell_average.hpp"
 #include "discretization/fixed_pivot.hpp"
+#include "drying/drying_curves.hpp"
+#include "drying/drying_surfaces.hpp"
 #include "growth/growth_laws.hpp"
 
 namespace granuflow::kernels {
@@ -58,6 +60,8 @@ void register_all(KernelRegistries& r) {
   register_growth_laws(r.growth);
   register_separation_curves(r.separation);
   register_comminution_laws(r.comminution);
+  register_drying_curves(r.drying_curves);
+  register_drying_surfaces(r.drying_surfaces);
   register_schemes(r);
 }
 

@@ -12,6 +12,8 @@
 #include "discretization/aggregation_scheme.hpp"
 #include "discretization/breakage_scheme.hpp"
 #include "discretization/fv_growth.hpp"
+#include "drying/drying_curve.hpp"
+#include "drying/drying_surface.hpp"
 #include "granuflow/registry.hpp"
 #include "growth/growth_law.hpp"
 
@@ -29,6 +31,9 @@ struct KernelRegistries {
   // mechanisms, but plugins of the same kind.
   Registry<SeparationCurve> separation{"separation curve"};
   Registry<ComminutionLaw> comminution{"comminution law"};
+  // The drying closures of a particle hold-up (paper 000, sections 5.2, 5.4.1).
+  Registry<DryingCurve> drying_curves{"drying curve"};
+  Registry<DryingSurface> drying_surfaces{"drying surface"};
 };
 
 void register_all(KernelRegistries& r);

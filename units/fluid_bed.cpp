@@ -13,6 +13,7 @@
 #include "granuflow/properties.hpp"
 #include "kernels/discretization/psd.hpp"
 #include "kernels/discretization/psd_setting.hpp"
+#include "kernels/drying/drying_closures.hpp"
 #include "kernels/drying/paper001_drying.hpp"
 #include "kernels/limited.hpp"
 #include "kernels/particle_geometry.hpp"
@@ -87,6 +88,7 @@ class FluidBed : public UnitBase<FluidBed> {
     p_betn_ = s.add_param({"bet_n", "-", def::kBetN, 1.0, 100.0, "BET n, Eq. (81)", t8});
     p_dv_ = s.add_param({"D_v", "m2/s", def::kVapourDiffusivity, 1e-7, 1e-3, "vapour diffusivity", t6});
     p_lambda_ = s.add_param({"lambda_g", "W/(m K)", def::kGasConductivity, 1e-3, 1.0, "gas thermal conductivity", t6});
+    closures_.declare(s, st, "linear", true);  // paper 000, sections 5.2, 5.4.1 (default: paper 001's Eq. (79), film)
     declare_population(s, st);
     declare_binder(st);
     const bool discharge = declare_states(s, st);
@@ -248,6 +250,7 @@ class FluidBed : public UnitBase<FluidBed> {
     pop_.configure(*w.pop, p, "unit fluid_bed");
     w.mapped = false;
   }
+  void check(const UnitSpec&, const double* p) const override { closures_.check(p, "drying_curve"); }
 
   template <class T>
   Status eval(const Ctx<T>& c) const {
@@ -280,6 +283,7 @@ class FluidBed : public UnitBase<FluidBed> {
     const int n = n_;  // a local bound: stores through the arrays could change the member n_
 #pragma omp simd
     for (int i = 0; i < n; ++i) class_transfer(tp, d[i], M[i], W[i], pm[i], g, &nu[i], &area[i], &flux[i], &q[i]);
+    closures_.curve(c.p, n, nu), closures_.surface(c.p, W, n, area);  // the chosen closures (heat keeps the area)
 #pragma omp simd
     for (int i = 0; i < n; ++i) dry[i] = p1::drying_rate(nu[i], area[i], flux[i]);
     const T m_vap = c.reduce(r_drying_, n_, [&](int i) { return sc.dry[i]; });
@@ -564,6 +568,7 @@ class FluidBed : public UnitBase<FluidBed> {
   std::shared_ptr<const kernels::Grid> grid_;
   kernels::Population pop_;
   BedLayering layering_;
+  kernels::DryingClosures closures_;  // drying curve and drying surface
   ParamId p_mass_, p_x0_, p_d50_, p_sigma_, p_t0_, p_cpl_, p_abed_, p_xcr_, p_sh_, p_betmm_, p_betn_, p_dv_, p_lambda_;
   StateId sM_, sW_, sH_, sT_, sU0_, sVap_, sQ_;
   PortId wet_, gas_, inlet_, feed_;

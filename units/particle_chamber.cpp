@@ -9,6 +9,7 @@
 #include "granuflow/flowsheet.hpp"
 #include "granuflow/properties.hpp"
 #include "kernels/discretization/psd.hpp"
+#include "kernels/drying/paper001_drying.hpp"
 #include "kernels/particle_geometry.hpp"
 #include "particle_chamber_work.hpp"
 
@@ -69,6 +70,7 @@ void ParticleChamber::configure(const UnitSpec&, const double* p, const double* 
 // The spray lands on the particles' surface (paper 003, Eq. (7.33)); the model has no nucleation from the spray, so
 // on an empty bed what is sprayed has nowhere to go and would vanish from the balances (issue 29).
 void ParticleChamber::check(const UnitSpec&, const double* p) const {
+  closures_.check(p, "drying_curve");
   if (spray_ && p[p_mass_.i] == 0.0 && p[p_spray_.i] > 0.0 && (wet_ || p[p_w_.i] > 0.0))
     throw ConfigError(violation("bed_mass", 0.0, "kg",
                                 "bed_mass > 0 while the spray is on (m_spray = " + fmt_num(p[p_spray_.i]) +
@@ -101,6 +103,19 @@ const T* particle_tables(const Ctx<T>& c, const W& w, S& sc, const ParticleParam
 template <class T>
 T ParticleChamber::spray_solids(const Ctx<T>& c) const {
   return spray_ ? T(c.par(p_spray_) * c.par(p_w_)) : T(0.0);
+}
+
+// Without a curve (W - X_eq M) / tau_dry; with one, paper 000, section 5.4.1: the constant rate (X_cr - X_eq) M /
+// tau_dry (the first-order rate at X_cr) times v(eta), eta = (X - X_eq) / (X_cr - X_eq) regularized as in paper 001's
+// Eq. (80); the linear curve is the first-order rate below X_cr.
+template <class T>
+T ParticleChamber::drying_rate(const Ctx<T>& c, const T& m, const T& w) const {
+  if (!closures_.has_curve()) return (w - c.par(p_xeq_) * m) / c.par(p_taudry_);
+  const T &x_eq = c.par(p_xeq_), &x_cr = c.par(p_xcr_);
+  T v = kernels::paper001::normalized_moisture(T(w / (m + kMassFloor)), x_eq, x_cr).value;
+  v = v < 1.0 ? v : T(1.0);
+  closures_.curve(c.p, 1, &v);
+  return (x_cr - x_eq) * m / c.par(p_taudry_) * v;
 }
 
 template <class T>
@@ -183,6 +198,19 @@ void ParticleChamber::outflows(const Ctx<T>& c, const T* frac) const {
   }
 }
 
+// The controlled discharge R for the controller's demand u: min(softplus(u), mdot_max) smoothed, or with a located
+// valve 0, u or mdot_max by the valve's position, which the scene's events switch.
+template <class T>
+T ParticleChamber::valve_flow(const Ctx<T>& c, const T& u, const T& m_set, const T& tau_c) const {
+  if (located_valve_) {
+    const long pos = std::lround(value_of(c.par(p_valve_)));
+    return pos == 0 ? T(0.0) : pos == 1 ? u : T(c.par(p_rmax_));
+  }
+  const T eps = kValveSmoothing * m_set / tau_c;
+  const T open = softplus(u, eps);
+  return open - softplus(T(open - c.par(p_rmax_)), eps);
+}
+
 template <class T>
 Status ParticleChamber::eval(const Ctx<T>& c) const {
   Work& w = c.template ws<Work>();
@@ -248,10 +276,7 @@ Status ParticleChamber::eval(const Ctx<T>& c) const {
       const T& m_set = c.par(p_mset_);
       const T& tau_c = c.par(p_tauc_);
       const T u = fed + m_sus - exch_rate * mass + (mass - m_set) / tau_c;
-      const T eps = kValveSmoothing * m_set / tau_c;
-      const T open = softplus(u, eps);
-      c.res(discharge_out_.rate) =
-          c.x(discharge_out_.rate) - (open - softplus(T(open - c.par(p_rmax_)), eps)) / (weighted + kMassFloor);
+      c.res(discharge_out_.rate) = c.x(discharge_out_.rate) - valve_flow(c, u, m_set, tau_c) / (weighted + kMassFloor);
     } else {
       c.res(discharge_out_.rate) = c.x(discharge_out_.rate) - c.par(p_k_);
     }
@@ -270,7 +295,7 @@ Status ParticleChamber::eval(const Ctx<T>& c) const {
     if (wet_) {
       // sprayed water lands in proportion to the class surface; first-order drying towards X_eq
       const T dep = spray_ ? T(m_water * M[i] * sc.spm[i] / (surface + kMassFloor)) : T(0.0);
-      const T dry = (W[i] - c.par(p_xeq_) * M[i]) / c.par(p_taudry_);
+      const T dry = drying_rate(c, M[i], W[i]);
       c.res(sW_ + i) = c.xd(sW_ + i) - (sc.dW[i] + in_w - out_w + dep - dry);
     }
   }
@@ -406,6 +431,13 @@ void ParticleChamber::outputs(const Ctx<T>& c) const {
     return m;
   };
   if (discharge_out_.rate) c.out(o_dis_) = outflow(1);
+  if (located_valve_) {  // the controller's demand u (eval), which the valve's events watch
+    inlet_flows(c, sc.in_m.data(), sc.in_w.data(), sc.gather);
+    T fed(0.0);
+    for (int i = 0; i < n_; ++i) fed += sc.in_m[i];
+    const T exch = exchange_.rate ? T(1.0 / c.par(p_tau_)) : T(0.0);
+    c.out(o_demand_) = fed + spray_solids(c) - exch * mass + (mass - c.par(p_mset_)) / c.par(p_tauc_);
+  }
   if (exchange_.rate) c.out(o_exch_) = outflow(0);
   c.out(o_top_) = mass > 0.0 ? T(M[n_ - 1] / mass) : T(0.0);
   c.out(o_hold_solids_) = mass;
@@ -435,7 +467,7 @@ ParticleChamber::Boundary<T> ParticleChamber::boundary(const Ctx<T>& c) const {
     const T wi = wet_ ? c.x(sW_ + i) : T(0.0);
     capacity += c.x(sM_ + i) * cp_s + wi * cp_l;
     dh += (c.xd(sM_ + i) * cp_s + (wet_ ? c.xd(sW_ + i) : T(0.0)) * cp_l) * (t - props::kT0);
-    if (wet_) vapour += (wi - c.par(p_xeq_) * c.x(sM_ + i)) / c.par(p_taudry_);
+    if (wet_) vapour += drying_rate(c, c.x(sM_ + i), wi);
     for (PortId p : inlets_) {
       const T& wf = c.port(p, solids::water(n_, i));
       h_in += (c.port(p, solids::mdot(i)) * cp_s + wf * cp_l) * (c.port(p, solids::T(n_)) - props::kT0);

@@ -30,6 +30,10 @@
 //      opening backwards while the bed fills at start-up and leaves the steady bed mass within eps^2 tau_c / (4 R)
 //      of M_set; the minimum has the same smooth form, min(a, b) = a - softplus(a - b). With a recycle the inflow
 //      includes the recycle, which depends on the discharge: the equations are solved together (an algebraic loop),
+//      With the setting valve: located, the switches are not smoothed: R = 0, u or mdot_max by the parameter `valve`
+//      (0 closed, 1 following the demand u, 2 at capacity), which the scene's events switch where the reported
+//      demand u (output discharge_demand) crosses 0 or mdot_max, located by the integrator
+//      (docs/events_and_checkpoints.md).
 //      and while the bed holds few particles of product size the ideal controller circulates R = M_sus / (product
 //      fraction), which the capacity bounds.
 // The bed is isothermal at T_bed (held by the fluidization gas, which is not modelled): the heat the gas supplies is
@@ -40,9 +44,11 @@
 #include <vector>
 
 #include "classifier.hpp"
+#include "granuflow/signals.hpp"
 #include "granuflow/unit.hpp"
 #include "kernels/discretization/fv_growth.hpp"
 #include "kernels/discretization/psd_setting.hpp"
+#include "kernels/drying/drying_closures.hpp"
 #include "kernels/population/population.hpp"
 #include "particles.hpp"
 
@@ -50,7 +56,7 @@ namespace granuflow::units {
 
 enum class ChamberRole { kGranulator, kSprayZone, kDryingZone };
 
-class ParticleChamber : public UnitBase<ParticleChamber> {
+class ParticleChamber : public UnitBase<ParticleChamber>, public HoldsSetPoint {
  public:
   explicit ParticleChamber(ChamberRole role) : role_(role) {}
   std::string type() const override;
@@ -59,9 +65,16 @@ class ParticleChamber : public UnitBase<ParticleChamber> {
   void configure(const UnitSpec& spec, const double* p, const double* shared, Workspace& ws) const override;
   void check(const UnitSpec& spec, const double* p) const override;
   void analytic_jacobian(const Ctx<double>& c, double cj, JacobianSink& sink) const override;
+  // With the bed mass held (ideal level controller), its dry mass at M_set (a steady state says when it is not).
+  std::vector<SetPoint> set_points() const override {
+    if (!controlled_) return {};
+    return {{p_mset_, o_mass_}};
+  }
 
   template <class T>
   Status eval(const Ctx<T>& c) const;
+  template <class T>
+  T valve_flow(const Ctx<T>& c, const T& u, const T& m_set, const T& tau_c) const;
   template <class T>
   void init(InitCtx<T>& c) const;
   template <class T>
@@ -104,6 +117,9 @@ class ParticleChamber : public UnitBase<ParticleChamber> {
   Boundary<T> boundary(const Ctx<T>& c) const;  // computes the outflows (outflows()) for its caller too
   template <class T>
   T spray_solids(const Ctx<T>& c) const;
+  // Water drying off a class of m kg dry solids holding w kg water, kg/s: first order, or along a drying curve.
+  template <class T>
+  T drying_rate(const Ctx<T>& c, const T& m, const T& w) const;
   template <class T>
   void growth_rates(const Ctx<T>& c, const T* N, const T* W, const T& amount, T* dM, T* dW) const;
   // What the inlets bring per class (dry solids, water), summed over the inlets in their order.
@@ -139,14 +155,18 @@ class ParticleChamber : public UnitBase<ParticleChamber> {
   bool spray_ = false, wet_ = false;
   Discharge discharge_ = Discharge::kNone;
   bool controlled_ = false;
+  bool located_valve_ = false;  // valve: located (the discharge's switches as events, not smoothed)
   Classifier classifier_;
+  kernels::DryingClosures closures_;  // the drying curve (setting drying_curve), when one is chosen
+  ParamId p_xcr_;                     // its critical moisture
   ParamId p_mass_, p_d50_, p_sigma_, p_x0_, p_t_, p_cpl_;
-  ParamId p_spray_, p_w_, p_tspray_, p_taudry_, p_xeq_, p_tau_, p_k_, p_mset_, p_tauc_, p_rmax_;
+  ParamId p_spray_, p_w_, p_tspray_, p_taudry_, p_xeq_, p_tau_, p_k_, p_mset_, p_tauc_, p_rmax_, p_valve_;
   StateId sM_, sW_, sT_, sZero_;
   std::vector<PortId> inlets_;
   Outlet exchange_, discharge_out_;
   ReductionId r_mass_, r_tm_, r_in_, r_surface_;
   QuadId q_solids_in_, q_water_in_, q_water_out_, q_energy_in_, q_energy_out_;
+  OutputId o_demand_;
   OutputId o_mass_, o_moisture_, o_d_[3], o_d32_, o_dmean_, o_sigma_, o_g_, o_particles_, o_dis_, o_exch_, o_top_,
       o_heat_, o_vapour_, o_hold_solids_, o_hold_water_, o_hold_energy_, o_psd_d_, o_psd_m_, o_outside_;
   kernels::TablePsd psd_;  // a measured initial bed (settings initial_psd, initial_psd_file)

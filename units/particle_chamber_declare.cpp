@@ -37,7 +37,7 @@ void ParticleChamber::declare_options(const ParticleSystem& ps, Settings& st) {
                            "residence-time segment)") == "layering";
   wet_ = st.get_choice("drying", "none", {"none", "first_order"},
                        "water on the particles: none (sprayed and fed water evaporates at once) or per-class water "
-                       "drying at (W - X_eq M) / tau_dry") == "first_order";
+                       "drying at (W - X_eq M) / tau_dry (or along drying_curve)") == "first_order";
   if (wet_) require_water(ps, st, "drying: first_order keeps per-class water on the particles");
   if (role_ != ChamberRole::kSprayZone) {
     const std::string d = st.get_choice("discharge", role_ == ChamberRole::kGranulator ? "unclassified" : "none",
@@ -49,6 +49,11 @@ void ParticleChamber::declare_options(const ParticleSystem& ps, Settings& st) {
       controlled_ = st.get_choice("bed_mass", "free", {"free", "controlled"},
                                   "hold-up: free (discharge rate k_discharge per second) or held at M_set by the "
                                   "discharge (ideal level controller)") == "controlled";
+    if (controlled_)
+      located_valve_ = st.get_choice("valve", "smooth", {"smooth", "located"},
+                                     "the controlled discharge's switches (closed below zero demand, at capacity "
+                                     "above mdot_max): smooth, or located: set by the parameter valve, which the "
+                                     "scene's events switch where discharge_demand crosses them") == "located";
   }
 }
 
@@ -75,6 +80,10 @@ void ParticleChamber::declare_params(UnitSpec& s, Settings& st) {
     p_x0_ = s.add_param({"X0", "kg/kg", 0.0, 0.0, 10.0, "initial moisture, dry basis", init});
     p_taudry_ = s.add_param({"tau_dry", "s", 60.0, 1e-3, 1e7, "drying time constant of the particle water", op});
     p_xeq_ = s.add_param({"X_eq", "kg/kg", 0.0, 0.0, 1.0, "equilibrium moisture, dry basis", op});
+    closures_.declare(s, st, "", false);  // paper 000, section 5.4.1: a drying curve instead of first order
+    if (closures_.has_curve())
+      p_xcr_ = s.add_param({"X_cr", "kg/kg", kernels::paper001::defaults::kCriticalMoisture, 1e-4, 10.0,
+                            "critical moisture content: end of the constant-rate period", "paper 001, Table 8"});
   }
   if (role_ != ChamberRole::kGranulator)
     p_tau_ = s.add_param({"tau", "s", role_ == ChamberRole::kSprayZone ? 4.0 : 196.0, 1e-3, 1e7,
@@ -91,6 +100,9 @@ void ParticleChamber::declare_params(UnitSpec& s, Settings& st) {
     p_tauc_ = s.add_param(
         {"tau_c", "s", 60.0, 1e-3, 1e6, "time constant of the discharge controller's correction (M - M_set)", op});
     p_rmax_ = s.add_param({"mdot_max", "kg/s", 1e3, 1e-9, 1e6, "capacity of the discharge (valve fully open)", op});
+    if (located_valve_)
+      p_valve_ = s.add_param({"valve", "-", 1.0, 0.0, 2.0,
+                              "valve position: 0 closed, 1 following the demand, 2 at capacity (set by events)", op});
   }
   if (discharge_ == Discharge::kClassified)
     classifier_.declare(s, st, "classifier", "plitt", "class_", "separation curve of the classifying discharge", grid_,
@@ -208,6 +220,7 @@ void ParticleChamber::declare_outputs(UnitSpec& s) {
   if (spray_) o_g_ = s.add_output("G", "m/s");
   o_particles_ = s.add_output("particles", "-");
   if (discharge_ != Discharge::kNone) o_dis_ = s.add_output("discharge_mdot", "kg/s");
+  if (located_valve_) o_demand_ = s.add_output("discharge_demand", "kg/s");
   if (exchange_.rate) o_exch_ = s.add_output("exchange_mdot", "kg/s");
   o_top_ = s.add_output("top_class_fraction", "-", OutputRole::kGridEnd);
   o_heat_ = s.add_output("heat_duty", "W");

@@ -6,14 +6,12 @@
 // (dem_collision: collision frequencies from a DEM count file, Eq. (12), times the liquid-content efficiency, Eq.
 // (13)).
 //
-// Liquid addition as paper 002 distributes it (section 3.2): the spray is droplets of one volume v_d, and a droplet
-// that meets a particle is absorbed by it whole, so a particle's liquid volume grows by v_d at a time. With a liquid
-// flow Q the droplets arrive at R = Q / v_d per second and each lands on one particle, chosen with a weight per
-// particle (setting spray_weight: every particle alike, or in proportion to the collision cross-section (D +
-// d_drop)^2). A bin's particles therefore leave at rate R w_a / W towards l_j + v_d, split between the two liquid
-// pivots around it so that number and liquid volume are kept. The liquid added is exactly Q. W = sum_b w_b N_b +
-// w_out N_out counts the particles that left the grid too (still in the vessel, they meet droplets): without them the
-// last particles on the grid would take all R droplets however few they are, a drain that does not vanish with them.
+// Liquid addition (units/pbm_2d_spray.hpp): droplets absorbed whole (paper 002, section 3.2) or a continuous flow
+// over the particles (Eq. (6)), shared per particle, by surface or by cross-section (setting spray_weight). A bin's
+// particles leave at rate R w_a / W towards l_j + v_d, split between the two liquid pivots around it so that number
+// and liquid volume are kept; the liquid added is exactly Q. W = sum_b w_b N_b + w_out N_out counts the particles that
+// left the grid too (still in the vessel, they meet the spray): without them the last particles on the grid would take
+// all the liquid however few they are, a drain that does not vanish with them.
 //
 // Drying (setting drying: surface): the constant-rate period of a wet particle, liquid volume lost at j_dry pi D^2 per
 // particle (surface-proportional evaporation, paper 000, section 2.2), moved down the liquid axis by first-order upwind
@@ -36,10 +34,12 @@
 
 #include "granuflow/errors.hpp"
 #include "granuflow/flowsheet.hpp"
+#include "kernels/aggregation/dem_collision.hpp"
 #include "kernels/discretization/initial_distribution.hpp"
 #include "kernels/discretization/psd.hpp"
 #include "kernels/population/population2d.hpp"
 #include "particles.hpp"
+#include "pbm_2d_spray.hpp"
 
 namespace granuflow::units {
 namespace {
@@ -48,7 +48,8 @@ using namespace kernels;
 constexpr double kPi = 3.14159265358979323846;
 
 enum class Initial { kMono, kExponential };
-enum class SprayWeight { kNumber, kCrossSection };
+using pbm2d::Spray;
+using pbm2d::SprayWeight;
 
 // Rows of the unit's outside rates: the engine's (number, solid, liquid that left the grid), then evaporated liquid.
 constexpr int kEvaporated = kOut2Rows, kRateRows = kOut2Rows + 1;
@@ -102,7 +103,9 @@ class Pbm2D : public UnitBase<Pbm2D> {
                       "initial solid distribution: one size d0, or exponential in volume (verification)") == "mono"
             ? Initial::kMono
             : Initial::kExponential;
-    p_n0_ = s.add_param({"N0", "-", 1.0, 0.0, 1e30, "initial particle number", "initial state (user)"});
+    p_n0_ = s.add_param({"N0", "-", 1.0, 0.0, 1e30,
+                         "initial particle number (with a DEM collision file: at most its DEM population)",
+                         "initial state (user); bound: docs/pbm_2d.md"});
     if (initial_ == Initial::kMono)
       p_size0_ = s.add_param({"d0", "m", 2e-3, 1e-9, 1.0, "initial particle diameter (solid volume)",
                               "paper 002, section 3.2: 2 mm primary particles"});
@@ -123,19 +126,28 @@ class Pbm2D : public UnitBase<Pbm2D> {
  private:
   // Spray and drying: their settings and parameters.
   void declare_mechanisms(UnitSpec& s, Settings& st) {
-    spray_ = st.get_choice("spray", "none", {"none", "droplets"},
-                           "liquid addition: none, or droplets absorbed whole by one particle each (paper 002, "
-                           "section 3.2)") == "droplets";
-    if (spray_) {
-      weight_ =
-          st.get_choice("spray_weight", "number", {"number", "cross_section"},
-                        "which particle a droplet meets: any alike, or in proportion to (D + d_drop)^2") == "number"
-              ? SprayWeight::kNumber
-              : SprayWeight::kCrossSection;
+    const std::string spray = st.get_choice(
+        "spray", "none", {"none", "droplets", "continuous"},
+        "liquid addition: none; droplets absorbed whole by one particle each (paper 002, section 3.2); or continuous, "
+        "a flow of liquid over the particles (paper 002, Eq. (6))");
+    spray_ = spray == "none" ? Spray::kNone : spray == "droplets" ? Spray::kDroplets : Spray::kContinuous;
+    const std::string weight =
+        st.get_choice("spray_weight", "number", {"number", "surface", "cross_section"},
+                      "how the sprayed liquid is shared: per particle alike, in proportion to the surface D^2, or "
+                      "(droplets only) to the cross-section (D + d_drop)^2 of a droplet meeting the particle");
+    weight_ = weight == "number"    ? SprayWeight::kNumber
+              : weight == "surface" ? SprayWeight::kSurface
+                                    : SprayWeight::kCrossSection;
+    if (spray_ == Spray::kContinuous && weight_ == SprayWeight::kCrossSection)
+      throw ConfigError(st.where() +
+                        ".spray_weight = 'cross_section': needs spray: droplets (a continuous flow has no droplet "
+                        "size); allowed with spray: continuous: number, surface");
+    if (spray_ != Spray::kNone) {
       p_q_ = s.add_param({"spray_rate", "m3/s", 1e-6, 0.0, 1.0, "liquid volume sprayed per second",
                           "operating input; paper 002: 50 000 droplets/s of 2 mm"});
-      p_dd_ = s.add_param({"d_drop", "m", 2e-3, 1e-7, 0.1, "droplet diameter",
-                           "paper 002, section 3.2: droplets as large as the particles"});
+      if (spray_ == Spray::kDroplets)
+        p_dd_ = s.add_param({"d_drop", "m", 2e-3, 1e-7, 0.1, "droplet diameter",
+                             "paper 002, section 3.2: droplets as large as the particles"});
       p_on_ = s.add_param({"t_spray_on", "s", 0.0, 0.0, 1e7, "spray start", "paper 002: liquid from 0.2 s"});
       p_off_ = s.add_param({"t_spray_off", "s", 1e7, 0.0, 1e7, "spray stop", "operating input"});
     }
@@ -160,9 +172,14 @@ class Pbm2D : public UnitBase<Pbm2D> {
           violation(st.where() + ".psd_d_max", dmax, "m", "psd_d_max > psd_d_min (" + fmt_num(dmin) + ")"));
     psd_edges_.resize(npsd + 1);
     for (long k = 0; k <= npsd; ++k) psd_edges_[k] = dmin * std::pow(dmax / dmin, double(k) / npsd);
+    // Eq. (14)'s D_ij: the particle's (Eq. (15) uses s + l), or the DEM particle's, whose liquid is implicit
+    const bool solid_only =
+        st.get_choice("psd_diameter", "total", {"total", "solid"},
+                      "the diameter that puts a bin in a size class of Eq. (14): of solid plus liquid volume, or of "
+                      "the solid volume alone (the DEM particle's size in paper 002)") == "solid";
     psd_class_.resize(n_);
     for (int a = 0; a < n_; ++a) {
-      const double d = grid_->diameter(a);
+      const double d = solid_only ? diameter_of_volume(grid_->solid_volume(a)) : grid_->diameter(a);
       int k = static_cast<int>(std::upper_bound(psd_edges_.begin(), psd_edges_.end(), d) - psd_edges_.begin()) - 1;
       psd_class_[a] = std::clamp(k, 0, static_cast<int>(npsd) - 1);  // Eq. (14): end classes take the tails
     }
@@ -176,7 +193,7 @@ class Pbm2D : public UnitBase<Pbm2D> {
         if (i == 0 && j == 0) sN_ = id;
       }
     const double s_mid = solid.pivot(ns_ / 2), l_mid = grid_->liquid(nl_ / 2 + 1);
-    if (pop_.aggregation() || spray_) {
+    if (pop_.aggregation() || spray_ != Spray::kNone) {
       s_out_[kOut2Number] = s.add_accumulator("number_left", "-", number_scale);
       s_out_[kOut2Solid] = s.add_accumulator("solid_left", "m3", number_scale * s_mid);
       s_out_[kOut2Liquid] = s.add_accumulator("liquid_left", "m3", number_scale * l_mid);
@@ -191,7 +208,8 @@ class Pbm2D : public UnitBase<Pbm2D> {
   }
 
   void declare_outputs(UnitSpec& s) {
-    if (spray_) q_sprayed_ = s.add_quadrature("liquid_sprayed", "kg", 1e-3, OutputRole::kBalanceIn, "water");
+    if (spray_ != Spray::kNone)
+      q_sprayed_ = s.add_quadrature("liquid_sprayed", "kg", 1e-3, OutputRole::kBalanceIn, "water");
     o_number_ = s.add_output("number", "-");
     o_davg_ = s.add_output("D_avg", "m");
     o_xavg_ = s.add_output("x_avg", "-");
@@ -230,7 +248,7 @@ class Pbm2D : public UnitBase<Pbm2D> {
   }
 
   void check(const UnitSpec&, const double* p) const override {
-    if (spray_ && p[p_off_.i] < p[p_on_.i])
+    if (spray_ != Spray::kNone && p[p_off_.i] < p[p_on_.i])
       throw ConfigError(
           violation("t_spray_off", p[p_off_.i], "s", "t_spray_off >= t_spray_on (" + fmt_num(p[p_on_.i]) + " s)"));
     if (initial_ == Initial::kMono) {
@@ -242,6 +260,7 @@ class Pbm2D : public UnitBase<Pbm2D> {
                                     "the solid grid's pivots (" + fmt_num(g.diameter_pivots().front()) + " to " +
                                         fmt_num(g.diameter_pivots().back()) + " m)"));
     }
+    check_population(p[p_n0_.i]);
     // the initial liquid l = s lc0 / (1 - lc0) of the largest particles present must fit on the liquid axis
     const double lc = p[p_lc0_.i];
     const double s_top = initial_ == Initial::kMono ? volume_of_diameter(p[p_size0_.i]) : grid_->solid().pivot(ns_ - 1);
@@ -249,6 +268,22 @@ class Pbm2D : public UnitBase<Pbm2D> {
       throw ConfigError(violation("lc0", lc, "",
                                   "initial liquid volume s lc0 / (1 - lc0) <= the top liquid pivot (" +
                                       fmt_num(grid_->liquid(nl_ - 1)) + " m3; setting liquid_max)"));
+  }
+
+  // Eq. (12)'s frequencies are per pair of particles at the DEM run's population (sum F_i, in its vessel): the same
+  // vessel holding more particles is a denser bed than the one measured, whose particles collide more often than the
+  // counts say (and N0 far beyond it only makes the run grind through aggregation times of 1e-25 s). Fewer particles
+  // are a dilute bed, where a pair's frequency changes little.
+  void check_population(double n0) const {
+    const auto* dem = dynamic_cast<const kernels::DemCollisionKernel*>(pop_.kernel());
+    if (!dem || !dem->counts()) return;
+    const kernels::CollisionCounts& f = *dem->counts();
+    double total = 0.0;
+    for (double x : f.particles) total += x;
+    if (n0 > total)
+      throw ConfigError(violation("N0", n0, "",
+                                  "N0 <= " + fmt_num(total) + ", the DEM population of " + f.path +
+                                      " (its per-pair frequencies, Eq. (12), hold at that population)"));
   }
 
   void configure(const UnitSpec& spec, const double* p, const double* shared, Workspace& ws) const override {
@@ -264,7 +299,7 @@ class Pbm2D : public UnitBase<Pbm2D> {
   }
 
   std::vector<double> breakpoints(const double* p) const override {
-    if (!spray_) return {};
+    if (spray_ == Spray::kNone) return {};
     return {p[p_on_.i], p[p_off_.i]};
   }
 
@@ -388,7 +423,7 @@ class Pbm2D : public UnitBase<Pbm2D> {
       if (s_out_[k]) sink.add(s_out_[k].i, c.offset + s_out_[k].i, cj);
     pop_.aggregation_jacobian(*w.pop, N, c.p, w.rows, w.cols, -1.0, sink);
     if (spraying(c)) {
-      Deposit<double> dep = deposit_terms(c, N);
+      pbm2d::Deposit<double> dep = deposit_terms(c, N);
       if (dep.W > 0) {
         // rate_a = R w_a N_a / W: d/dN_a = R w_a / W, and -R w_a N_a w_b / W^2 for every b (one outer product)
         std::vector<double> u(n_states_, 0.0);
@@ -434,7 +469,7 @@ class Pbm2D : public UnitBase<Pbm2D> {
     const double* N = &c.x(sN_);
     w.death.assign(n_, 0.0);
     pop_.death_rates(*w.pop, N, c.p, w.death.data());
-    Deposit<double> dep;
+    pbm2d::Deposit<double> dep;
     const bool spray = spraying(c);
     if (spray) dep = deposit_terms(c, N);
     const double jd = drying_ ? c.par(p_dry_) : 0.0, dl = grid_->liquid_step();
@@ -474,64 +509,21 @@ class Pbm2D : public UnitBase<Pbm2D> {
  private:
   template <class T>
   bool spraying(const Ctx<T>& c) const {
-    return spray_ && c.t_seg >= value_of(c.par(p_on_)) && c.t_seg < value_of(c.par(p_off_));
+    return spray_ != Spray::kNone && c.t_seg >= value_of(c.par(p_on_)) && c.t_seg < value_of(c.par(p_off_));
   }
 
-  // The droplet arrivals: R droplets per second, weight per bin, their sum over the particles, and the liquid
-  // shift v_d / dl in steps (lo steps with weight 1 - nu, lo + 1 with nu).
-  // n_out, w_out: the particles that left the grid and the weight of one (at their mean volume).
   template <class T>
-  struct Deposit {
-    T R = T(0.0), W = T(0.0), nu = T(0.0), vd = T(0.0), n_out = T(0.0), w_out = T(0.0);
-    double g_n = 0.0, g_v = 0.0;  // d(w_out N_out)/dN_out, /d(volume off the grid)
-    int lo = 0;
-    std::vector<T> w;
-  };
-  template <class T>
-  Deposit<T> deposit_terms(const Ctx<T>& c, const T* N) const {
-    Deposit<T> d;
-    const T dd = c.par(p_dd_);
-    const T vd = kPi / 6.0 * dd * dd * dd;
-    d.R = c.par(p_q_) / vd, d.vd = vd;
-    d.w.resize(n_);
-    for (int a = 0; a < n_; ++a) {
-      const T s = grid_->diameter(a) + dd;
-      d.w[a] = weight_ == SprayWeight::kNumber ? T(1.0) : T(s * s);
-      d.W += d.w[a] * N[a];
-    }
-    if (s_out_[kOut2Number] && value_of(c.x(s_out_[kOut2Number])) > 0.0) {
-      d.n_out = c.x(s_out_[kOut2Number]);
-      d.w_out = T(1.0), d.g_n = 1.0;
-      const T V = c.x(s_out_[kOut2Solid]) + c.x(s_out_[kOut2Liquid]);
-      if (weight_ == SprayWeight::kCrossSection && value_of(V) > 0.0) {  // at the mean size off the grid
-        const T D = cbrt(6.0 / kPi * V / d.n_out);
-        d.w_out = (D + dd) * (D + dd);
-        d.g_n = value_of(d.w_out - 2.0 / 3.0 * (D + dd) * D), d.g_v = value_of(2.0 / 3.0 * (D + dd) * D * d.n_out / V);
-      }
-      d.W += d.w_out * d.n_out;
-    }
-    const T x = vd / grid_->liquid_step();
-    d.lo = static_cast<int>(std::floor(value_of(x)));
-    d.nu = x - double(d.lo);
-    return d;
+  pbm2d::Deposit<T> deposit_terms(const Ctx<T>& c, const T* N) const {
+    const bool out = bool(s_out_[kOut2Number]);
+    const T n_out = out ? T(c.x(s_out_[kOut2Number])) : T(0.0);
+    const T v_out = out ? T(c.x(s_out_[kOut2Solid]) + c.x(s_out_[kOut2Liquid])) : T(0.0);
+    const T dd = spray_ == pbm2d::Spray::kDroplets ? T(c.par(p_dd_)) : T(0.0);
+    return pbm2d::deposit_terms(*grid_, spray_, weight_, T(c.par(p_q_)), dd, N, out, n_out, v_out);
   }
-  // Where one particle of bin a goes when it absorbs a droplet, as (local row, amount per particle): its own row -1,
-  // the two liquid pivots around l_j + v_d, or the outside rows (number, solid and liquid volume) beyond the axis.
   template <class T, class F>
-  void place_deposit(int a, const Deposit<T>& d, F&& add) const {
-    const int i = a / nl_, j = a % nl_;
-    add(sN_.i + a, T(-1.0));
-    const int L[2] = {j + d.lo, j + d.lo + 1};
-    const T f[2] = {T(1.0 - d.nu), d.nu};
-    for (int k = 0; k < 2; ++k) {
-      if (L[k] < nl_) {
-        add(sN_.i + grid_->bin(i, L[k]), f[k]);
-      } else {
-        add(s_out_[kOut2Number].i, f[k]);
-        add(s_out_[kOut2Solid].i, T(f[k] * grid_->solid().pivot(i)));
-        add(s_out_[kOut2Liquid].i, T(f[k] * (L[k] * grid_->liquid_step())));
-      }
-    }
+  void place_deposit(int a, const pbm2d::Deposit<T>& d, F&& add) const {
+    const int out[kOut2Rows] = {s_out_[kOut2Number].i, s_out_[kOut2Solid].i, s_out_[kOut2Liquid].i};
+    pbm2d::place_deposit(*grid_, a, d, sN_.i, out, add);
   }
 
   template <class T>
@@ -541,7 +533,7 @@ class Pbm2D : public UnitBase<Pbm2D> {
     out.assign(kRateRows, T(0.0));
     pop_.aggregation_rates(*w.pop, N, c.p, dN.data(), out.data());
     if (spraying(c)) {
-      const Deposit<T> dep = deposit_terms(c, N);
+      const pbm2d::Deposit<T> dep = deposit_terms(c, N);
       if (value_of(dep.W) > 0) {
         for (int a = 0; a < n_; ++a) {
           if (value_of(N[a]) == 0.0 && std::is_same_v<T, double>) continue;
@@ -576,7 +568,8 @@ class Pbm2D : public UnitBase<Pbm2D> {
   std::shared_ptr<const Grid2D> grid_;
   int ns_ = 0, nl_ = 0, n_ = 0, n_states_ = 0;
   Initial initial_ = Initial::kMono;
-  bool spray_ = false, drying_ = false;
+  Spray spray_ = Spray::kNone;
+  bool drying_ = false;
   SprayWeight weight_ = SprayWeight::kNumber;
   Population2D pop_;
   std::vector<double> psd_edges_;

@@ -17,6 +17,7 @@
 #include "particles.hpp"
 #include "pbm_2d.hpp"
 #include "pbm_batch.hpp"
+#include "pi_controller.hpp"
 #include "sieve.hpp"
 #include "solids_feed.hpp"
 #include "solids_mixer.hpp"
@@ -56,6 +57,7 @@ void register_all(Registry<Unit>& r) {
   register_mill(r);
   register_solids_mixer(r);
   register_solids_splitter(r);
+  register_pi_controller(r);
 }
 
 #ifdef GRANUFLOW_TEST_UNITS

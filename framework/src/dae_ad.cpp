@@ -152,6 +152,8 @@ void DaeSystem::ad_unit(int u, double t, const double* y, const double* yp, doub
     for (size_t d = d0; d < d1; ++d) seed_dir(plan.dirs[d], d - d0, 1.0, cj);
     if (rec) rec->sweep(d0, d1);
     rj_.assign(ns, Jet(0.0));
+    drive_states(xj_.data(), pj_, u);  // driven parameters carry their sources' seeds
+    drive_outputs(t, xj_.data(), xdj_.data(), pj_, u);
     Ctx<Jet> c = ctx<Jet>(u, t, xj_.data(), xdj_.data(), pj_, rj_.data());
     c.recorder = rec.get();
     inst.unit->residual(c);

@@ -45,4 +45,10 @@ extern template void DaeSystem::evaluate_explicit<double>(double, double*, doubl
 extern template void DaeSystem::evaluate_explicit<Jet>(double, Jet*, Jet*, const std::vector<std::vector<Jet>>&,
                                                        std::vector<Jet>&, const std::vector<int>*);
 
+extern template void DaeSystem::drive_states<double>(const double*, std::vector<std::vector<double>>&, int) const;
+extern template void DaeSystem::drive_states<Jet>(const Jet*, std::vector<std::vector<Jet>>&, int) const;
+extern template void DaeSystem::drive_outputs<double>(double, const double*, const double*,
+                                                      std::vector<std::vector<double>>&, int);
+extern template void DaeSystem::drive_outputs<Jet>(double, const Jet*, const Jet*, std::vector<std::vector<Jet>>&, int);
+
 }  // namespace granuflow

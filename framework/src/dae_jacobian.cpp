@@ -116,11 +116,16 @@ DaeSystem::OuterTerm& DaeSystem::next_term(std::vector<OuterTerm>& terms, size_t
 void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj, double* dense, double* sparse) {
   ++n_jac_;
   fill_params(t);
-  if (!inline_) return assemble(t, y, yp, cj, n_, dense, sparse);
+  drive_states(y, pvals_);  // for the analytic parts; the AD sweeps drive their Jets (ad_unit)
+  if (!inline_) {
+    drive_outputs(t, y, yp, pvals_);
+    return assemble(t, y, yp, cj, n_, dense, sparse);
+  }
   if (!dense) throw std::logic_error("explicit units are inlined only with dense Jacobians");
   std::copy(y, y + n_, y_ext_.begin());
   std::copy(yp, yp + n_, yp_ext_.begin());
   evaluate_explicit(t, y_ext_.data(), yp_ext_.data(), pvals_, scratch_);
+  drive_outputs(t, y_ext_.data(), yp_ext_.data(), pvals_);
   jac_ext_.resize(size_t(n_) * n_ext_);  // the integrated units' rows over every column
   n_outer_ = n_rs_outer_ = 0;
   zs_triplets_.resize(fs_.units().size());
@@ -181,6 +186,8 @@ void DaeSystem::assemble(double t, const double* y, const double* yp, double cj,
 void DaeSystem::reference_jacobian(double t, const double* y, const double* yp, double cj, double* dense) {
   if (inline_) throw std::logic_error("reference_jacobian: build the DaeSystem without inlining");
   fill_params(t);
+  drive_states(y, pvals_);
+  drive_outputs(t, y, yp, pvals_);
   const auto& units = fs_.units();
   std::fill(dense, dense + size_t(n_) * n_, 0.0);
   jets_plain_ = 0;

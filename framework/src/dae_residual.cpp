@@ -31,11 +31,43 @@ template void DaeSystem::evaluate_explicit<double>(double, double*, double*, con
 template void DaeSystem::evaluate_explicit<Jet>(double, Jet*, Jet*, const std::vector<std::vector<Jet>>&,
                                                 std::vector<Jet>&, const std::vector<int>*);
 
+template <class T>
+void DaeSystem::drive_states(const T* y, std::vector<std::vector<T>>& params, int sink) const {
+  for (const auto& d : drives_)
+    if (d.state >= 0 && (sink < 0 || d.unit == sink)) params[d.unit][d.param] = y[d.state];
+}
+
+// A measured output: the measured unit's outputs at (y, y'), its quadratures read as zero (resolve_drives refuses
+// measuring one), its parameters with their drives by states.
+template <class T>
+void DaeSystem::drive_outputs(double t, const T* y, const T* yp, std::vector<std::vector<T>>& params, int sink) {
+  if (!output_drives_) return;
+  const auto& units = fs_.units();
+  auto& out = per_scalar<T>(drive_out_, drive_out_j_);
+  auto& quad = per_scalar<T>(drive_quad_, drive_quad_j_);
+  quad.assign(n_quad_ + 1, T(0.0));
+  for (const auto& d : drives_) {
+    if (d.source_unit < 0 || (sink >= 0 && d.unit != sink)) continue;
+    drive_states(y, params, d.source_unit);
+    out.assign(units[d.source_unit].spec.outputs().size(), T(0.0));
+    Ctx<T> c = ctx<T>(d.source_unit, t, y, yp, params, out.data());
+    c.quad = quad.data() + units[d.source_unit].quad_offset;
+    units[d.source_unit].unit->report(c);
+    params[d.unit][d.param] = out[d.output];
+  }
+}
+template void DaeSystem::drive_states<double>(const double*, std::vector<std::vector<double>>&, int) const;
+template void DaeSystem::drive_states<Jet>(const Jet*, std::vector<std::vector<Jet>>&, int) const;
+template void DaeSystem::drive_outputs<double>(double, const double*, const double*, std::vector<std::vector<double>>&,
+                                               int);
+template void DaeSystem::drive_outputs<Jet>(double, const Jet*, const Jet*, std::vector<std::vector<Jet>>&, int);
+
 void DaeSystem::extend(double t, const double* y, const double* yp, double* y_full, double* yp_full) {
   std::copy(y, y + n_, y_full);
   std::copy(yp, yp + n_, yp_full);
   if (!inline_) return;
   fill_params(t);
+  drive_states(y_full, pvals_);
   evaluate_explicit(t, y_full, yp_full, pvals_, scratch_);
 }
 
@@ -43,6 +75,7 @@ Status DaeSystem::residual(double t, const double* y, const double* yp, double* 
   ++n_res_;
   fill_params(t);
   const auto& units = fs_.units();
+  drive_states(y, pvals_);
   if (inline_) {
     std::copy(y, y + n_, y_ext_.begin());
     std::copy(yp, yp + n_, yp_ext_.begin());
@@ -50,6 +83,7 @@ Status DaeSystem::residual(double t, const double* y, const double* yp, double* 
     y = y_ext_.data();
     yp = yp_ext_.data();
   }
+  drive_outputs(t, y, yp, pvals_);
   for (size_t u = 0; u < units.size(); ++u) {
     if (inline_ && units[u].spec.is_explicit()) continue;
     const Status s = units[u].unit->residual(ctx<double>(static_cast<int>(u), t, y, yp, pvals_, r + units[u].offset));
@@ -63,13 +97,16 @@ Status DaeSystem::residual(double t, const double* y, const double* yp, double* 
 Status DaeSystem::quadrature(double t, const double* y, const double* yp, double* qdot) {
   fill_params(t);
   const auto& units = fs_.units();
+  drive_states(y, pvals_);
   if (inline_) {
     std::copy(y, y + n_, y_ext_.begin());
     std::copy(yp, yp + n_, yp_ext_.begin());
-    evaluate_explicit(t, y_ext_.data(), yp_ext_.data(), pvals_, scratch_, &quad_explicit_);
+    // a measured output may read any explicit state
+    evaluate_explicit(t, y_ext_.data(), yp_ext_.data(), pvals_, scratch_, output_drives_ ? nullptr : &quad_explicit_);
     y = y_ext_.data();
     yp = yp_ext_.data();
   }
+  drive_outputs(t, y, yp, pvals_);
   for (size_t u = 0; u < units.size(); ++u)
     if (!units[u].spec.quadratures().empty())
       units[u].unit->quadrature(ctx<double>(static_cast<int>(u), t, y, yp, pvals_, qdot + units[u].quad_offset));
@@ -80,6 +117,8 @@ Status DaeSystem::quadrature(double t, const double* y, const double* yp, double
 
 void DaeSystem::report(double t, const double* y, const double* yp, const double* q, double* out) {
   fill_params(t);
+  drive_states(y, pvals_);
+  drive_outputs(t, y, yp, pvals_);
   const auto& units = fs_.units();
   int k = 0;
   for (size_t u = 0; u < units.size(); ++u) {

@@ -21,7 +21,9 @@ bool take_directions(const std::vector<Jet>& jets, int n, size_t d0, size_t d1, 
 }  // namespace
 
 // Seeds direction `slot` for parameter `id` and the parameters linked to it, where they belong to unit `u`.
+// id < 0: a direction of the states alone (an event's rate along the trajectory, events_run.cpp).
 void DaeSystem::seed(int id, int u, size_t slot, std::vector<Jet>& pj) const {
+  if (id < 0) return;
   auto [pu, pk] = fs_.param_location(id);
   if (pu == u) pj[pk].v[slot] = 1.0;
   for (int t : fs_.linked_targets(id)) {
@@ -56,7 +58,9 @@ Status DaeSystem::sens_residual(double t, const double* y, const double* yp, con
   for (size_t d0 = 0; d0 < params.size(); d0 += kAdChunk) {
     const size_t d1 = std::min(params.size(), d0 + kAdChunk);
     load_directions(y, yp, params, d0, d1, yS, ypS, n_);
+    drive_states(xj_.data(), pj_);
     if (inline_) evaluate_explicit(t, xj_.data(), xdj_.data(), pj_, jet_scratch_);
+    drive_outputs(t, xj_.data(), xdj_.data(), pj_);
     for (size_t u = 0; u < units.size(); ++u) {
       if (inline_ && units[u].spec.is_explicit()) continue;
       const Status s = units[u].unit->residual(
@@ -75,7 +79,9 @@ Status DaeSystem::quadrature_sens(double t, const double* y, const double* yp, c
   for (size_t d0 = 0; d0 < params.size(); d0 += kAdChunk) {
     const size_t d1 = std::min(params.size(), d0 + kAdChunk);
     load_directions(y, yp, params, d0, d1, yS, nullptr, n_);
+    drive_states(xj_.data(), pj_);
     if (inline_) evaluate_explicit(t, xj_.data(), xdj_.data(), pj_, jet_scratch_);
+    drive_outputs(t, xj_.data(), xdj_.data(), pj_);
     qj_.assign(n_quad_, Jet(0.0));
     for (size_t u = 0; u < units.size(); ++u)
       if (!units[u].spec.quadratures().empty())
@@ -94,6 +100,7 @@ void DaeSystem::extend_sensitivities(double t, const double* y, const double* yp
   for (size_t d0 = 0; d0 < params.size(); d0 += kAdChunk) {
     const size_t d1 = std::min(params.size(), d0 + kAdChunk);
     load_directions(y, yp, params, d0, d1, yS, nullptr, n_);
+    drive_states(xj_.data(), pj_);
     evaluate_explicit(t, xj_.data(), xdj_.data(), pj_, jet_scratch_);
     for (size_t d = d0; d < d1; ++d)
       for (int i = n_; i < n_ext_; ++i) yS_full[d][i] = xj_[i].v[d - d0];
@@ -133,6 +140,8 @@ void DaeSystem::report_sensitivities(double t, const double* y, const double* yp
   for (size_t d0 = 0; d0 < params.size(); d0 += kAdChunk) {
     const size_t d1 = std::min(params.size(), d0 + kAdChunk);
     load_directions(y, yp, params, d0, d1, yS, nullptr, n_ext_);
+    drive_states(xj_.data(), pj_);
+    drive_outputs(t, xj_.data(), xdj_.data(), pj_);
     for (int i = 0; i < n_quad_; ++i) {
       qj_[i] = Jet(q[i]);
       for (size_t d = d0; d < d1; ++d) qj_[i].v[d - d0] = qS ? qS[d][i] : 0.0;

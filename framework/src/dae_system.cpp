@@ -91,14 +91,25 @@ DaeSystem::DaeSystem(const Flowsheet& fs, bool inline_explicit) : fs_(fs) {
   pvals_.resize(units.size());
   pconst_.resize(units.size());
   local_cols_.resize(units.size());
-  // Columns each unit's rows can depend on: own states and every field its ports read.
-  for (size_t u = 0; u < units.size(); ++u) {
-    std::vector<int>& cols = local_cols_[u];
+  drives_ = resolve_drives(fs_);
+  for (const auto& d : drives_) output_drives_ = output_drives_ || d.source_unit >= 0;
+  // Columns each unit's rows can depend on: own states and every field its ports read, and what drives its
+  // parameters: a state, or the columns of a measured unit (its own and its ports', and its drives' states).
+  auto unit_columns = [&](int u, std::vector<int>& cols) {
     const int ns = static_cast<int>(units[u].spec.states().size());
     for (int k = 0; k < ns; ++k) cols.push_back(units[u].offset + k);
     for (const auto& port : units[u].port_index)
       for (int c : port)
         if (c >= 0) cols.push_back(c);
+    for (const auto& d : drives_)
+      if (d.unit == u && d.state >= 0) cols.push_back(d.state);
+  };
+  for (size_t u = 0; u < units.size(); ++u) {
+    std::vector<int>& cols = local_cols_[u];
+    const int ns = static_cast<int>(units[u].spec.states().size());
+    unit_columns(static_cast<int>(u), cols);
+    for (const auto& d : drives_)
+      if (d.unit == int(u) && d.source_unit >= 0) unit_columns(d.source_unit, cols);
     std::sort(cols.begin(), cols.end());
     cols.erase(std::unique(cols.begin(), cols.end()), cols.end());
     fill_ += double(ns) * double(cols.size());  // units' row blocks are disjoint

@@ -9,6 +9,7 @@
 
 #include "granuflow/dae_system.hpp"
 #include "granuflow/errors.hpp"
+#include "granuflow/signals.hpp"
 
 namespace granuflow {
 
@@ -40,13 +41,13 @@ void Flowsheet::add_instance(const std::string& name, std::unique_ptr<Unit> unit
   inst.unit = std::move(unit);
   settings.attach(this);
   inst.unit->declare(inst.spec, settings);
+  settings.check_all_used();  // attached: a setting given to the wrong unit names the unit it belongs to
   settings.attach(nullptr);
   if (!inst.spec.shared_params().empty()) {
     for (size_t k = 0; k < units_.size(); ++k)
       if (units_[k].name == inst.spec.shared_params()) inst.shared = static_cast<int>(k);
     if (inst.shared < 0) throw std::logic_error("unit '" + name + "' reads the parameters of an absent unit");
   }
-  settings.check_all_used();
   inst.settings = settings.declared();
   for (const auto& p : inst.spec.params()) inst.params.push_back(p.value);
   inst.inputs.resize(inst.params.size());
@@ -184,6 +185,7 @@ void Flowsheet::finalize() {
         if (idx[f] >= 0) run[f] = f + 1 < idx.size() && idx[f + 1] == idx[f] + 1 ? run[f + 1] + 1 : 1;
     }
   }
+  resolve_drives(*this);  // refuses a controller's wiring that names nothing or cannot hold
   pool_ = std::make_shared<SystemPool>();
   finalized_ = true;
 }
@@ -259,9 +261,19 @@ int Flowsheet::param_id(const std::string& qualified) const {
   for (const auto& u : units_)
     if (dot != std::string::npos && u.name == qualified.substr(0, dot))
       for (const auto& p : u.spec.params()) allowed += (allowed.empty() ? "" : ", ") + p.name;
-  if (!allowed.empty())
+  if (!allowed.empty()) {
+    // A parameter that moved to another unit (the particle system's densities, once the bed's) names its place.
+    const std::string key = qualified.substr(dot + 1);
+    std::string elsewhere;
+    for (const auto& u : units_)
+      for (const auto& p : u.spec.params())
+        if (p.name == key && u.name != qualified.substr(0, dot)) elsewhere += (elsewhere.empty() ? "" : ", ") + u.name;
     throw ConfigError("unknown parameter '" + qualified + "' (parameters of " + qualified.substr(0, dot) + ": " +
-                      allowed + ")");
+                      allowed + ")" +
+                      (elsewhere.empty() ? ""
+                                         : "; '" + key + "' is a parameter of " + elsewhere + ": " +
+                                               elsewhere.substr(0, elsewhere.find(',')) + "." + key));
+  }
   std::string units;
   for (const auto& u : units_) units += (units.empty() ? "" : ", ") + u.name;
   throw ConfigError("unknown parameter '" + qualified + "': expected 'unit.param' with unit one of " + units);
@@ -301,6 +313,14 @@ double Flowsheet::linked_value(int source) const {
 }
 
 // A link target reports the value it takes in a run (its source's), not the value stored before the last run.
+// A parameter driven by a signal (signals.hpp) takes its source's value in every evaluation: a value given to it would
+// never be used, so it is refused, naming the source.
+static void refuse_driven(const Flowsheet& fs, int id, const std::string& what) {
+  if (const std::string by = driven_by(fs, id); !by.empty())
+    throw ConfigError(what + ": " + fs.qualified_name(id) + " is driven by " + by +
+                      " in every evaluation; change the controller's parameters instead");
+}
+
 double Flowsheet::param_value(int id) const {
   const int src = link_source(id);
   if (src >= 0) return linked_value(src);
@@ -328,6 +348,8 @@ void Flowsheet::set_param_value(int id, double v) {
                       ": cannot be set, it is driven by the time-dependent input " + q + " (inputs: " + q +
                       "); change the input's values, or remove the input to make " + q + " a constant");
   }
+  auto [u, k] = param_location(id);
+  if (!(v == units_[u].params[k])) refuse_driven(*this, id, qualified_name(id) + " = " + fmt_num(v));  // copies pass
   store_param(id, v);
 }
 
@@ -385,6 +407,7 @@ void Flowsheet::set_input(const std::string& qualified, PiecewiseLinear input) {
   const int id = param_id(qualified);
   auto [u, k] = param_location(id);
   const ParamSpec& s = units_[u].spec.params()[k];
+  refuse_driven(*this, id, "input " + qualified);
   if (const int src = link_source(id); src >= 0)
     throw ConfigError("input " + qualified + ": cannot be set, " + qualified + " follows " + qualified_name(src) +
                       " by a link (links: " + qualified + ": " + qualified_name(src) + "); give " +
@@ -412,6 +435,7 @@ void Flowsheet::clear_input(const std::string& qualified) {
 void Flowsheet::link(const std::string& target, const std::string& source) {
   const int t = param_id(target), s = param_id(source);
   if (t == s) throw ConfigError("link " + target + ": a parameter cannot follow itself");
+  for (int id : {t, s}) refuse_driven(*this, id, "link " + target + " -> " + source);
   if (param_spec(t).unit != param_spec(s).unit)
     throw ConfigError("link " + target + " -> " + source + ": units differ (" + param_spec(t).unit + " vs " +
                       param_spec(s).unit + ")");

@@ -5,6 +5,7 @@
 
 #include "consistent_sensitivities.hpp"
 #include "consistent_start.hpp"
+#include "granuflow/errors.hpp"
 
 namespace granuflow::detail {
 
@@ -53,6 +54,16 @@ int ida_quad_sens(int ns, realtype t, N_Vector y, N_Vector yp, N_Vector* yS, N_V
   try {
     return static_cast<int>(u->sys->quadrature_sens(t, N_VGetArrayPointer(y), N_VGetArrayPointer(yp), u->sens_params,
                                                     u->yS.data(), u->qS.data()));
+  } catch (const std::exception& e) {
+    u->last_error = e.what();
+    return -1;
+  }
+}
+
+int ida_roots(realtype t, N_Vector y, N_Vector yp, realtype* g, void* ud) {
+  auto* u = static_cast<IdaUser*>(ud);
+  try {
+    return u->roots(t, N_VGetArrayPointer(y), N_VGetArrayPointer(yp), g);
   } catch (const std::exception& e) {
     u->last_error = e.what();
     return -1;
@@ -223,7 +234,7 @@ int IdaStepper::begin_segment(size_t seg, double t0, double t1, SolverStats& sta
   if (seg > 0) {
     add_current_counts(counts_);
     check(IDAReInit(mem, t0, y_.v, yp_.v), "IDAReInit");
-    if (nq_ > 0) {
+    if (nq_ > 0 && !restored_) {
       realtype tq = t0;
       IDAGetQuad(mem, &tq, q_.v);
       check(IDAQuadReInit(mem, q_.v), "IDAQuadReInit");
@@ -233,6 +244,8 @@ int IdaStepper::begin_segment(size_t seg, double t0, double t1, SolverStats& sta
   user_.cache.valid = false;  // a segment starts from a fresh Jacobian
   const int flag = start_consistently(seg, t0, t1, stats);
   if (flag < 0) return flag;
+  restored_ = false;
+  if (jump_pending_) apply_jump(t0);
   if (ns_ > 0) sensitivity_initial_conditions(t0);
   check(IDASetStopTime(mem, t1), "IDASetStopTime");
   return 0;
@@ -305,6 +318,69 @@ void IdaStepper::add_current_counts(SolverStats& s) const {
     IDAGetNumPrecEvals(mem, &v), s.preconditioner_setups += v;
     IDAGetNumLinConvFails(mem, &v), s.linear_failures += v;
   }
+}
+
+void IdaStepper::set_roots(int n, RootFunction g, const std::vector<int>& directions) {
+  if (n == 0) return;
+  n_roots_ = n;
+  user_.roots = std::move(g);
+  check(IDARootInit(ida_->mem, n, ida_roots), "IDARootInit");
+  std::vector<int> dir = directions;
+  check(IDASetRootDirection(ida_->mem, dir.data()), "IDASetRootDirection");
+  // A disarmed event's g is a constant: IDAS need not warn that it is one.
+  check(IDASetNoInactiveRootWarn(ida_->mem), "IDASetNoInactiveRootWarn");
+}
+
+std::vector<int> IdaStepper::roots() {
+  std::vector<int> found(n_roots_, 0);
+  if (n_roots_ > 0) check(IDAGetRootInfo(ida_->mem, found.data()), "IDAGetRootInfo");
+  return found;
+}
+
+// The jump conditions at a state event (stepper.hpp, SensitivityJump), once the consistent y'+ after the event is
+// known: the differential states' sensitivities and the quadratures' ones; the algebraic states' follow from the
+// consistent sensitivities computed next.
+void IdaStepper::apply_jump(double t) {
+  jump_pending_ = false;
+  if (ns_ == 0) return;
+  const std::vector<double> id = sys_.differential_id();
+  std::vector<double> qdot(std::max(nq_, 1), 0.0);
+  if (nq_ > 0 && sys_.quadrature(t, y_.data(), yp_.data(), qdot.data()) != Status::kOk)
+    throw SolverError("the quadrature rates after an event at t = " + fmt_num(t) + " s cannot be evaluated", t, "?", 0);
+  for (int k = 0; k < ns_; ++k) {
+    double* s = N_VGetArrayPointer(yS_[k]);
+    for (int i = 0; i < n_; ++i)
+      if (id[i] != 0.0) s[i] += (jump_.yp_before[i] - yp_.data()[i]) * jump_.tau[k];
+    if (nq_ == 0) continue;
+    double* sq = N_VGetArrayPointer(qS_[k]);
+    for (int i = 0; i < nq_; ++i) sq[i] += (jump_.qdot_before[i] - qdot[i]) * jump_.tau[k];
+  }
+}
+
+bool IdaStepper::save(StepperState& s) {
+  s.y.assign(y_.data(), y_.data() + n_);
+  s.yp.assign(yp_.data(), yp_.data() + n_);
+  s.q.assign(q_.data(), q_.data() + nq_);
+  s.yS.assign(ns_, {}), s.ypS.assign(ns_, {}), s.qS.assign(ns_, {});
+  for (int k = 0; k < ns_; ++k) {
+    const double* a = N_VGetArrayPointer(yS_[k]);
+    const double* b = N_VGetArrayPointer(ypS_[k]);
+    s.yS[k].assign(a, a + n_), s.ypS[k].assign(b, b + n_);
+    if (nq_ > 0) s.qS[k].assign(N_VGetArrayPointer(qS_[k]), N_VGetArrayPointer(qS_[k]) + nq_);
+  }
+  return true;
+}
+
+void IdaStepper::restore(const StepperState& s) {
+  std::copy(s.y.begin(), s.y.end(), y_.data());
+  std::copy(s.yp.begin(), s.yp.end(), yp_.data());
+  std::copy(s.q.begin(), s.q.end(), q_.data());
+  for (int k = 0; k < ns_; ++k) {
+    std::copy(s.yS[k].begin(), s.yS[k].end(), N_VGetArrayPointer(yS_[k]));
+    std::copy(s.ypS[k].begin(), s.ypS[k].end(), N_VGetArrayPointer(ypS_[k]));
+    if (nq_ > 0) std::copy(s.qS[k].begin(), s.qS[k].end(), N_VGetArrayPointer(qS_[k]));
+  }
+  restored_ = true;
 }
 
 void IdaStepper::finish(SolverStats& stats) {

@@ -29,8 +29,15 @@ class IdaStepper : public Stepper {
   void end_segment(double t0, double t1) override;
   StepFailure failure(int flag) override;
   void finish(SolverStats& stats) override;
+  void set_roots(int n, RootFunction g, const std::vector<int>& directions) override;
+  bool root_found(int flag) const override { return flag == IDA_ROOT_RETURN; }
+  std::vector<int> roots() override;
+  void jump_sensitivities(SensitivityJump jump) override { jump_ = std::move(jump), jump_pending_ = true; }
+  bool save(StepperState& s) override;
+  void restore(const StepperState& s) override;
 
  private:
+  void apply_jump(double t);
   void add_current_counts(SolverStats& s) const;  // IDAReInit zeroes IDAS's counters: added up before each restart
   void init_quadratures();
   void init_sensitivities();
@@ -56,6 +63,10 @@ class IdaStepper : public Stepper {
   N_Vector* qS_ = nullptr;
   std::vector<const double*> yS_now_, qS_now_;
   SolverStats counts_;
+  int n_roots_ = 0;
+  SensitivityJump jump_;
+  bool jump_pending_ = false;
+  bool restored_ = false;  // the next segment starts from restore()d values, not from IDAS's last step
 };
 
 }  // namespace granuflow::detail

@@ -1,123 +1,173 @@
 #include "granuflow/quantity.hpp"
 
+#include <udunits2.h>
+
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
-#include <sstream>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <stdexcept>
+#include <utility>
 
 #include "granuflow/errors.hpp"
 
 namespace granuflow {
 namespace {
 
-struct UnitAlias {
-  const char* name;
-  const char* si;
-  double factor;  // si = factor * value + offset
-  double offset;
+// Units are parsed by UDUNITS-2 (Unidata; Debian's libudunits2): SI prefixes, products ("Pa s", "kg.m-3"),
+// quotients ("kg/(m2 s)") and powers ("m^3", "m3") compose, so any unit of the right dimension is accepted without a
+// list growing one unit at a time. Three spellings of the field mean something else to its grammar, or nothing.
+const std::pair<const char*, const char*> kSpellings[] = {
+    {"-", "1"},              // dimensionless, as the papers' tables write it
+    {"wt%", "%"},            // a mass fraction in per cent
+    {"J/kg K", "J/(kg K)"},  // the engineering reading (UDUNITS would read J K / kg)
 };
 
-// Every SI unit maps to itself; the others are the units the papers and plants use.
-const UnitAlias kAliases[] = {
-    {"-", "-", 1, 0},
-    {"%", "-", 0.01, 0},
-    {"K", "K", 1, 0},
-    {"degC", "K", 1, 273.15},
-    {"m", "m", 1, 0},
-    {"mm", "m", 1e-3, 0},
-    {"um", "m", 1e-6, 0},
-    {"cm", "m", 1e-2, 0},
-    {"m2", "m2", 1, 0},
-    {"m3", "m3", 1, 0},
-    {"L", "m3", 1e-3, 0},
-    {"kg", "kg", 1, 0},
-    {"g", "kg", 1e-3, 0},
-    {"s", "s", 1, 0},
-    {"min", "s", 60, 0},
-    {"h", "s", 3600, 0},
-    {"1/s", "1/s", 1, 0},
-    {"1/min", "1/s", 1.0 / 60, 0},
-    {"1/h", "1/s", 1.0 / 3600, 0},
-    {"kg/s", "kg/s", 1, 0},
-    {"g/min", "kg/s", 1e-3 / 60, 0},
-    {"g/s", "kg/s", 1e-3, 0},
-    {"kg/h", "kg/s", 1.0 / 3600, 0},
-    {"kg/min", "kg/s", 1.0 / 60, 0},
-    {"m3/s", "m3/s", 1, 0},
-    {"m3/h", "m3/s", 1.0 / 3600, 0},
-    {"L/min", "m3/s", 1e-3 / 60, 0},
-    {"m/s", "m/s", 1, 0},
-    {"kg/kg", "kg/kg", 1, 0},
-    {"g/kg", "kg/kg", 1e-3, 0},
-    {"wt%", "kg/kg", 0.01, 0},
-    {"kg/m3", "kg/m3", 1, 0},
-    {"g/L", "kg/m3", 1, 0},
-    {"Pa", "Pa", 1, 0},
-    {"kPa", "Pa", 1e3, 0},
-    {"bar", "Pa", 1e5, 0},
-    {"W", "W", 1, 0},
-    {"kW", "W", 1e3, 0},
-    {"J", "J", 1, 0},
-    {"kJ", "J", 1e3, 0},
-    {"J/kg", "J/kg", 1, 0},
-    {"kJ/kg", "J/kg", 1e3, 0},
-    {"J/(kg K)", "J/(kg K)", 1, 0},
-    {"kJ/(kg K)", "J/(kg K)", 1e3, 0},
-    {"W/(m2 K)", "W/(m2 K)", 1, 0},
-    {"W/(m K)", "W/(m K)", 1, 0},
-    {"m2/s", "m2/s", 1, 0},
-    {"Pa s", "Pa s", 1, 0},
-    {"mPa s", "Pa s", 1e-3, 0},
-    {"J/kg/m", "J/kg/m", 1, 0},
-    {"1/m", "1/m", 1, 0},
-    {"kg/(m2 s)", "kg/(m2 s)", 1, 0},
-    {"m3/kg", "m3/kg", 1, 0},
-    {"kg/mol", "kg/mol", 1, 0},
-    {"g/mol", "kg/mol", 1e-3, 0},
-    {"m3/(s kg)", "m3/(s kg)", 1, 0},
-    {"kg/m2", "kg/m2", 1, 0},
-    {"1/J", "1/J", 1, 0},
-    {"J/kg K", "J/(kg K)", 1, 0},
-    {"m^3/s", "m3/s", 1, 0},
-    {"1/(m s)", "1/(m s)", 1, 0},
-    {"1/m3", "1/m3", 1, 0},
+// Common units offered as examples when a unit is not understood (examples only: any composition is accepted).
+const char* const kExamples[] = {
+    "-",     "%",     "K",        "degC",      "m",        "mm",      "um",    "m2",   "m3",   "L",    "kg",
+    "g",     "s",     "min",      "h",         "1/s",      "kg/s",    "g/min", "kg/h", "m3/s", "m3/h", "m/s",
+    "kg/kg", "g/kg",  "kg/m3",    "g/L",       "Pa",       "kPa",     "bar",   "W",    "kW",   "J",    "kJ",
+    "J/kg",  "kJ/kg", "J/(kg K)", "kJ/(kg K)", "W/(m2 K)", "W/(m K)", "W/K",   "m2/s", "Pa s", "mPa s"};
+
+struct UtFree {
+  void operator()(ut_unit* u) const { ut_free(u); }
+};
+using UnitPtr = std::unique_ptr<ut_unit, UtFree>;
+
+// One parsed unit: its affine map to the base-SI product (si = factor * value + offset) and that product's text.
+struct Parsed {
+  bool ok = false;
+  double factor = 1, offset = 0;
+  std::string base;  // "m-3.kg", "K", "1"
 };
 
-const UnitAlias* find_alias(const std::string& name) {
-  for (const auto& a : kAliases)
-    if (name == a.name) return &a;
-  return nullptr;
+// UDUNITS-2 keeps parser state in globals and is not thread-safe: every call goes through this one lock, and each
+// unit text is parsed once per process (scenes are loaded from many threads at once in sweeps).
+class UnitSystem {
+ public:
+  static UnitSystem& get() {
+    static UnitSystem s;
+    return s;
+  }
+  // The affine map of a unit text onto its base-SI product ({ok = false} when the text is not a plain unit).
+  Parsed parse(const std::string& text) {
+    std::lock_guard<std::mutex> lock(mu_);
+    auto it = cache_.find(text);
+    if (it != cache_.end()) return it->second;
+    Parsed p = parse_locked(text);
+    cache_.emplace(text, p);
+    return p;
+  }
+
+ private:
+  UnitSystem() {
+    ut_set_error_message_handler(ut_ignore);
+    sys_ = ut_read_xml(nullptr);  // the database Debian installs (or $UDUNITS2_XML_PATH)
+    if (!sys_) throw std::runtime_error("granuflow: the UDUNITS-2 unit database could not be read (libudunits2-data)");
+  }
+  static std::string spelled(const std::string& text) {
+    for (const auto& [field, ud] : kSpellings)
+      if (text == field) return ud;
+    return text;
+  }
+  // Only plain unit expressions: no time origins ("s since 2000-01-01"), logarithmic units ("lg(re 1 mW)"),
+  // control characters or surrounding blanks, which the grammar would quietly accept.
+  static bool plain(const std::string& t) {
+    if (t.empty() || t.front() == ' ' || t.back() == ' ') return false;
+    for (unsigned char c : t)
+      if (c < 0x20 || c == '@' || c == ':') return false;
+    return t.find("since") == std::string::npos && t.find("re ") == std::string::npos &&
+           t.find("after") == std::string::npos && t.find("from") == std::string::npos;
+  }
+  Parsed parse_locked(const std::string& text) {
+    Parsed p;
+    const std::string t = spelled(text);
+    if (!plain(t)) return p;
+    UnitPtr u(ut_parse(sys_, t.c_str(), UT_UTF8));
+    if (!u) return p;
+    char buf[256];
+    const int n = ut_format(u.get(), buf, sizeof buf, UT_ASCII | UT_DEFINITION);
+    if (n < 0 || n >= static_cast<int>(sizeof buf)) return p;
+    // The definition is "[scale ]product[ @ origin]"; the product alone names the dimension in base SI units.
+    std::string def(buf, n);
+    if (const auto at = def.find(" @ "); at != std::string::npos) def = def.substr(0, at);
+    if (const auto sp = def.find(' '); sp != std::string::npos && std::isdigit(static_cast<unsigned char>(def[0])))
+      def = def.substr(sp + 1);
+    const bool scaled = std::isdigit(static_cast<unsigned char>(def[0])) != 0 && def != "1";
+    if (scaled || def.find('(') != std::string::npos) return p;
+    UnitPtr base(ut_parse(sys_, def.c_str(), UT_ASCII));
+    if (!base) return p;
+    cv_converter* cv = ut_get_converter(u.get(), base.get());
+    if (!cv) return p;
+    p.offset = cv_convert_double(cv, 0.0);
+    p.factor = cv_convert_double(cv, 1.0) - p.offset;
+    cv_free(cv);
+    p.ok = std::isfinite(p.factor) && std::isfinite(p.offset) && p.factor != 0;
+    p.base = def;
+    return p;
+  }
+  std::mutex mu_;
+  ut_system* sys_ = nullptr;
+  std::map<std::string, Parsed> cache_;
+};
+
+// The dimension of a parsed unit in the project's SI spelling where it has one ("W/K"), else the base product.
+std::string si_spelling(const Parsed& p) {
+  for (const char* e : kExamples) {
+    const Parsed q = UnitSystem::get().parse(e);
+    if (q.ok && q.base == p.base && q.factor == 1 && q.offset == 0) return e;
+  }
+  return p.base;
+}
+
+std::string examples_for(const Parsed& si) {
+  std::string out;
+  for (const char* e : kExamples) {
+    const Parsed p = UnitSystem::get().parse(e);
+    if (p.ok && p.base == si.base) out += (out.empty() ? "" : ", ") + std::string(e);
+  }
+  return out;
 }
 
 }  // namespace
 
+bool is_known_si_unit(const std::string& si_unit) {
+  // A coherent SI unit: understood, and equal to its base-SI product without a scale or an origin.
+  const Parsed p = UnitSystem::get().parse(si_unit);
+  return p.ok && p.factor == 1 && p.offset == 0;
+}
+
 const std::vector<std::string>& known_si_units() {
   static const std::vector<std::string> units = [] {
     std::vector<std::string> v;
-    for (const auto& a : kAliases)
-      if (std::find(v.begin(), v.end(), a.si) == v.end()) v.push_back(a.si);
+    for (const char* e : kExamples)
+      if (is_known_si_unit(e)) v.push_back(e);
     return v;
   }();
   return units;
 }
 
-bool is_known_si_unit(const std::string& si_unit) {
-  const auto& u = known_si_units();
-  return std::find(u.begin(), u.end(), si_unit) != u.end();
-}
-
 double to_si(double value, const std::string& from_unit, const std::string& si_unit, const std::string& where) {
   if (from_unit.empty() || from_unit == si_unit) return value;
-  const UnitAlias* a = find_alias(from_unit);
-  if (!a) {
-    std::string allowed;
-    for (const auto& x : kAliases)
-      if (si_unit == x.si) allowed += (allowed.empty() ? "" : ", ") + std::string(x.name);
-    throw ConfigError(where + ": unknown unit '" + from_unit + "' (allowed for " + si_unit + ": " + allowed + ")");
+  const Parsed si = UnitSystem::get().parse(si_unit);
+  if (!si.ok) throw std::logic_error(where + ": declared SI unit '" + si_unit + "' is not understood");
+  const Parsed from = UnitSystem::get().parse(from_unit);
+  if (!from.ok) {
+    const std::string ex = examples_for(si);
+    throw ConfigError(where + ": unknown unit '" + from_unit + "' (allowed: any unit of " + si_unit +
+                      (ex.empty() ? "" : ", e.g. " + ex) + ")");
   }
-  if (si_unit != a->si)
-    throw ConfigError(where + ": unit '" + from_unit + "' is " + a->si + ", but the value must be in " + si_unit);
-  return a->factor * value + a->offset;
+  if (from.base != si.base)
+    throw ConfigError(where + ": unit '" + from_unit + "' is " + si_spelling(from) + ", but the value must be in " +
+                      si_unit);
+  // Through the base product: value -> base -> si (si itself is coherent, factor 1 and offset 0, for declared units).
+  const double base_value = from.factor * value + from.offset;
+  if (si.factor == 1 && si.offset == 0) return base_value;
+  return (base_value - si.offset) / si.factor;
 }
 
 bool parse_quantity(const std::string& text, double* value, std::string* unit) {

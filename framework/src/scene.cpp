@@ -12,6 +12,7 @@
 #include <set>
 #include <sstream>
 
+#include "events.hpp"
 #include "granuflow/errors.hpp"
 #include "granuflow/materials.hpp"
 #include "granuflow/plugin.hpp"
@@ -44,7 +45,7 @@ class Loader {
     if (!root.IsMap()) fail("", "the file must be a mapping of scene keys, got " + kind_name(root));
     check_keys(root, "",
                {"scene", "description", "t_end", "output", "solver", "particles", "units", "connections", "inputs",
-                "summary", "plots", "sweep", "notes", "links", "accuracy", "plugins"});
+                "summary", "plots", "sweep", "notes", "links", "accuracy", "events", "checkpoints", "plugins"});
     Scene s;
     s.path = label_;
     s.name = scalar(required(root, "scene", ""), "scene");
@@ -82,6 +83,8 @@ class Loader {
     s.options.t_end = quantity(required(root, "t_end", ""), "t_end", "s");
     if (root["output"]) load_output(root["output"], s.options);
     if (root["solver"]) load_solver(root["solver"], s.options);
+    if (root["events"]) s.options.events = detail::load_events(root["events"], fs, label_);
+    if (root["checkpoints"]) s.options.checkpoints = detail::load_checkpoints(root["checkpoints"], label_);
     try {
       s.options.validate(true);
     } catch (const ConfigError& e) {

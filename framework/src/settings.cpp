@@ -83,7 +83,17 @@ void Settings::check_all_used() const {
     if (std::find(used_.begin(), used_.end(), k) != used_.end()) continue;
     std::string allowed;
     for (const auto& d : declared_) allowed += (allowed.empty() ? "" : ", ") + d.name;
-    throw ConfigError(where_ + "." + k + ": unknown setting (allowed: " + (allowed.empty() ? "none" : allowed) + ")");
+    // A setting that belongs to another unit (the size grid, now the particle system's) names its place.
+    std::string elsewhere;
+    if (fs_)
+      for (const auto& u : fs_->units())
+        for (const auto& d : u.settings)
+          if (d.name == k) elsewhere = u.name;
+    throw ConfigError(where_ + "." + k + ": unknown setting (allowed: " + (allowed.empty() ? "none" : allowed) + ")" +
+                      (elsewhere.empty() ? ""
+                                         : "; '" + k + "' is a setting of " + elsewhere + ": set it under " +
+                                               (elsewhere == "particles" ? "particles: settings:"
+                                                                         : "units: " + elsewhere + ": settings:")));
   }
 }
 

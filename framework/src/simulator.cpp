@@ -6,6 +6,7 @@
 #include <memory>
 #include <utility>
 
+#include "events.hpp"
 #include "granuflow/errors.hpp"
 #include "granuflow/structure.hpp"
 #include "ida_stepper.hpp"
@@ -44,6 +45,14 @@ void SimOptions::validate(bool scene_keys) const {
       fail(field, key, t_out[i], scene_keys ? "s" : "", "0 <= t_out <= t_end (" + fmt_num(t_end) + " s)");
     if (i > 0 && !(t_out[i] > t_out[i - 1]))
       fail(field, key, t_out[i], scene_keys ? "s" : "", "t_out increasing (previous " + fmt_num(t_out[i - 1]) + " s)");
+  }
+  for (size_t i = 0; i < checkpoints.size(); ++i) {
+    const std::string field = "checkpoints[" + std::to_string(i) + "]";
+    if (!(checkpoints[i] > 0 && checkpoints[i] < t_end))
+      fail(field, field, checkpoints[i], "s", "0 < checkpoint < t_end (" + fmt_num(t_end) + " s)");
+    if (i > 0 && !(checkpoints[i] > checkpoints[i - 1]))
+      fail(field, field, checkpoints[i], "s",
+           "checkpoints increasing (previous " + fmt_num(checkpoints[i - 1]) + " s)");
   }
 }
 
@@ -111,6 +120,7 @@ SimResult simulate_ida(Flowsheet& fs, const SimOptions& opt, const std::string& 
   }
   check_algebraic_structure(sys, j0.empty() ? nullptr : j0.data());  // names an unsolvable algebraic part
   const std::vector<int> sens_ids = sensitivity_ids(fs, opt);
+  check_events(fs, opt.events, opt.sensitivities);
   IdaStepper stepper(sys, opt, kind, sens_ids, std::move(j0), reason);
   return drive(fs, sys, opt, sens_ids, stepper, wall0);
 }
@@ -123,6 +133,12 @@ SimResult simulate(Flowsheet& fs, const SimOptions& opt) {
   fs.check_units();  // every unit at the values of the run, inputs at each of their knots
   const auto wall0 = std::chrono::steady_clock::now();
   if (opt.method == Method::kIda) return simulate_ida(fs, opt, "asked for (solver.method)", wall0);
+  // Events, checkpoints and restarts run on IDAS's root finding and restarts (events_and_checkpoints.md).
+  const bool ida_only = !opt.events.empty() || !opt.checkpoints.empty() || !opt.restart_file.empty();
+  if (ida_only && opt.method != Method::kAuto)
+    throw ConfigError(std::string("solver.method = '") + to_string(opt.method) +
+                      "': events, checkpoints and restarts need IDAS (solver.method: auto or ida)");
+  if (ida_only) return simulate_ida(fs, opt, "events, checkpoints or a restart: IDAS", wall0);
   const std::string algebraic = detail::first_algebraic_state(fs);
   if (!algebraic.empty()) {
     if (opt.method == Method::kAdams || opt.method == Method::kErk)

@@ -9,6 +9,7 @@
 #include <sunmatrix/sunmatrix_dense.h>
 #include <sunmatrix/sunmatrix_sparse.h>
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -80,6 +81,7 @@ struct IdaUser {
   JacobianCache cache;
   bool fresh_only = false;  // consistent initialization: Newton from a guess needs the Jacobian of each iterate
   bool iterative = false;   // GMRES with the units' preconditioners instead of a factored Jacobian
+  std::function<int(double, const double*, const double*, double*)> roots;  // state events' g (events_run.hpp)
 };
 int ida_res(realtype t, N_Vector y, N_Vector yp, N_Vector r, void* ud);
 int ida_jac(realtype t, realtype cj, N_Vector y, N_Vector yp, N_Vector, SUNMatrix J, void* ud, N_Vector, N_Vector,

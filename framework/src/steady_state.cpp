@@ -26,6 +26,7 @@
 
 #include "consistent_start.hpp"
 #include "granuflow/errors.hpp"
+#include "granuflow/signals.hpp"
 #include "granuflow/simulator.hpp"
 #include "solver_setup.hpp"
 
@@ -579,6 +580,7 @@ SteadyResult solve_steady_state(Flowsheet& fs, const SteadyOptions& opt, const s
   sys.extend(opt.t, y.data(), s.zeros.data(), r.y.data(), yp_full.data());
   r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   steady_outputs(fs, sys, opt.t, y, s.zeros, yp_full, r);
+  for (auto& w : missed_set_points(fs, opt.t, r.outputs)) r.warnings.push_back(std::move(w));
   if (opt.stability && dense) {
     const auto t0 = std::chrono::steady_clock::now();
     stability(s, y, s.kept.size(), r);

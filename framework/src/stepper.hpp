@@ -5,6 +5,7 @@
 // consistent start; the others: a restart from where the last segment ended), how the state, derivatives,
 // quadratures and sensitivities are read at an output time, and its own counts.
 #pragma once
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -40,6 +41,25 @@ inline void add_counts(SolverStats& to, const SolverStats& from) {
   to.linear_failures += from.linear_failures;
 }
 
+// Everything an integrator restarts from at the start of a segment (a checkpoint, checkpoint.hpp): the unknowns, their
+// derivatives, the quadratures and the sensitivities of each, at time t.
+struct StepperState {
+  double t = 0.0;
+  std::vector<double> y, yp, q;
+  std::vector<std::vector<double>> yS, ypS, qS;
+};
+
+// What changes the sensitivities at a state event (events_run.hpp): for a root at t* of g(t, y, p), the event time
+// moves with p by tau_k = dt*/dp_k = -(dg/dp_k) / (dg/dt), and a state that stays continuous across the event while
+// its rate jumps from y'- to y'+ has s+ = s- + (y'- - y'+) tau_k (the same for the quadratures).
+struct SensitivityJump {
+  std::vector<double> tau;                     // per sensitivity parameter
+  std::vector<double> yp_before, qdot_before;  // the integrator's y' and the quadrature rates just before the event
+};
+
+// Root functions of the state events: g_i(t, y, y') for each event; 0 on success.
+using RootFunction = std::function<int(double, const double*, const double*, double*)>;
+
 class Stepper {
  public:
   virtual ~Stepper() = default;
@@ -57,6 +77,19 @@ class Stepper {
   virtual StepFailure failure(int flag) = 0;
   // The stepper's counts, which integrator ran and why, the linear solver it used.
   virtual void finish(SolverStats& stats) = 0;
+
+  // State events (IDAS; the driver refuses them before another stepper is made): `n` root functions and their
+  // directions (+1 rising, -1 falling, 0 both).
+  virtual void set_roots(int, RootFunction, const std::vector<int>&) {}
+  virtual bool root_found(int) const { return false; }
+  // After root_found: which root functions crossed (non-zero entries).
+  virtual std::vector<int> roots() { return {}; }
+  // Applied when the next segment starts, once its consistent values are known.
+  virtual void jump_sensitivities(SensitivityJump) {}
+  // Checkpoints: the values at the end of a segment, just read by end_segment(); and a start from such values, the
+  // next begin_segment() then restarting from them as from the end of a segment of this run.
+  virtual bool save(StepperState&) { return false; }
+  virtual void restore(const StepperState&) {}
 };
 
 }  // namespace granuflow::detail

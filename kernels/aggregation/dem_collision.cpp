@@ -1,5 +1,7 @@
 #include "aggregation/dem_collision.hpp"
 
+#include <cmath>
+
 #include "granuflow/flowsheet.hpp"
 
 namespace granuflow::kernels {
@@ -33,9 +35,10 @@ void DemCollisionKernel::declare(Settings& s, const std::string& prefix) {
                                        "data table of DEM collision frequencies C_ij, 1/s (paper 002, Eq. (12)); "
                                        "used when no collisions_file is given");
     if (none)  // nothing to choose from: the setting that is missing is the file
-      throw ConfigError(s.where() + "." + prefix +
-                        "collisions_file: not given, and no table of collision frequencies is loaded; name the DEM "
-                        "collision-count file (CSV: dt_s, edges_m, particles, counts; docs/dem_collisions.md)");
+      throw ConfigError(
+          s.where() + "." + prefix +
+          "collisions_file: not given, and no table of collision frequencies is loaded; name the DEM "
+          "collision-count file (CSV: like_collisions, dt_s, edges_m, particles, counts; docs/dem_collisions.md)");
     frequency_ = &table(t);
   }
 }
@@ -76,12 +79,24 @@ Table collision_frequency_table(const std::vector<double>& counts, const std::ve
   Table t{static_cast<int>(n), static_cast<int>(n), std::vector<double>(n * n, 0.0), "1/s", source};
   for (size_t i = 0; i < n; ++i)
     for (size_t j = 0; j < n; ++j)
-      if (numbers[i] > 0 && numbers[j] > 0) t.values[i * n + j] = counts[i * n + j] / (numbers[i] * numbers[j] * dt);
+      if (numbers[i] > 0 && numbers[j] > 0) {
+        const double c = counts[i * n + j] / (numbers[i] * numbers[j] * dt);
+        if (!std::isfinite(c))  // counts near the largest double, particle numbers near the smallest
+          throw ConfigError(source + ": the collision frequency of classes " + std::to_string(i + 1) + " x " +
+                            std::to_string(j + 1) + " (Eq. (12): count / (F_i F_j dt)) is not a finite number");
+        t.values[i * n + j] = c;
+      }
   return t;
 }
 
+// The population balance's event rate within class i is 1/2 C_ii F_i^2, between i != j C_ij F_i F_j: Eq. (12) as
+// printed gives that when N_ii holds each like collision twice; a file that counts it once has its diagonal doubled.
 Table collision_frequency_table(const CollisionCounts& c) {
-  return collision_frequency_table(c.counts, c.particles, c.dt, c.path);
+  if (c.like_tally == 2) return collision_frequency_table(c.counts, c.particles, c.dt, c.path);
+  std::vector<double> counts = c.counts;
+  const size_t n = c.particles.size();
+  for (size_t i = 0; i < n; ++i) counts[i * n + i] *= 2.0;
+  return collision_frequency_table(counts, c.particles, c.dt, c.path);
 }
 
 void register_dem_collision(Registry<AggregationKernel>& r) {

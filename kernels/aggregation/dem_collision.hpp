@@ -8,9 +8,9 @@
 //     the collision frequency of the DEM class holding its pivot diameter; every pivot must lie inside the file's
 //     edges (a ConfigError names the file and the class otherwise).
 //   * collisions: the name of a data table of C_ij already loaded (data_tables.hpp), one row and column per class.
-// The counts are taken as each particle tallies its own contacts: an unlike collision appears once in N_ij and
-// once in N_ji, a like one twice in N_ii, so that Eq. (12) as printed gives the rate per pair for like and unlike
-// classes alike (docs/dem_collisions.md).
+// The file says how it counts a collision of two like particles (key like_collisions): twice, as each particle
+// tallies its own contacts (an unlike collision once in N_ij and once in N_ji), so that Eq. (12) as printed gives the
+// rate per pair for like and unlike classes alike; or once, and its diagonal is doubled (docs/dem_collisions.md).
 //
 // Efficiency (setting efficiency): step, Eq. (13) as printed, or smooth, psi0 w(LC) with the logistic
 // w = (1 + tanh((LC - LC_min) / lc_width)) / 2, whose derivative is continuous (docs/pbm_2d.md measures what the

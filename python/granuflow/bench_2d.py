@@ -194,7 +194,7 @@ def one_dimensional_reduction(q: int = 2) -> dict:
     with tempfile.TemporaryDirectory() as tmp:
         csv = os.path.join(tmp, "uniform.csv")
         with open(csv, "w") as f:
-            f.write(f"dt_s,{dt}\nedges_m,0.01,100\nparticles,{F}\ncounts,{beta * F * F * dt}\n")
+            f.write(f"like_collisions,twice\ndt_s,{dt}\nedges_m,0.01,100\nparticles,{F}\ncounts,{beta * F * F * dt}\n")
         grid = f"particles: {{settings: {{grid: geometric, q: {q}, classes: {12 * q}, v_min: 0.015625}}}}\n"
         head = "t_end: 2 s\noutput: {times: [0 s, 1 s, 2 s]}\nsolver: {rtol: 1e-10, atol: 1e-12}\n"
         two = load_text("scene: two\n" + head + grid + "units:\n  g:\n    type: pbm_2d\n    settings: {initial: "

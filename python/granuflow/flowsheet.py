@@ -317,7 +317,9 @@ class Flowsheet:
                  n_out: int | None = None, rtol: float | None = None, atol: float | None = None,
                  sensitivities: Sequence[str] = (), linear_solver: str | None = None,
                  max_steps: int | None = None, method: str | None = None, warn: bool = True,
-                 error_estimate: bool = False, accuracy=None, grid_check: bool | None = None) -> Result:
+                 error_estimate: bool = False, accuracy=None, grid_check: bool | None = None,
+                 checkpoints: Iterable[float] | None = None, checkpoint_dir: str | None = None,
+                 restart: str | None = None) -> Result:
         """Integrate the flowsheet; the GIL is released during the solve.
 
         ``method``: ``auto`` (default: IDAS for a DAE, for an ODE chosen by its stiffness), ``ida``, ``bdf``,
@@ -341,6 +343,9 @@ class Flowsheet:
         ``grid_check`` (default: ``warn``, for flowsheets of up to grid_check.PYTHON_MAX_STATES unknowns): one solve
         on a grid twice as fine estimates the grid error of every summary output and warns above 2 %
         (:mod:`granuflow.accuracy.grid_check`; ``Result.grid_check``).
+        ``checkpoints`` (s; default: the scene's ``checkpoints:``), ``checkpoint_dir``, ``restart``: checkpoint
+        times, the folder their files are written to, and a checkpoint file to resume from
+        (docs/events_and_checkpoints.md).
         """
         if not isinstance(error_estimate, (bool, np.bool_)):
             raise ConfigError(f"simulate(): error_estimate = {short(error_estimate)}: expected True or False")
@@ -379,7 +384,9 @@ class Flowsheet:
             t_end=None if t_end is None else _end_time(t_end, "simulate()"),
             t_out=t_out, n_out=None if n_out is None else int(n_out), rtol=rtol, atol=atol,
             sensitivities=list(sensitivities), linear_solver=linear_solver,
-            max_steps=None if max_steps is None else int(max_steps), method=method, names=layout is None)
+            max_steps=None if max_steps is None else int(max_steps), method=method, names=layout is None,
+            checkpoints=None if checkpoints is None else _times(checkpoints, "simulate(): checkpoints"),
+            checkpoint_dir=checkpoint_dir or "", restart=restart or "")
         if layout is None:
             layout = self._layout = Layout(raw, self.units())
             self._summary_map = dict(self._scene.summary_map)
@@ -387,6 +394,7 @@ class Flowsheet:
         res.material = self.material
         res.flowsheet = self
         res.check_balance()  # a unit that loses mass is an error, not a number in a file
+        res.extra_warnings += self._unfired_events(res)
         if error_estimate:
             res.error_estimate = self._error_estimate(res, linear_solver=linear_solver, max_steps=max_steps,
                                                       method=method)
@@ -399,6 +407,20 @@ class Flowsheet:
             res.grid_check = gc.check(self, res, linear_solver=linear_solver, max_steps=max_steps, method=method)
         self._warn(res, warn)
         return res
+
+    def _unfired_events(self, res: Result) -> list[str]:
+        """A declared event that never fired in a run that reached its end is named: an event fires on a crossing,
+        so a condition that already held when it was armed, or never got there, would otherwise pass unnoticed."""
+        if "events:" not in self.text or not len(res.t) or res.t[-1] < res.t[0] + (self.t_end - res.t[0]) * (1 - 1e-12):
+            return []  # no events, or a stop event ended the run early (the later ones had no chance)
+        import yaml
+
+        declared = (yaml.load(self.text, Loader=_yaml_loader()) or {}).get("events") or []
+        fired = {e["name"] for e in res.events}
+        return [f"event {e.get('name')} ({e.get('when')}) never fired: its condition did not cross during the run "
+                "(an event fires on a crossing, not where its condition already holds when it is armed; "
+                "docs/events_and_checkpoints.md)"
+                for e in declared if isinstance(e, dict) and e.get("name") not in fired]
 
     def _warn(self, res: Result, warn: bool) -> None:
         if warn:
@@ -419,6 +441,11 @@ class Flowsheet:
         if scene is not None:
             return None if scene is False else acc_target.parse_target(scene, f"{self.path or self.name}: accuracy")
         return {"*": DEFAULT_ACCURACY} if self._grid_without_classes() else None
+
+    @property
+    def scene_checkpoints(self) -> list[float]:
+        """The scene's ``checkpoints:`` times (s), empty without (docs/events_and_checkpoints.md)."""
+        return list(self._scene.checkpoints)
 
     @property
     def scene_accuracy(self):
@@ -505,6 +532,12 @@ class Flowsheet:
     def predict_raw(self, experiments: list, params: Mapping[str, float], options: dict) -> list:
         """The core's predictions of the experiments' observables (use :func:`granuflow.calibration.predict`)."""
         return _core.predict(self._scene, experiments, dict(params), options)
+
+    def diagram(self) -> "diagram.Diagram":  # noqa: F821 - imported when drawn
+        """The flowsheet drawn by Graphviz: shown inline in a notebook; ``.save("fs.svg")`` writes it."""
+        from .diagram import Diagram
+
+        return Diagram(self)
 
     def __repr__(self) -> str:
         return f"<granuflow.Flowsheet {self.name!r}: {len(self.state_names)} states, {len(self.params)} parameters>"

@@ -1,9 +1,10 @@
 """Quantities at the edges: numbers with units in scene, sweep and experiment files, command-line options, tables
 and plots; SI everywhere inside.
 
-This is the one module of the package that converts units. The factors come from the C++ core (``_core.to_si``
-and its checked table of units); this module adds parsing (``"60 degC"``), the way back from SI to a display unit,
-differences (a standard deviation of 2 degC is one of 2 K) and the edge units that fit an SI unit.
+This is the one module of the package that converts units. The factors come from the C++ core (``_core.to_si``,
+which parses units with UDUNITS-2: prefixes, products, quotients and powers compose); this module adds parsing
+(``"60 degC"``), the way back from SI to a display unit, differences (a standard deviation of 2 degC is one of 2 K)
+and the edge units that fit an SI unit.
 """
 from __future__ import annotations
 

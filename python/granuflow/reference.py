@@ -23,6 +23,8 @@ KERNEL_FAMILIES = {
     "growth_scheme": ("growth schemes", "`growth_scheme:` setting"),
     "separation": ("separation curves", "`upper_curve:`, `lower_curve:` of `sieve`, `classifier:` of the chambers"),
     "comminution": ("comminution laws", "`law:` setting of `mill`"),
+    "drying_curve": ("drying curves", "`drying_curve:` setting of `fluid_bed` and the wet chambers"),
+    "drying_surface": ("drying surfaces", "`drying_surface:` setting of `fluid_bed`"),
 }
 
 

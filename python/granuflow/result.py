@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import math
+import os
 
 import numpy as np
 
@@ -70,6 +71,9 @@ class Result:
         self.sens = raw["sens"]
         self.sens_params = list(raw["sens_params"])
         self.stats = dict(raw["stats"])
+        # State events that fired ({name, phase, t}), in time order; the checkpoint files the run wrote.
+        self.events = [dict(e) for e in raw.get("events", [])]
+        self.checkpoint_files = list(raw.get("checkpoint_files", []))
         self.wall_time_s = raw["wall_time_s"]
         self.rtol = raw.get("rtol")
         self.atol = raw.get("atol")
@@ -125,15 +129,18 @@ class Result:
     def repeated_outputs(self) -> list[str]:
         """Outputs that repeat a state of the same unit over the whole run (a balance term that is the unit's own
         accumulator, a class mass reported again for the size distribution): files list such a quantity once."""
-        by_unit: dict[str, list[int]] = {}
-        for i, n in enumerate(self.state_names):
-            by_unit.setdefault(n.rpartition(".")[0], []).append(i)
-        out = []
-        for j, n in enumerate(self.output_names):
-            col = self.outputs[:, j]
-            if any(np.array_equal(col, self.y[:, i]) for i in by_unit.get(n.rpartition(".")[0], ())):
-                out.append(n)
-        return out
+        # Linear in the size of the result: each column's bytes are looked up among the same unit's state columns
+        # (+ 0.0 makes -0.0 and 0.0 one value, as array_equal has them; a column with NaN never repeats, as there).
+        def keys(block):
+            cols = np.ascontiguousarray(np.asarray(block, dtype=float).T) + 0.0
+            return [None if np.isnan(c).any() else c.tobytes() for c in cols]
+
+        by_unit: dict[str, set] = {}
+        for n, k in zip(self.state_names, keys(self.y)):
+            if k is not None:
+                by_unit.setdefault(n.rpartition(".")[0], set()).add(k)
+        return [n for n, k in zip(self.output_names, keys(self.outputs))
+                if k is not None and k in by_unit.get(n.rpartition(".")[0], ())]
 
     def _display_columns(self):
         """(header, values) of every state and output as files show them: sizes in µm, the rest SI; outputs that
@@ -321,6 +328,16 @@ class Result:
         return out
 
     @property
+    def phases(self) -> list[dict]:
+        """The recipe's phases: the first (``start``) from the start, then one from each event (its ``phase``) to the
+        next event or the end of the run."""
+        starts = [("start", float(self.t[0]))] + [(e["phase"], float(e["t"])) for e in self.events]
+        ends = [t for _, t in starts[1:]] + [float(self.t[-1])]
+        # an event that stops the run begins no phase
+        return [{"name": n, "t_start_s": a, "t_end_s": b} for k, ((n, a), b) in enumerate(zip(starts, ends))
+                if b > a or k == 0]
+
+    @property
     def summary(self) -> dict:
         """The fields of summary.json (docs/design.md contract); null where the scene has no such quantity."""
         s = {"scene": self.scene_name, "t_end_s": float(self.t[-1])}
@@ -353,6 +370,11 @@ class Result:
         if self.grid_check is not None:
             s["grid_check"] = self.grid_check.to_json()
         s["grid_end"] = {k: {x: _finite(v) for x, v in e.items()} for k, e in ends.items()}
+        if self.events:  # a recipe: when each event fired and the phases between them
+            s["events"] = [{"name": e["name"], "phase": e["phase"], "t_s": e["t"]} for e in self.events]
+            s["phases"] = self.phases
+        if self.checkpoint_files:
+            s["checkpoint_files"] = [os.path.basename(f) for f in self.checkpoint_files]
         s["warnings"] = self.warnings
         s["wall_time_s"] = self.wall_time_s
         st = self.stats

@@ -53,17 +53,19 @@ def _summary(fs: Flowsheet, raw: dict) -> tuple[dict, dict, dict]:
 
 # Flows below this (kg/s, W) are round-off of a steady state with nothing flowing, not a flow to close a balance on.
 NO_FLOW = 1e-15
+# Growth rates below this (1/s, a time scale of 30 000 years) are round-off of a zero eigenvalue.
+NEUTRAL_RATE = 1e-12
 
 
 def boundary_balance(raw: dict) -> dict:
     """Per quantity the flows in and out and their closure ``rel`` = |in - out| / max; where nothing flows (both
-    below NO_FLOW) the closure is 0 and ``note`` says so, never 1 from 0 against 7e-37."""
+    below NO_FLOW) the closure is undefined: ``rel`` is None and ``note`` says why, never 1 from 0 against 7e-37."""
     out = {}
     for q, f in sorted(raw["boundary_flows"].items()):
         scale = max(abs(f["in"]), abs(f["out"]))
         if scale < NO_FLOW:
-            out[q] = {"in": f["in"], "out": f["out"], "rel": 0.0,
-                      "note": f"nothing flows across the boundary (in and out below {NO_FLOW:g})"}
+            out[q] = {"in": f["in"], "out": f["out"], "rel": None,
+                      "note": f"undefined: nothing flows across the boundary (in and out below {NO_FLOW:g})"}
         else:
             out[q] = {"in": f["in"], "out": f["out"], "rel": abs(f["in"] - f["out"]) / scale}
     return out
@@ -74,9 +76,14 @@ def _stability(raw: dict) -> dict | None:
     if not s:
         return None
     re, im = s["max_real_eigenvalue"], s["imag_of_max"]
-    return {"max_real_eigenvalue_1_s": re, "imag_1_s": im,
-            "oscillation_period_s": 2.0 * math.pi / im if im > 0 else None,
-            "stable": bool(re < 0.0), "time_s": s["time_s"]}
+    out = {"max_real_eigenvalue_1_s": re, "imag_1_s": im,
+           "oscillation_period_s": 2.0 * math.pi / im if im > 0 else None,
+           "stable": bool(re < 0.0), "time_s": s["time_s"]}
+    if abs(re) < NEUTRAL_RATE and im < NEUTRAL_RATE:  # round-off of a zero eigenvalue is no growth nor decay
+        out["stable"] = None
+        out["note"] = (f"neutral: the largest eigenvalue is zero to round-off (|{re:.3g}| < {NEUTRAL_RATE:g} 1/s): a "
+                       "quantity nothing changes, e.g. a hold-up with nothing flowing in or out")
+    return out
 
 
 def steady_report(fs: Flowsheet, *, t: float = 0.0, stability: bool = True, ftol: float = 1e-10) -> dict:
@@ -85,18 +92,20 @@ def steady_report(fs: Flowsheet, *, t: float = 0.0, stability: bool = True, ftol
     flowsheet's boundary, per second, and ``rel`` = |in - out| / max), ``stability`` (the eigenvalue of the
     linearized dynamics with the largest real part: ``stable``, ``oscillation_period_s``; None for sparse systems),
     ``solver`` (``method``, ``iterations``, ``pseudo_steps``, ``residual_norm``, ``wall_time_s``, ``conserved``,
-    ``warnings``), ``warnings`` (an end class of a size grid holding more than GRID_END_WARNING of the mass, as a run
-    warns; a boundary balance closing worse than outputs.balance_limits allows) and ``units``. Raises
-    :class:`~granuflow.result.BalanceError` (with the report as ``.report``) when a closure is above
-    outputs.BALANCE_FAIL."""
+    ``warnings``), ``warnings`` (a controller missing its set point, the trivial root; an end class of a size grid
+    holding more than GRID_END_WARNING of the mass, as a run warns; a boundary balance closing worse than
+    outputs.balance_limits allows) and ``units``. Raises :class:`~granuflow.result.BalanceError` (with the report as
+    ``.report``) when a closure is above outputs.BALANCE_FAIL."""
     raw = fs.steady_state(t=float(t), ftol=ftol, stability=stability)
     values, units, reasons = _summary(fs, raw)
     rep = {"scene": fs.name, "t_s": float(t), **values, "null_reasons": reasons, "balance": boundary_balance(raw),
            "stability": _stability(raw),
            "solver": {k: raw[k] for k in ("method", "iterations", "pseudo_steps", "residual_norm", "wall_time_s",
                                           "conserved", "warnings")}}
-    # every check a run makes on its grids, on the steady state too
-    rep["warnings"] = outputs_mod.grid_end_warnings(steady_grid_ends(fs, raw), "at the steady state")
+    # what the solve found (a controller that misses its set point, the trivial root), and every check a run makes on
+    # its grids, on the steady state too
+    rep["warnings"] = list(raw["warnings"])
+    rep["warnings"] += outputs_mod.grid_end_warnings(steady_grid_ends(fs, raw), "at the steady state")
     # and the balance guard: a steady state whose boundary flows do not close loses or makes mass (BalanceError)
     warns, fails = outputs_mod.balance_findings(rep["balance"], None, "at the steady state")
     rep["warnings"] += warns

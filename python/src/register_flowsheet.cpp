@@ -76,7 +76,8 @@ void validate_as(const Options& o, const std::string& field_prefix, const std::s
 py::dict simulate(Scene& s, std::optional<double> t_end, std::optional<std::vector<double>> t_out,
                   std::optional<int> n_out, std::optional<double> rtol, std::optional<double> atol,
                   std::vector<std::string> sensitivities, std::optional<std::string> linear_solver,
-                  std::optional<long> max_steps, std::optional<std::string> method, bool names) {
+                  std::optional<long> max_steps, std::optional<std::string> method, bool names,
+                  std::optional<std::vector<double>> checkpoints, std::string checkpoint_dir, std::string restart) {
   SimOptions o = s.options;
   // An empty list would silently mean "the scene's output times"; the scene file refuses `times: []` too.
   if (t_out && t_out->empty())
@@ -93,6 +94,8 @@ py::dict simulate(Scene& s, std::optional<double> t_end, std::optional<std::vect
   if (max_steps) o.max_steps = *max_steps;
   if (method) o.method = parse_method(*method, "simulate(): method");
   o.sensitivities = std::move(sensitivities);
+  if (checkpoints) o.checkpoints = *checkpoints;
+  o.checkpoint_dir = std::move(checkpoint_dir), o.restart_file = std::move(restart);
   validate_as(o, "SimOptions.", "simulate(): ");
   SimResult r;
   try {
@@ -122,6 +125,12 @@ py::dict simulate(Scene& s, std::optional<double> t_end, std::optional<std::vect
                "output_sens"_a = as_array(std::move(r.output_sens), {nt, np, no}),
                "sens"_a = as_array(std::move(r.sens), {nt, np, ns}), "sens_params"_a = r.sens_params, "stats"_a = stats,
                "wall_time_s"_a = r.wall_time_s, "rtol"_a = o.rtol, "atol"_a = o.atol, "t_end"_a = o.t_end);
+  // Recipes: the events that fired (with the phase each began) and the checkpoint files written.
+  py::list events;
+  for (const auto& e : r.events) events.append(py::dict("name"_a = e.name, "phase"_a = e.phase, "t"_a = e.t));
+  out["events"] = events;
+  out["checkpoint_files"] = r.checkpoint_files;
+  out["checkpoints"] = o.checkpoints;
   // The names and roles depend on the flowsheet's structure only: a caller that keeps them asks once.
   if (names) {
     out["state_names"] = r.state_names;
@@ -192,6 +201,13 @@ void register_flowsheet(py::module_& m) {
       .def_property_readonly("rtol", [](const Scene& s) { return s.options.rtol; })
       .def_property_readonly("atol", [](const Scene& s) { return s.options.atol; })
       .def_property_readonly("t_out", [](const Scene& s) { return s.options.t_out; })
+      .def_property_readonly("checkpoints", [](const Scene& s) { return s.options.checkpoints; })
+      .def_property_readonly("event_names",
+                             [](const Scene& s) {
+                               std::vector<std::string> v;
+                               for (const auto& e : s.options.events) v.push_back(e.name);
+                               return v;
+                             })
       .def_property_readonly("n_out", [](const Scene& s) { return s.options.n_out; })
       .def("set_t_end",
            [](Scene& s, double t) {
@@ -308,7 +324,8 @@ void register_flowsheet(py::module_& m) {
           "stability"_a = false)
       .def("simulate", &simulate, py::kw_only(), "t_end"_a = py::none(), "t_out"_a = py::none(), "n_out"_a = py::none(),
            "rtol"_a = py::none(), "atol"_a = py::none(), "sensitivities"_a = std::vector<std::string>{},
-           "linear_solver"_a = py::none(), "max_steps"_a = py::none(), "method"_a = py::none(), "names"_a = true);
+           "linear_solver"_a = py::none(), "max_steps"_a = py::none(), "method"_a = py::none(), "names"_a = true,
+           "checkpoints"_a = py::none(), "checkpoint_dir"_a = "", "restart"_a = "");
 
   m.def(
       "load_scene", [&reg](const std::string& path) { return load_scene(path, reg); }, "path"_a);

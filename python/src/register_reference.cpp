@@ -158,6 +158,8 @@ py::dict kernel_reference() {
   add_family(out, "growth_scheme", r.growth_schemes);
   add_family(out, "separation", r.separation);
   add_family(out, "comminution", r.comminution);
+  add_family(out, "drying_curve", r.drying_curves);
+  add_family(out, "drying_surface", r.drying_surfaces);
   return out;
 }
 

@@ -40,6 +40,7 @@ RTOL, ATOL = 1e-5, 1e-4
 def read_counts(path):
     rows = {}
     counts = []
+    like = None
     for line in open(path):
         line = line.split("#")[0].strip()
         if not line:
@@ -47,10 +48,14 @@ def read_counts(path):
         key, *vals = line.split(",")
         if key == "counts":
             counts.append([float(v) for v in vals])
+        elif key == "like_collisions":
+            like = vals[0].strip()
         else:
             rows[key] = [float(v) for v in vals]
     F = np.array(rows["particles"])
     N = np.array(counts)
+    if like == "once":  # a like collision counted once: twice per pair as Eq. (12) reads it
+        N = N + np.diag(np.diag(N))
     C = N / np.outer(F, F) / rows["dt_s"][0]
     return np.array(rows["edges_m"]), C
 

@@ -74,10 +74,48 @@ TEST(DemCollisionFile, EveryProblemNamesTheFileRowAndColumn) {
   EXPECT_THROW(read_collision_counts("/nonexistent/counts.csv"), ConfigError);
 }
 
+// A collision of two particles of one class is in N_ii once or twice depending on the DEM tool: the file must say
+// which (no default is safe), and a file that counts it once gets its diagonal doubled, nothing else.
+TEST(DemCollisionFile, TheFileSaysHowLikeCollisionsAreCounted) {
+  const std::string body = "dt_s,0.5\nedges_m,1e-3,2e-3,3e-3\nparticles,100,50\ncounts,10,4\ncounts,4,2\n";
+  try {
+    parse_collision_counts(body, "my.csv");
+    FAIL() << "a file that does not say how it counts like collisions was accepted";
+  } catch (const ConfigError& e) {
+    const std::string msg = e.what();
+    EXPECT_EQ(msg.rfind("my.csv: no 'like_collisions' row", 0), 0u) << msg;
+    EXPECT_NE(msg.find("'like_collisions,twice'"), std::string::npos) << msg;
+    EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+  }
+  try {
+    parse_collision_counts("like_collisions,thrice\n" + body, "my.csv");
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("row 1, column 2: like_collisions takes one value"), std::string::npos);
+  }
+  const Table twice = collision_frequency_table(parse_collision_counts("like_collisions,twice\n" + body, "my.csv"));
+  const Table once = collision_frequency_table(parse_collision_counts(body + "like_collisions,once\n", "my.csv"));
+  for (int i = 0; i < 2; ++i)
+    for (int j = 0; j < 2; ++j) EXPECT_EQ(once.at(i, j), (i == j ? 2.0 : 1.0) * twice.at(i, j)) << i << j;
+  EXPECT_DOUBLE_EQ(twice.at(0, 0), 10.0 / (100 * 100 * 0.5));  // Eq. (12) as printed
+  // a frequency that overflows (here only once the like collisions are doubled) is named where it comes from
+  const std::string huge = "dt_s,1\nedges_m,1e-3,2e-3\nparticles,1\ncounts,1e308\n";
+  EXPECT_NO_THROW(parse_collision_counts("like_collisions,twice\n" + huge, "my.csv"));
+  try {
+    parse_collision_counts("like_collisions,once\n" + huge, "my.csv");
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("my.csv: row 5, column 2: count 1e+308: the collision frequency"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 // Spreadsheet programs write UTF-8 CSV with a byte-order mark: it is no part of the first key. Binary garbage is
 // named by an escaped excerpt of what stood where a key should (a NUL in the message cut it short before).
 TEST(DemCollisionFile, AByteOrderMarkIsSkippedAndGarbageIsShownEscaped) {
-  const std::string text = "dt_s,0.5\nedges_m,1e-3,2e-3,3e-3\nparticles,100,50\ncounts,10,4\ncounts,4,2\n";
+  const std::string text =
+      "like_collisions,twice\ndt_s,0.5\nedges_m,1e-3,2e-3,3e-3\nparticles,100,50\ncounts,10,4\ncounts,4,2\n";
   const CollisionCounts plain = parse_collision_counts(text, "my.csv");
   const CollisionCounts marked = parse_collision_counts("\xEF\xBB\xBF" + text, "my.csv");
   EXPECT_EQ(marked.counts, plain.counts);

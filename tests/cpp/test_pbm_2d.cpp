@@ -259,8 +259,9 @@ TEST(Pbm2D, DryingRemovesExactlyWhatItReports) {
 // (docs/verification.md).
 TEST(Pbm2D, SolidMarginalIsTheOneDimensionalConstantKernelSolution) {
   const double beta = 1.0, F = 1000, dt = 0.5;  // one DEM class: C = count / (F^2 dt)
-  const std::string csv = write_temp(
-      "uniform.csv", "dt_s,0.5\nedges_m,0.01,100\nparticles,1000\ncounts," + fmt_num(beta * F * F * dt) + "\n");
+  const std::string csv =
+      write_temp("uniform.csv", "like_collisions,twice\ndt_s,0.5\nedges_m,0.01,100\nparticles,1000\ncounts," +
+                                    fmt_num(beta * F * F * dt) + "\n");
   const std::string grid = "particles: {settings: {grid: geometric, q: 2, classes: 24, v_min: 0.015625}}\n";
   const std::string head = "t_end: 2 s\noutput: {times: [0 s, 1 s, 2 s]}\nsolver: {rtol: 1e-10, atol: 1e-12}\n";
   Scene two =

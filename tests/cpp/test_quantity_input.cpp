@@ -15,7 +15,9 @@ TEST(Quantity, ConvertsEdgeUnitsToSi) {
   EXPECT_DOUBLE_EQ(to_si(200, "um", "m", "x"), 2e-4);
   EXPECT_DOUBLE_EQ(to_si(5, "g/kg", "kg/kg", "x"), 5e-3);
   EXPECT_THROW(to_si(1, "degC", "kg/s", "bed.T"), ConfigError);
-  EXPECT_THROW(to_si(1, "furlong", "m", "bed.d"), ConfigError);
+  EXPECT_DOUBLE_EQ(to_si(2, "inch", "m", "bed.d"), 0.0508);  // composed from the units library, not a list
+  EXPECT_THROW(to_si(1, "furlong", "kg", "bed.m"), ConfigError);
+  EXPECT_THROW(to_si(1, "blorp", "m", "bed.d"), ConfigError);
   double v;
   std::string u;
   ASSERT_TRUE(parse_quantity("700 m3/h", &v, &u));
@@ -24,6 +26,14 @@ TEST(Quantity, ConvertsEdgeUnitsToSi) {
   ASSERT_TRUE(parse_quantity("-1.5e-3", &v, &u));
   EXPECT_EQ(u, "");
   EXPECT_FALSE(parse_quantity("abc", &v, &u));
+}
+
+// Parameters, states and outputs declare coherent SI units: understood, without a scale or an origin.
+TEST(Quantity, DeclaredUnitsAreCoherentSi) {
+  for (const char* si : {"K", "kg/s", "J/(kg K)", "W/(m2 K)", "W/K", "Pa s", "1/s", "-", "kg/kg", "m2/s", "1/m3"})
+    EXPECT_TRUE(is_known_si_unit(si)) << si;
+  for (const char* not_si : {"kW", "degC", "%", "g", "h", "um", "blorp", ""})
+    EXPECT_FALSE(is_known_si_unit(not_si)) << not_si;
 }
 
 TEST(PiecewiseLinear, InterpolatesAndIntegratesExactly) {

@@ -14,8 +14,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <fstream>
 #include <map>
 #include <set>
+#include <sstream>
 #include <string>
 #include <thread>
 
@@ -41,9 +43,9 @@ units:
     params: {N0: 1, v0: 1 m3, growth_G: 0.01}
 )";
 
-// The 2-D population with every mechanism: DEM kernel (smooth efficiency), droplets split between liquid pivots,
-// cross-section weighting, drying.
-std::string pbm_2d_scene() {
+// The 2-D population with every mechanism: DEM kernel (smooth efficiency), droplets split between liquid pivots
+// (or a continuous flow of liquid), cross-section (or surface) weighting, drying.
+std::string pbm_2d_scene(const std::string& spray = "droplets", const std::string& weight = "cross_section") {
   return R"(
 scene: pbm_2d_all_mechanisms
 t_end: 0.5 s
@@ -58,13 +60,16 @@ units:
       liquid_max: 2.4e-8
       aggregation: dem_collision
       agg_efficiency: smooth
-      spray: droplets
-      spray_weight: cross_section
+      spray: )" +
+         spray + R"(
+      spray_weight: )" +
+         weight + R"(
+      psd_diameter: solid
       drying: surface
       agg_collisions_file: )" +
          testing::repo_path("flowsheets/data/sen2014_collisions_example.csv") + R"(
-    params: {N0: 1000, d0: 2.1 mm, lc0: 0.2, spray_rate: 4e-6 m3/s, d_drop: 1.5 mm, dry_flux: 1e-6 m/s, agg_psi0: 0.5}
-)";
+    params: {N0: 1000, d0: 2.1 mm, lc0: 0.2, spray_rate: 4e-6 m3/s, dry_flux: 1e-6 m/s, agg_psi0: 0.5)" +
+         std::string(spray == "droplets" ? ", d_drop: 1.5 mm}" : "}") + "\n";
 }
 
 // Paper 003's continuous units in one loop: a wet granulator with aggregation and a classified discharge held at its
@@ -124,6 +129,32 @@ units:
   mill: {type: mill, settings: {law: lognormal}, params: {d50: 450 um, sigma_g: 1.5}}
 )";
 
+// The dry loop with its bed mass held by a PI controller on the discharge rate instead of the ideal controller: a
+// parameter driven by a state (k_discharge by the controller's output) and by an output (the controller's measurement
+// by the granulator's mass, a sum over its classes).
+const char* kPiLoopHead = R"(
+scene: pi_sieve_mill_loop
+t_end: 2 h
+output: {n: 5}
+solver: {rtol: 1e-8, atol: 1e-10}
+particles: {settings: {classes: 12, d_min: 2.0e-4, d_max: 3.0e-3, water: false}, params: {rho_s: 1500, eps_intra: 0}}
+units:
+  seed: {type: solids_feed, params: {mdot: 5 kg/h, d50: 400 um, sigma: 1.3, T: 30 degC}}
+  gran:
+    type: granulator
+    settings: {discharge: unclassified, bed_mass: free}
+    params: {bed_mass: 20 kg, d50_0: 800 um, sigma_0: 1.4, m_spray: 60 kg/h, w_spray: 0.3}
+  sieve:
+    type: sieve
+    settings: {upper_curve: plitt, lower_curve: plitt}
+    params: {upper_d_cut: 1.5 mm, lower_d_cut: 1.0 mm}
+  mill: {type: mill, settings: {law: lognormal}, params: {d50: 450 um, sigma_g: 1.5}}
+  lic:
+    type: pi_controller
+    settings: {measure: gran.mass, drive: gran.k_discharge, action: direct}
+    params: {set_point: 22 kg, y_span: 20 kg, Kp: 2, Ti: 20 min, Tt: 20 min, u_min: 0, u_max: 0.02, u0: 1e-3}
+)";
+
 // The two-compartment bed of paper 003 (Eqs. (7.37)-(7.39)) run continuously: spray zone and drying zone exchanging
 // particles, the drying zone fed and discharged (free hold-up), the water of the spray drying in both zones.
 const char* kTwoZone = R"(
@@ -142,6 +173,36 @@ units:
   product: {type: solids_product}
 connections: [spray.out -> dry.in, dry.out -> spray.in, seed.out -> dry.feed, dry.discharge -> product.in]
 )";
+
+// The review's drying closures (paper 000): the headline with a drying curve and a drying surface other than the
+// defaults in its bed (the bed's moisture stays below the critical one: the curve acts on every class).
+Scene drying_closures_scene(const std::string& settings, const std::string& params) {
+  std::ifstream f(testing::repo_path("flowsheets/stoeckl_gf25_batch.yaml"));
+  std::stringstream ss;
+  ss << f.rdbuf();
+  std::string text = ss.str();
+  const std::string from = "    params: {bed_mass: 15 kg,";
+  const size_t at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  if (at != std::string::npos)
+    text.replace(at, from.size(), "    settings: {" + settings + "}\n    params: {" + params + "bed_mass: 15 kg,");
+  return scene_from_text(text);
+}
+
+// The two-zone bed with a drying curve in both compartments (paper 000, section 5.4.1, in paper 003's chambers).
+std::string two_zone_with_curve(const std::string& two_zone) {
+  std::string text = two_zone;
+  for (const std::string unit : {"spray: {type: spray_compartment, settings: {",
+                                 "dry: {type: drying_compartment, "
+                                 "settings: {"}) {
+    const size_t at = text.find(unit);
+    EXPECT_NE(at, std::string::npos) << unit;
+    text.insert(at + unit.size(), "drying_curve: gamma, ");
+  }
+  const size_t p = text.find("params: {bed_mass: 3.92");
+  text.insert(p + 9, "drying_gamma: 3, X_cr: 0.012, ");
+  return text;
+}
 
 // Scenes named by GRANUFLOW_CONFORMANCE_SCENES, if set.
 const char* kUserScenes = std::getenv("GRANUFLOW_CONFORMANCE_SCENES");
@@ -167,9 +228,21 @@ std::vector<std::pair<std::string, Scene>> scenes() {
   v.emplace_back("continuous dryer", scene_from_file("flowsheets/continuous_drying_bed.yaml"));
   v.emplace_back("pbm", scene_from_text(kPbmMechanisms));
   v.emplace_back("pbm 2d", scene_from_text(pbm_2d_scene()));
+  v.emplace_back("pbm 2d, surface-weighted droplets", scene_from_text(pbm_2d_scene("droplets", "surface")));
+  v.emplace_back("pbm 2d, continuous liquid", scene_from_text(pbm_2d_scene("continuous", "surface")));
   v.emplace_back("sieve-mill loop", scene_from_text(std::string(kSieveMillLoopHead) + kLoopTail));
   v.emplace_back("dry sieve-mill loop", scene_from_text(std::string(kDrySieveMillLoopHead) + kLoopTail));
   v.emplace_back("two-zone bed", scene_from_text(kTwoZone));
+  v.emplace_back("drying: gamma curve, coverage",
+                 drying_closures_scene("drying_curve: gamma, drying_surface: coverage", "drying_gamma: 3, "));
+  v.emplace_back("drying: cubic curve, droplet height",
+                 drying_closures_scene("drying_curve: cubic, drying_surface: droplet_height",
+                                       "drying_A: 0.5, drying_B: 0.3, drying_C: 0.2, drying_theta: 1.2, "));
+  v.emplace_back("drying: correction", drying_closures_scene("drying_surface: correction", "drying_f_surface: 0.6, "));
+  v.emplace_back("two-zone bed, gamma curve", scene_from_text(two_zone_with_curve(kTwoZone)));
+  v.emplace_back("headline, PI on the gas temperature",
+                 scene_from_file("flowsheets/stoeckl_gf25_batch_controlled.yaml"));
+  v.emplace_back("sieve-mill loop, PI on the bed mass", scene_from_text(std::string(kPiLoopHead) + kLoopTail));
   return v;
 }
 

@@ -19,7 +19,7 @@ assert DIAMETER_PLOT in SCENE_TEXT and PSD_PLOT in SCENE_TEXT
 
 # ------------------------------------------------------------------------------------------------ run: plots
 @pytest.mark.parametrize("unit, needles", [
-    ("furlong", ["plots[0].unit", "'furlong'", "allowed", "um"]),
+    ("blorp", ["plots[0].unit", "'blorp'", "allowed", "um"]),
     ("degC", ["plots[0].unit", "'degC'", "bed.d10", "allowed: m, mm, um"]),
 ])
 def test_plot_unit_unknown_or_of_the_wrong_dimension(tmp_path, unit, needles):
@@ -31,8 +31,8 @@ def test_plot_unit_unknown_or_of_the_wrong_dimension(tmp_path, unit, needles):
 def test_display_conversion_refuses_unknown_units():
     from granuflow import quantity
 
-    with pytest.raises(ValueError, match="furlong"):
-        quantity.convert([1.0], "furlong", "m")
+    with pytest.raises(ValueError, match="blorp"):
+        quantity.convert([1.0], "blorp", "m")
     with pytest.raises(ValueError, match="degC"):
         quantity.convert([1.0], "degC", "m")
     assert quantity.convert([300.0], "degC", "K")[0] == pytest.approx(26.85)

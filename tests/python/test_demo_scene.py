@@ -83,7 +83,7 @@ def test_errors_are_typed_and_name_the_thing():
         fs.set("tank1.mass", -3)
     with pytest.raises(ValueError, match="parameters of tank1"):
         fs.set("tank1.volume", 1.0)
-    with pytest.raises(gf.ConfigError, match="unknown unit 'furlong'"):
+    with pytest.raises(gf.ConfigError, match="unit 'furlong' is m, but the value must be in kg"):
         fs.set("tank1.mass", "3 furlong")
     fs._scene  # noqa: B018 - the flowsheet stays usable after errors
     assert fs.simulate(t_end=10).t[-1] == 10

@@ -2,6 +2,7 @@
 import glob
 import json
 import os
+import re
 import sys
 import time
 
@@ -54,5 +55,11 @@ def test_notebook_runs_headless(path, kernel_env):
             text = o.get("text", "") if o.output_type == "stream" else ""
             if text.startswith("granuflow ") and " from " in text:
                 assert PKG_PATH in text, text
+    # every notebook that builds a flowsheet shows it (Flowsheet.diagram(): an SVG Graphviz drew); the Monte Carlo
+    # has no flowsheet
+    svgs = [o["data"]["image/svg+xml"] for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", [])
+            if "image/svg+xml" in o.get("data", {})]
+    if any(re.search(r"\bgf\.load(_text)?\(", c.source) for c in nb.cells if c.cell_type == "code"):
+        assert any("<svg" in s and "class=\"node\"" in s for s in svgs), "the notebook shows no flowsheet diagram"
     assert open(path, "rb").read() == before  # executed in memory; the file stays as committed
     assert wall < 90, f"{os.path.basename(path)} took {wall:.0f} s; keep notebooks small"

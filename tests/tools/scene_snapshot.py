@@ -44,7 +44,8 @@ inputs:
 
 def is_scene(path):
     with open(path, encoding="utf-8") as f:
-        return not any(line.startswith("variables:") for line in f)  # sweep files name a scene and vary it
+        # sweep files name a scene and vary it; a Monte Carlo scene (engine: monte_carlo) is no flowsheet
+        return not any(line.startswith(("variables:", "engine: monte_carlo")) for line in f)
 
 
 def variants():

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "granuflow/flowsheet.hpp"
+#include "granuflow/signals.hpp"
 
 namespace granuflow {
 
@@ -133,6 +134,12 @@ class DaeSystem {
   void load_directions(const double* y, const double* yp, const std::vector<int>& params, size_t d0, size_t d1,
                        const double* const* yS, const double* const* ypS, int n_loaded);
   void params_as_jets();
+  // Drives (signals.hpp) into `params`: those whose source is a state (readable from the integrated states alone), then
+  // those whose source is an output (after the explicit states are evaluated); for unit `sink` only, or all (-1).
+  template <class T>
+  void drive_states(const T* y, std::vector<std::vector<T>>& params, int sink = -1) const;
+  template <class T>
+  void drive_outputs(double t, const T* y, const T* yp, std::vector<std::vector<T>>& params, int sink = -1);
 
   const Flowsheet& fs_;
   int n_;      // unknowns
@@ -140,10 +147,14 @@ class DaeSystem {
   int n_quad_ = 0;
   bool inline_ = false;
   double fill_ = 0.0;
-  std::vector<std::unique_ptr<Workspace>> ws_;       // per unit, this run's
-  std::vector<int> explicit_order_;                  // explicit units, each after the explicit units it reads
-  std::vector<int> quad_explicit_;                   // the explicit units the quadrature rates read, in that order
-  std::vector<std::pair<int, int>> inputs_;          // (unit, parameter) of every parameter driven by an input
+  std::vector<std::unique_ptr<Workspace>> ws_;  // per unit, this run's
+  std::vector<int> explicit_order_;             // explicit units, each after the explicit units it reads
+  std::vector<int> quad_explicit_;              // the explicit units the quadrature rates read, in that order
+  std::vector<std::pair<int, int>> inputs_;     // (unit, parameter) of every parameter driven by an input
+  std::vector<Drive> drives_;                   // parameters driven by signals (signals.hpp)
+  bool output_drives_ = false;                  // some parameter is driven by an output
+  std::vector<double> drive_out_, drive_quad_;  // a measured unit's outputs, zero quadratures
+  std::vector<Jet> drive_out_j_, drive_quad_j_;
   std::vector<std::pair<int, int>> explicit_reads_;  // (u, v): explicit unit u reads explicit unit v, in order
   // u w^T on the rows of `unit` and the columns `cols`: outer_ for explicit units, rs_outer_ for integrated ones
   struct OuterTerm {

@@ -1,16 +1,16 @@
 // SI units used inside granuflow and the conversions allowed at the edges (scene files, plots).
-// A parameter declares its SI unit from the checked set below; a scene value may carry any unit of the
-// same dimension ("60 degC", "700 m3/h", "90 g/min", "200 um") and is converted once, on loading.
+// A parameter declares a coherent SI unit; a scene value may carry any unit of the same dimension ("60 degC",
+// "700 m3/h", "90 g/min", "200 um", "5 kW/K"), parsed by UDUNITS-2, and is converted once, on loading.
 #pragma once
 #include <string>
 #include <vector>
 
 namespace granuflow {
 
-// True if `si_unit` is one of the SI units granuflow parameters and states may declare.
+// True if `si_unit` is a coherent SI unit (understood, no scale, no origin): what parameters and states declare.
 bool is_known_si_unit(const std::string& si_unit);
 
-// The checked set, for error messages and docs.
+// The common coherent SI units, for docs and for finding a unit in a setting's description.
 const std::vector<std::string>& known_si_units();
 
 // Converts `value` given in `from_unit` to the SI unit `si_unit`; throws ConfigError naming `where` when the

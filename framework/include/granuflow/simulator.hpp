@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "granuflow/dae_system.hpp"
+#include "granuflow/events.hpp"
 #include "granuflow/flowsheet.hpp"
 
 namespace granuflow {
@@ -48,6 +49,13 @@ struct SimOptions {
   LinearSolverChoice linear_solver = LinearSolverChoice::kAuto;
   Method method = Method::kAuto;
   int dense_limit = 400;
+  std::vector<EventSpec> events;  // state events (events.hpp); a run with events integrates with IDAS
+  // Checkpoints: times in (0, t_end) at which the run stops and restarts its integrator (in every run that names
+  // them, so that a restart from the file written there is bit-identical); with checkpoint_dir, the state is written
+  // there as checkpoint_<t>s.gfckpt. restart_file: resume from such a file instead of starting at t = 0.
+  std::vector<double> checkpoints;
+  std::string checkpoint_dir;
+  std::string restart_file;
   // Throws ConfigError naming the value and the rule, and the field as SimOptions.<field> or, with scene_keys, as the
   // scene file's key.
   void validate(bool scene_keys = false) const;
@@ -89,6 +97,8 @@ struct SimResult {
   std::vector<double> sens;         // row-major [time][param][state]
   std::vector<double> output_sens;  // row-major [time][param][output], exact (outputs differentiated with Jets)
   SolverStats stats;
+  std::vector<EventRecord> events;            // the events that fired, in time order
+  std::vector<std::string> checkpoint_files;  // written by this run
   double wall_time_s = 0.0;
   int n_states() const { return static_cast<int>(state_names.size()); }
   double state(size_t time_index, int state) const { return y[time_index * state_names.size() + state]; }

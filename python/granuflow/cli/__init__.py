@@ -1,5 +1,5 @@
-"""Command line: ``granuflow run | steady | sweep | contour | calibrate | describe | units | kernels | materials |
-docs | bench``.
+"""Command line: ``granuflow run | steady | draw | report | sweep | contour | calibrate | describe | units | kernels |
+materials | docs | bench``.
 
 Exit codes: 0 success, 2 bad input (scene, option, parameter), 3 solver failure. A failure prints one line
 on stderr naming what went wrong. Each command's module is imported only when it runs, so that ``granuflow run``
@@ -19,6 +19,11 @@ _QUICK = {"core": "tank chains of 100 and 1000 states (not 10000)",
           "scene": "10 classes only, SciPy once", "sweep": "a 9 x 9 map, one repeat, no Dask",
           "pbm2d": "20x20 and 40x40 bins, dense LU and SciPy at 20x20, the other sections at 20x20",
           "loop": "50 classes only, one repeat"}
+
+
+# The commands whose output folder records what made it (provenance.json: the command line and the input files'
+# text), which `granuflow report` shows.
+_PROVENANCE = ("run", "steady", "sweep", "contour", "calibrate")
 
 
 def _cmd(module: str, name: str):
@@ -76,6 +81,11 @@ def main(argv=None) -> int:
                         "grid as written")
     r.add_argument("--no-grid-check", action="store_true",
                    help="skip the check of the size grid (one solve on a grid twice as fine)")
+    r.add_argument("--checkpoint-at", metavar="TIMES",
+                   help="write the run's full state at these times to checkpoint_<t>s.gfckpt in --out (comma-"
+                        "separated, e.g. '10 min,30 min'; replaces the scene's checkpoints:)")
+    r.add_argument("--restart", metavar="FILE",
+                   help="resume from a checkpoint file of the same scene (bit-identical to the run that wrote it)")
     r.add_argument("--quiet", action="store_true", help="no output but errors")
     r.set_defaults(func=_cmd("run", "cmd_run"))
     st = sub.add_parser("steady", help="solve a scene's steady state directly; write steady.json and steady_psd.csv")
@@ -86,6 +96,14 @@ def main(argv=None) -> int:
     st.add_argument("--no-stability", action="store_true", help="skip the eigenvalues of the linearized dynamics")
     st.add_argument("--quiet", action="store_true", help="no output but errors")
     st.set_defaults(func=_cmd("steady", "cmd_steady"))
+    dr = sub.add_parser("draw", help="draw a scene's flowsheet with Graphviz (units, streams, recycles)")
+    dr.add_argument("scene")
+    dr.add_argument("--out", required=True, help="image file: .svg, .png, .pdf or .dot")
+    dr.set_defaults(func=_cmd("info", "cmd_draw"))
+    rp = sub.add_parser("report", help="write OUT_DIR/report.html: one offline page with the diagram, results, "
+                        "balances, warnings, plots, scene and command of a finished output folder")
+    rp.add_argument("out_dir")
+    rp.set_defaults(func=_cmd("info", "cmd_report"))
     w = sub.add_parser("sweep", help="run a sweep file; write sweep.csv and sweep.json")
     w.add_argument("sweepfile")
     w.add_argument("--out", required=True, help="output folder (created)")
@@ -164,7 +182,12 @@ def main(argv=None) -> int:
 
     try:
         _load_plugins(args.plugin)
-        return args.func(args)
+        code = args.func(args)
+        if code == 0 and args.cmd in _PROVENANCE:
+            from .provenance import write_provenance
+
+            write_provenance(args, argv)
+        return code
     except (_core.ConfigError, FileNotFoundError) as e:
         print(f"granuflow: bad input: {one_line(e)}", file=sys.stderr)
         return EXIT_BAD_INPUT

@@ -30,6 +30,14 @@ def parse_seconds(text: str, option: str = "--t-end") -> float:
     return t
 
 
+def parse_times(text: str, option: str) -> list[float]:
+    """A comma-separated list of times (s, or with a time unit) from the command line, each > 0."""
+    times = [parse_time(item.strip(), option) for item in text.split(",") if item.strip()]
+    if not times:
+        raise ConfigError(f"{option} = '{text}': expected times such as '10 min,30 min'")
+    return times
+
+
 def parse_sets(items) -> dict:
     """``--set unit.name=value`` options as {name: value text} (a parameter, or a setting, which rebuilds the
     flowsheet: granuflow.structure.apply); a malformed one is bad input. Quotes around the value are the shell's

@@ -73,8 +73,9 @@ def cmd_describe(args) -> int:
     """Every parameter with every column, never truncated: a text table whose width follows the content (not the
     terminal), or CSV / JSON for a spreadsheet or a script."""
     from ..flowsheet import load
+    from ..montecarlo.scene import Scene, is_scene
 
-    rows = describe_rows(load(args.scene))
+    rows = Scene(args.scene).describe_rows() if is_scene(args.scene) else describe_rows(load(args.scene))
     out = sys.stdout
     if args.format == "json":
         json.dump(rows, out, indent=1)
@@ -91,6 +92,31 @@ def cmd_describe(args) -> int:
         print(fmt.format(*DESCRIBE_COLUMNS).rstrip())
         for x in cells:
             print(fmt.format(*x).rstrip())
+    return 0
+
+
+def cmd_draw(args) -> int:
+    """The scene's flowsheet drawn by Graphviz into --out (its extension chooses the format)."""
+    from ..diagram import Diagram
+    from ..flowsheet import load
+
+    diagram = Diagram(load(args.scene))
+    try:
+        path = diagram.save(args.out)
+    except ValueError as e:
+        raise ConfigError(f"--out {e}") from None
+    except RuntimeError as e:
+        print(f"granuflow: draw: {e}", file=sys.stderr)
+        return 1
+    print(f"flowsheet diagram: {path}")
+    return 0
+
+
+def cmd_report(args) -> int:
+    """OUT_DIR/report.html for a finished output folder."""
+    from ..report import write_report
+
+    print(f"report: {write_report(args.out_dir)}")
     return 0
 
 

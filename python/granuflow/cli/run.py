@@ -12,7 +12,7 @@ from ..flowsheet import load
 from ..structure import apply as apply_sets
 from ..plots.spec import plot_specs
 from ..result import BalanceError
-from .common import check_out_dir, parse_seconds, parse_sets
+from .common import check_out_dir, parse_seconds, parse_sets, parse_times
 
 
 def _draw(res, specs, out: str) -> list[str]:
@@ -53,15 +53,29 @@ def _accuracy_option(text):
 
 
 def cmd_run(args) -> int:
+    from ..montecarlo.scene import is_scene as is_monte_carlo
+
+    if is_monte_carlo(args.scene):  # engine: monte_carlo (docs/monte_carlo.md)
+        from .run_montecarlo import cmd_run_monte_carlo
+
+        return cmd_run_monte_carlo(args)
     fs = apply_sets(load(args.scene), parse_sets(args.set))  # settings rebuild the flowsheet
     specs = plot_specs(fs, drawing=not args.no_plots)  # against the scene file's own t_end
     if args.t_end is not None:
         fs.set_t_end(parse_seconds(args.t_end))
     check_out_dir(args.out)
+    ckpt = {}
+    if args.checkpoint_at is not None:
+        ckpt["checkpoints"] = parse_times(args.checkpoint_at, "--checkpoint-at")
+    if args.checkpoint_at is not None or fs.scene_checkpoints:
+        os.makedirs(args.out, exist_ok=True)
+        ckpt["checkpoint_dir"] = args.out
+    if args.restart is not None:
+        ckpt["restart"] = args.restart
     failure = None
     try:
         res = fs.simulate(warn=False, error_estimate=args.error_estimate, accuracy=_accuracy_option(args.accuracy),
-                          grid_check=not args.no_grid_check and fs.scene_accuracy is not False)
+                          grid_check=not args.no_grid_check and fs.scene_accuracy is not False, **ckpt)
     except BalanceError as e:  # a unit lost mass: write what happened, then exit 3 naming the balance
         res, failure = e.result, e
     for w in res.warnings:  # also in summary.json; exit 0 (but for a failed balance): the run is what was asked for

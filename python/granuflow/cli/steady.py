@@ -53,6 +53,7 @@ def cmd_steady(args) -> int:
         s = rep["solver"]
         stab = rep["stability"]
         how = ("" if stab is None else "; stable" if stab["stable"] else
+               "; neutral (a zero eigenvalue: nothing flows)" if stab["stable"] is None else
                f"; UNSTABLE: the dynamics oscillate around it (growth rate {stab['max_real_eigenvalue_1_s']:.3g} 1/s"
                + (f", period {stab['oscillation_period_s']:.4g} s)" if stab["oscillation_period_s"] else ")"))
         print(f"{fs.name}: steady state by {s['method']} in {s['iterations']} iterations"

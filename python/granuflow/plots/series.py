@@ -22,6 +22,21 @@ def _margins(fig) -> None:
     fig.subplots_adjust(left=0.12, right=0.97, bottom=0.12, top=0.91)
 
 
+def _phases(ax, result) -> None:
+    """A recipe's events as dashed vertical lines, every second phase shaded and each named at the bottom."""
+    events = getattr(result, "events", None)
+    if not events:
+        return
+    for k, ph in enumerate(result.phases):
+        a, b = ph["t_start_s"] / 60.0, ph["t_end_s"] / 60.0
+        if k % 2 == 1:
+            ax.axvspan(a, b, color="0.85", alpha=0.5, lw=0, zorder=0)
+        if k > 0:
+            ax.axvline(a, color="0.35", ls="--", lw=0.8)
+        ax.text(0.5 * (a + b), 0.01, ph["name"], transform=ax.get_xaxis_transform(), ha="center", va="bottom",
+                fontsize=7, color="0.3")
+
+
 def supported_formats() -> list[str]:
     """File extensions matplotlib can write (png, pdf, svg, ...)."""
     from matplotlib.backend_bases import FigureCanvasBase
@@ -46,6 +61,7 @@ def plot_series(result, spec: dict, path: str) -> str:
         if err is not None:  # the estimated numerical error as a band around the curve
             lo, hi = (convert(result[name] + sign * np.abs(err), unit, si) for sign in (-1, 1))
             ax.fill_between(result.t / 60.0, lo, hi, color=line.get_color(), alpha=0.25, lw=0)
+    _phases(ax, result)
     unit = units.pop() if len(units) == 1 else ""
     ylabel = spec.get("ylabel", "")
     ax.set_xlabel("time / min")

@@ -1,0 +1,70 @@
+"""Units of measure parsed by UDUNITS-2 (issue 33 §3): prefixes, products, quotients and powers compose, offsets
+(degC) and dimensionless spellings work, a unit that is not understood or of the wrong dimension is refused with
+one line naming it, and the parser (not thread-safe itself) gives the same answers from many threads."""
+from concurrent.futures import ThreadPoolExecutor
+
+import pytest
+
+import granuflow as gf
+from granuflow import _core
+from granuflow.quantity import to_si
+
+
+@pytest.mark.parametrize("text, si, expected", [
+    ("60 degC", "K", 333.15),
+    ("700 m3/h", "m3/s", 700 / 3600),
+    ("90 g/min", "kg/s", 90e-3 / 60),
+    ("200 um", "m", 200e-6),
+    ("3 mPa s", "Pa s", 3e-3),
+    ("2 kJ/(kg K)", "J/(kg K)", 2000.0),
+    ("1.5 J/kg K", "J/(kg K)", 1.5),        # the engineering reading, not J K / kg
+    ("4 kg.m-3", "kg/m3", 4.0),             # products and powers in UDUNITS' own notation
+    ("2 m^3/s", "m3/s", 2.0),
+    ("36 kg/(h m2)", "kg/(m2 s)", 0.01),
+    ("5 W/K", "W/K", 5.0),                  # a heat-loss coefficient: no list had to learn it
+    ("12 kW/K", "W/K", 12e3),
+    ("250 mbar", "Pa", 25e3),
+    ("30 mL/min", "m3/s", 30e-6 / 60),
+    ("5 %", "-", 0.05),
+    ("3 wt%", "kg/kg", 0.03),
+    ("8 g/kg", "kg/kg", 8e-3),
+    ("2 ms", "s", 2e-3),
+])
+def test_composed_units_convert_to_si(text, si, expected):
+    assert to_si(text, si, "x") == pytest.approx(expected, rel=1e-14)
+
+
+def test_temperature_differences_drop_the_offset():
+    from granuflow.quantity import difference_to_si
+    assert difference_to_si("2 degC", "K", "sigma") == pytest.approx(2.0, rel=1e-14)
+
+
+@pytest.mark.parametrize("unit, message", [
+    ("blorp", "unknown unit 'blorp' (allowed: any unit of kg, e.g. kg, g)"),
+    ("kg/blorp", "unknown unit 'kg/blorp'"),
+    ("s since 2000-01-01", "unknown unit 's since 2000-01-01'"),   # a time origin is not a unit of a quantity
+    ("lg(re 1 mW)", "unknown unit 'lg(re 1 mW)'"),                 # nor is a logarithmic unit
+    ("\nkg", "unknown unit '\nkg'"),
+    ("m", "unit 'm' is m, but the value must be in kg"),
+    ("W/K", "unit 'W/K' is W/K, but the value must be in kg"),
+])
+def test_refusals_name_the_unit(unit, message):
+    with pytest.raises(gf.ConfigError) as e:
+        _core.to_si(1.0, unit, "kg", "units.tank.params.mass")
+    assert str(e.value).startswith("units.tank.params.mass: ")
+    assert message in str(e.value)
+
+
+def test_a_settings_si_unit_is_read_from_its_description():
+    from granuflow.structure import setting_si_unit
+    assert setting_si_unit({"type": "number", "description": "largest pivot diameter, m (Table 5)"}) == "m"
+    assert setting_si_unit({"type": "number", "description": "a count, dimensionless"}) == ""
+
+
+def test_many_threads_get_the_same_conversions():
+    texts = [("60 degC", "K"), ("700 m3/h", "m3/s"), ("3 mPa s", "Pa s"), ("5 W/K", "W/K"), ("2 kJ/(kg K)",
+             "J/(kg K)")] * 40
+    serial = [to_si(t, si, "x") for t, si in texts]
+    with ThreadPoolExecutor(8) as pool:
+        parallel = list(pool.map(lambda a: to_si(a[0], a[1], "x"), texts))
+    assert parallel == serial
