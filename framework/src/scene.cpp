@@ -205,9 +205,9 @@ class Loader {
     check_unique(node, at);
     for (const auto& p : node) {
       const std::string key = key_of(p.first, at);
-      const std::string q = unit + "." + key;
+      std::string q = unit + "." + key;
       try {
-        fs.param_id(q);
+        q = fs.qualified_name(fs.param_id(q));  // the current name of a renamed parameter's old spelling
       } catch (const ConfigError& e) {
         fail(at + "." + key, e.what());
       }
@@ -376,9 +376,10 @@ class Loader {
     if (!in.IsMap()) fail("inputs", "expected a mapping of unit.param -> {times, values, interp}");
     check_unique(in, "inputs");
     for (const auto& kv : in) {
-      const std::string q = key_of(kv.first, "inputs"), at = "inputs." + q;
+      std::string q = key_of(kv.first, "inputs");
+      const std::string at = "inputs." + q;
       try {
-        fs.param_id(q);
+        q = fs.qualified_name(fs.param_id(q));
       } catch (const ConfigError& e) {
         fail(at, e.what());
       }

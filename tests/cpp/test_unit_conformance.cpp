@@ -325,7 +325,7 @@ TEST(UnitConformance, OneFlowsheetFromFourThreadsGivesTheSerialAnswer) {
   for (auto& [name, s] : scenes()) {
     SCOPED_TRACE(name);
     SimOptions o = s.options;
-    if (name == "headline") o.sensitivities = {"bed.ln_beta0", "particles.rho_s"};
+    if (name == "headline") o.sensitivities = {"bed.agg_ln_beta0", "particles.rho_s"};
     const SimResult ref = simulate(*s.flowsheet, o);
     std::vector<SimResult> got(4);
     std::vector<std::thread> threads;
