@@ -138,7 +138,8 @@ TEST(StageProblem, JacobianEqualsFiniteDifferencesOfTheResiduals) {
 Stage two_parameter_stage() {
   Stage st;
   st.name = "wall_and_agglomeration";
-  st.free = {{"wall.k_wall", Transform::kLog, 1.0, 200.0, {}}, {"bed.agg_ln_beta0", Transform::kNone, -25.0, -10.0, {}}};
+  st.free = {{"wall.k_wall", Transform::kLog, 1.0, 200.0, {}},
+             {"bed.agg_ln_beta0", Transform::kNone, -25.0, -10.0, {}}};
   return st;
 }
 

@@ -336,9 +336,9 @@ TEST(SieveMillLoop, InlinedJacobianIsTheSchurComplementOfTheFullOne) {
 
 TEST(Gf25Scene, SensitivitiesEqualFiniteDifferences) {
   // the bed's parameter tables (particle mass, breakage matrix) and its initial PSD carry parameter derivatives too
-  const std::vector<std::string> params{"bed.agg_ln_beta0",    "bed.sel_k_break",     "wall.k_wall", "bed.X_cr",
-                                        "droplets.k_evap", "particles.rho_s", "bed.frag_q_frag",  "bed.frag_d_frag_min",
-                                        "bed.d50_0",       "bed.sigma_0"};
+  const std::vector<std::string> params{"bed.agg_ln_beta0", "bed.sel_k_break", "wall.k_wall",     "bed.X_cr",
+                                        "droplets.k_evap",  "particles.rho_s", "bed.frag_q_frag", "bed.frag_d_frag_min",
+                                        "bed.d50_0",        "bed.sigma_0"};
   Scene s = headline();
   SimOptions o = s.options;
   o.t_out = {0, 1200};

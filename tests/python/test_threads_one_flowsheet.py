@@ -46,7 +46,8 @@ def test_a_run_on_a_kept_system_equals_a_run_on_a_new_flowsheet():
     for run, reference in [
         (lambda: fs.simulate(t_end=900.0, warn=False), lambda: fresh().simulate(t_end=900.0, warn=False)),
         # a kernel parameter (the engine's tables are rebuilt) and an operating one
-        (lambda: (fs.update({"bed.agg_ln_beta0": -16.5, "nozzle.mdot": 1.5e-3}), fs.simulate(t_end=900.0, warn=False))[1],
+        (lambda: (fs.update({"bed.agg_ln_beta0": -16.5, "nozzle.mdot": 1.5e-3}),
+                  fs.simulate(t_end=900.0, warn=False))[1],
          lambda: fresh(**{"bed.agg_ln_beta0": -16.5, "nozzle.mdot": 1.5e-3}).simulate(t_end=900.0, warn=False)),
         # with sensitivities, then without again
         (lambda: fs.simulate(t_end=900.0, warn=False, sensitivities=["bed.agg_ln_beta0"]),
