@@ -12,7 +12,7 @@ Environment:
                               beside them. The wheel then has that folder's options (GRANUFLOW_NATIVE ...).
   CMAKE_CXX_COMPILER_LAUNCHER passed to CMake (e.g. ccache)
   CMAKE_BUILD_PARALLEL_LEVEL  build jobs (default: the number of CPUs)
-A pip build is portable (GRANUFLOW_NATIVE=OFF, the project's default): the wheel runs on any x86-64 machine.
+A pip build is portable (GRANUFLOW_NATIVE=OFF): the wheel runs on any x86-64 machine.
 """
 import os
 import pathlib
