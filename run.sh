@@ -13,6 +13,8 @@ PACKAGES=(cmake ninja-build g++ pkg-config
   python3-dev python3-numpy python3-scipy python3-matplotlib python3-pandas python3-yaml python3-pytest
   python3-nbclient python3-nbformat python3-ipykernel jupyter-nbconvert python3-distributed python3-tqdm
   python3-nlopt clang-format-14 flake8)
+# pip install of the checkout into a virtual environment (tests/python/test_install.py, docs/install_and_plugins.md).
+PACKAGES+=(python3-pip python3-venv python3-setuptools python3-wheel)
 # Checking builds (./run.sh sanitize, fuzz): Debian's clang and its libFuzzer/sanitizer runtimes.
 PACKAGES+=(clang-14 libclang-rt-14-dev)
 MAIN_SCENE=flowsheets/stoeckl_gf25_batch.yaml

@@ -11,6 +11,7 @@
 #include "granuflow/errors.hpp"
 #include "granuflow/flowsheet.hpp"
 #include "granuflow/properties.hpp"
+#include "granuflow/renamed.hpp"
 #include "kernels/discretization/psd.hpp"
 #include "kernels/discretization/psd_setting.hpp"
 #include "kernels/drying/drying_closures.hpp"
@@ -101,18 +102,21 @@ class FluidBed : public UnitBase<FluidBed> {
 
  private:
   void declare_population(UnitSpec& s, Settings& st) {
-    // Aggregation, breakage (and growth) by the population engine, each kernel with its own parameter table under
-    // its own names (ln_beta0, k_break ...). Paper 001: glass-transition kernel on the fixed pivot, Vogel-Peukert
-    // breakage with tanh power-law fragments, aggregates beyond the grid kept in the top class (fold).
+    // Aggregation, breakage (and growth) by the population engine, each kernel's parameters under the names they
+    // carry in every unit (agg_ln_beta0, sel_k_break ...; the bare names of earlier versions are deprecated aliases).
+    // Paper 001: glass-transition kernel on the fixed pivot, Vogel-Peukert breakage with tanh power-law fragments,
+    // aggregates beyond the grid kept in the top class (fold).
     kernels::PopulationOptions o;
     o.aggregation = "glass_transition", o.aggregation_scheme = "fixed_pivot";
     o.breakage = "vogel_peukert", o.fragments = "tanh_power_law", o.breakage_scheme = "fixed_pivot";
     o.outside = kernels::Outside::kFold;
-    o.agg_prefix = o.sel_prefix = o.frag_prefix = o.growth_prefix = "";
     o.agg_settings = o.frag_settings = o.growth_settings = "";
     o.sel_settings = "breakage_";
     o.properties = {"water"};
+    const size_t first = s.params().size();
     pop_.declare(s, st, grid_, o);
+    for (size_t k = first; k < s.params().size(); ++k)
+      add_renamed_param(type(), s.params()[k].name.substr(s.params()[k].name.find('_') + 1), s.params()[k].name);
     for (Field f : {Field::kMoisture, Field::kLiquidFraction})
       if (pop_.needs().field(f))
         throw ConfigError(st.where() +

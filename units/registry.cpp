@@ -64,8 +64,10 @@ void register_all(Registry<Unit>& r) {
 void register_test_units(Registry<Unit>& r);  // tests/cpp/leaky_pipe.cpp, built with the tests
 #endif
 
-const Registry<Unit>& builtin() {
-  static const Registry<Unit> r = [] {
+const Registry<Unit>& builtin() { return registry(); }
+
+Registry<Unit>& registry() {
+  static Registry<Unit> r = [] {
     Registry<Unit> reg("unit type");
     register_all(reg);
 #ifdef GRANUFLOW_TEST_UNITS

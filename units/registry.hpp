@@ -5,6 +5,8 @@
 
 namespace granuflow::units {
 void register_all(Registry<Unit>& r);
-// The registry with every built-in unit, created on first use.
+// The registry with every built-in unit, created on first use, and the unit types of plugins loaded since
+// (granuflow/plugin.hpp). registry() is what a plugin's registration function adds to.
 const Registry<Unit>& builtin();
+Registry<Unit>& registry();
 }  // namespace granuflow::units

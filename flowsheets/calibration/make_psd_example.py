@@ -7,7 +7,7 @@
 * gf25_measured_start.yaml: the headline scene ../stoeckl_gf25_batch.yaml starting from that sieve analysis
   (bed settings initial_psd: table, initial_psd_file) instead of the log-normal;
 * gf25_example_q3.yaml and ../data/gf25_example_q3.csv: "measured" Q3 at the sieve sizes after 30 and 60 min: the
-  model's Q3 (the scene above, bed.ln_beta0 = TRUE_LN_BETA0) plus Gaussian noise of standard deviation 0.01 (absolute,
+  model's Q3 (the scene above, bed.agg_ln_beta0 = TRUE_LN_BETA0) plus Gaussian noise of standard deviation 0.01 (absolute,
   seed 27), clipped to [0, 1] and rounded to 4 decimals.
 
     PYTHONPATH=build/python python3 flowsheets/calibration/make_psd_example.py
@@ -74,12 +74,12 @@ def q3_observables() -> list[str]:
 def experiments(fs):
     sigma = {o: {"abs": SIGMA_Q3} for o in q3_observables()}
     es = cal.synthetic_experiments(fs, [{"name": "B1", "kind": "centre point", "use": "calibration", "set": {}}],
-                                   params={"bed.ln_beta0": TRUE_LN_BETA0}, times=np.array(TIMES_MIN) * 60.0,
+                                   params={"bed.agg_ln_beta0": TRUE_LN_BETA0}, times=np.array(TIMES_MIN) * 60.0,
                                    observables=q3_observables(), sigma=sigma, seed=SEED, name="gf25_example_q3")
     for o in es.experiments[0].observations:
         o.value = np.round(np.clip(o.value, 0.0, 1.0), 4)
     es.description = (f"MADE UP, not measurements: Q3 of the bed at the sieve sizes after {TIMES_MIN[0]} and "
-                      f"{TIMES_MIN[1]} min, the model's (gf25_measured_start.yaml, bed.ln_beta0 = {TRUE_LN_BETA0}) "
+                      f"{TIMES_MIN[1]} min, the model's (gf25_measured_start.yaml, bed.agg_ln_beta0 = {TRUE_LN_BETA0}) "
                       f"plus Gaussian noise of {SIGMA_Q3} (seed {SEED}), clipped to [0, 1] (make_psd_example.py)")
     es.scene = SCENE
     return es
@@ -97,6 +97,6 @@ if __name__ == "__main__":
     with open(csv_path, "w") as f:
         f.write("# MADE UP, not measurements: Q3 (mass fraction below each size) of the bed of "
                 "gf25_measured_start.yaml\n"
-                f"# after {TIMES_MIN[0]} and {TIMES_MIN[1]} min: the model's with bed.ln_beta0 = {TRUE_LN_BETA0} plus "
+                f"# after {TIMES_MIN[0]} and {TIMES_MIN[1]} min: the model's with bed.agg_ln_beta0 = {TRUE_LN_BETA0} plus "
                 f"Gaussian noise {SIGMA_Q3} (seed {SEED}),\n# written by flowsheets/calibration/make_psd_example.py; "
                 "docs/measured_psd.md\n" + text)

@@ -9,6 +9,7 @@
 
 #include "granuflow/dae_system.hpp"
 #include "granuflow/errors.hpp"
+#include "granuflow/renamed.hpp"
 #include "granuflow/signals.hpp"
 
 namespace granuflow {
@@ -255,8 +256,15 @@ int Flowsheet::param_id(const std::string& qualified) const {
       if (u.name + "." + p.name == qualified) return id;
       ++id;
     }
-  // Name the unit's parameters when the unit exists, else all units.
   const auto dot = qualified.find('.');
+  // An old spelling of a renamed parameter stands for the new name (with a warning once per process).
+  for (const auto& u : units_)
+    if (dot != std::string::npos && u.name == qualified.substr(0, dot)) {
+      const std::string renamed = renamed_param(u.unit->type(), qualified.substr(dot + 1));
+      if (!renamed.empty() && u.spec.param_index(renamed) >= 0)  // this instance has it (its kernels declare it)
+        return param_id(u.name + "." + use_renamed_param(u.unit->type(), u.name, qualified.substr(dot + 1)));
+    }
+  // Name the unit's parameters when the unit exists, else all units.
   std::string allowed;
   for (const auto& u : units_)
     if (dot != std::string::npos && u.name == qualified.substr(0, dot))

@@ -92,7 +92,7 @@ bool particle_system_property(const std::string& property) { return particle_pro
 
 std::string material_property_of(const std::string& param, bool particle_system) {
   static const std::set<std::string> all = catalogue_properties();
-  // A kernel's parameters carry its prefix in units that hold several kernels; the fluid bed keeps the bare names.
+  // A kernel's parameters carry its mechanism's prefix (agg_) in every unit.
   const std::string bare = param.rfind("agg_", 0) == 0 ? param.substr(4) : param;
   if (!all.count(bare)) return "";
   if (particle_system_property(bare) != particle_system) return "";

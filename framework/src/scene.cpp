@@ -15,6 +15,7 @@
 #include "events.hpp"
 #include "granuflow/errors.hpp"
 #include "granuflow/materials.hpp"
+#include "granuflow/plugin.hpp"
 #include "granuflow/quantity.hpp"
 #include "yaml_text.hpp"
 
@@ -44,7 +45,7 @@ class Loader {
     if (!root.IsMap()) fail("", "the file must be a mapping of scene keys, got " + kind_name(root));
     check_keys(root, "",
                {"scene", "description", "t_end", "output", "solver", "particles", "units", "connections", "inputs",
-                "summary", "plots", "sweep", "notes", "links", "accuracy", "events", "checkpoints"});
+                "summary", "plots", "sweep", "notes", "links", "accuracy", "events", "checkpoints", "plugins"});
     Scene s;
     s.path = label_;
     s.name = scalar(required(root, "scene", ""), "scene");
@@ -54,6 +55,7 @@ class Loader {
 
     Params params;
     std::map<std::string, std::string> given;  // unit.param -> scene key that set it (params or inputs)
+    if (root["plugins"]) load_plugins(root["plugins"]);
     load_units(root, fs, params);
     if (root["connections"]) load_connections(root["connections"], fs);
     try {
@@ -100,6 +102,24 @@ class Loader {
 
  private:
   using Params = std::vector<std::pair<std::string, YAML::Node>>;  // unit name, its params node
+
+  // Plugins before the units that may name their types (granuflow/plugin.hpp); a relative path is taken from the
+  // scene file's folder.
+  void load_plugins(const YAML::Node& p) const {
+    if (!p.IsSequence()) fail("plugins", "expected a list of shared-library paths, got " + kind_name(p));
+    const size_t slash = label_.rfind('/');
+    const std::string dir = slash == std::string::npos ? "" : label_.substr(0, slash + 1);
+    for (size_t i = 0; i < p.size(); ++i) {
+      const std::string at = "plugins[" + std::to_string(i) + "]";
+      std::string file = scalar(p[i], at);
+      if (!file.empty() && file[0] != '/') file = dir + file;
+      try {
+        load_plugin(file);
+      } catch (const ConfigError& e) {
+        fail(at, e.what());
+      }
+    }
+  }
 
   // One unit per entry; the `particles` section is the unit "particles" of type particles (the size grid and
   // product shared by every particle unit), declared first so that the others find it.
@@ -185,9 +205,9 @@ class Loader {
     check_unique(node, at);
     for (const auto& p : node) {
       const std::string key = key_of(p.first, at);
-      const std::string q = unit + "." + key;
+      std::string q = unit + "." + key;
       try {
-        fs.param_id(q);
+        q = fs.qualified_name(fs.param_id(q));  // the current name of a renamed parameter's old spelling
       } catch (const ConfigError& e) {
         fail(at + "." + key, e.what());
       }
@@ -356,9 +376,10 @@ class Loader {
     if (!in.IsMap()) fail("inputs", "expected a mapping of unit.param -> {times, values, interp}");
     check_unique(in, "inputs");
     for (const auto& kv : in) {
-      const std::string q = key_of(kv.first, "inputs"), at = "inputs." + q;
+      std::string q = key_of(kv.first, "inputs");
+      const std::string at = "inputs." + q;
       try {
-        fs.param_id(q);
+        q = fs.qualified_name(fs.param_id(q));
       } catch (const ConfigError& e) {
         fail(at, e.what());
       }

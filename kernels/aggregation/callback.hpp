@@ -1,8 +1,8 @@
 // A kernel given as a callable returning the n x n matrix beta (1/s), for prototyping (e.g. from Python through
 // the bindings). Slower than a compiled kernel: the callable runs in double only, so the Jet evaluation
-// returns its values with zero derivatives: Jacobians treat beta as constant in the state (exact only when
-// needs().number is false) and parameter sensitivities through it are zero. State-independent callables are
-// still evaluated once per run.
+// treats beta as constant in the state (exact only when needs().number is false) and differentiates it by its own
+// parameters with central finite differences (callback.cpp), two more calls per parameter a sensitivity or a
+// calibration asks for. State-independent callables are still evaluated once per run.
 #pragma once
 #include <algorithm>
 #include <functional>

@@ -19,8 +19,11 @@ from .flowsheet import Flowsheet, load, load_text
 from .kernels import aggregation_kernels, register_kernel
 from .reference import kernel_reference, unit_reference, unit_types
 from .result import BalanceError, BalanceWarning, GridWarning, Result
+from ._version import __version__  # generated from the project version in CMakeLists.txt
+from .plugins import PluginWarning, load_plugin, load_search_path, load_search_path_at_import
 
-__version__ = "0.2.0"
+load_search_path_at_import()  # GRANUFLOW_PLUGIN_PATH: a user's units and kernels, before anything lists or builds them
+
 __all__ = ["load", "load_text", "Flowsheet", "Result", "GridWarning", "BalanceWarning", "ConfigError", "SolverError",
            "BalanceError", "CalibrationError", "unit_types", "unit_reference", "kernel_reference", "register_kernel",
-           "aggregation_kernels", "__version__"]
+           "aggregation_kernels", "load_plugin", "load_search_path", "PluginWarning", "__version__"]

@@ -8,6 +8,7 @@
 // the kernel, the entry and the rule; an exception raised by the callable becomes one too, with its type and text.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
 
 #include <cmath>
 #include <map>
@@ -108,16 +109,19 @@ void check_and_copy(const std::string& where, const py::handle& out, int n, doub
   for (int i = 0; i < n; ++i) beta[size_t(i) * n + i] = b[size_t(i) * n + i];
 }
 
-kernels::BetaCallback make_callback(const std::string& name, std::shared_ptr<PyCallable> f) {
-  return [where = where_of(name), f](const ClassState<double>& s, const double*, double* beta) {
+kernels::BetaCallback make_callback(const std::string& name, std::shared_ptr<PyCallable> f,
+                                    std::vector<std::string> params) {
+  return [where = where_of(name), f, params](const ClassState<double>& s, const double* p, double* beta) {
     py::gil_scoped_acquire gil;
     const int n = s.n;
     py::array_t<double> d(n, s.diameter), v(n, s.volume);  // copies: the grid stays untouched
     d.attr("setflags")("write"_a = false);
     v.attr("setflags")("write"_a = false);
+    py::dict kw;  // the kernel's parameters by name, in SI
+    for (size_t k = 0; k < params.size(); ++k) kw[py::str(params[k])] = p[k];
     py::object out;
     try {
-      out = py::reinterpret_borrow<py::object>(f->fn)(d, v);
+      out = py::reinterpret_borrow<py::object>(f->fn)(d, v, **kw);
     } catch (py::error_already_set& e) {
       const std::string type = py::str(e.type().attr("__name__"));
       const std::string text = py::str(e.value());
@@ -127,7 +131,8 @@ kernels::BetaCallback make_callback(const std::string& name, std::shared_ptr<PyC
   };
 }
 
-void register_kernel(const std::string& name, const py::function& fn, const std::string& description, bool replace) {
+void register_kernel(const std::string& name, const py::function& fn, const std::vector<ParamSpec>& params,
+                     const std::string& description, bool replace) {
   auto& reg = kernels::registries().aggregation;
   auto& mine = python_kernels();
   auto f = std::make_shared<PyCallable>(fn);
@@ -146,20 +151,34 @@ void register_kernel(const std::string& name, const py::function& fn, const std:
                       "': violates a non-empty name other than 'none' without spaces or any of :,{}[]#");
   auto slot = std::make_shared<Slot>();
   slot->set(std::move(f));
+  std::vector<std::string> names;
+  for (const auto& p : params) names.push_back(p.name);
   // The factory takes the callable current at flowsheet build time (register_callback_kernel would fix it now).
-  reg.add(name, (description.empty() ? "Python kernel" : description) + " (callable, prototyping)", [name, slot] {
-    return std::make_unique<kernels::CallbackKernel>(std::vector<ParamSpec>{}, kernels::ClassNeeds{},
-                                                     make_callback(name, slot->get()));
-  });
+  reg.add(name, (description.empty() ? "Python kernel" : description) + " (callable, prototyping)",
+          [name, slot, params, names] {
+            return std::make_unique<kernels::CallbackKernel>(params, kernels::ClassNeeds{},
+                                                             make_callback(name, slot->get(), names));
+          });
   mine.emplace(name, std::move(slot));
 }
 
 }  // namespace
 
 void register_kernels(py::module_& m) {
-  m.def("register_aggregation_kernel", &register_kernel, "name"_a, "fn"_a, py::kw_only(), "description"_a = "",
-        "replace"_a = false,
-        "Add a Python aggregation kernel fn(diameters_m, volumes_m3) -> (n, n) beta in 1/s to the kernel registry.");
+  m.def(
+      "register_aggregation_kernel",
+      [](const std::string& name, const py::function& fn, const std::vector<py::dict>& params,
+         const std::string& description, bool replace) {
+        std::vector<ParamSpec> specs;
+        for (const auto& d : params)  // checked in granuflow.kernels; here only converted
+          specs.push_back({d["name"].cast<std::string>(), d["unit"].cast<std::string>(), d["default"].cast<double>(),
+                           d["lower"].cast<double>(), d["upper"].cast<double>(), d["description"].cast<std::string>(),
+                           d["source"].cast<std::string>()});
+        register_kernel(name, fn, specs, description, replace);
+      },
+      "name"_a, "fn"_a, py::kw_only(), "params"_a = std::vector<py::dict>{}, "description"_a = "", "replace"_a = false,
+      "Add a Python aggregation kernel fn(diameters_m, volumes_m3, **params) -> (n, n) beta in 1/s to the kernel "
+      "registry; params: dicts with name, unit (SI), default, lower, upper, description, source.");
   m.def(
       "aggregation_kernels",
       [] {

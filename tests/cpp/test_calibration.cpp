@@ -65,7 +65,7 @@ void fill_with_model(const Scene& s, std::vector<Experiment>& exps, const std::m
 }
 
 TEST(OutputSensitivities, EqualFiniteDifferencesOfSimulations) {
-  const std::vector<std::string> params{"bed.ln_beta0", "droplets.k_evap"};
+  const std::vector<std::string> params{"bed.agg_ln_beta0", "droplets.k_evap"};
   Scene s = short_headline();
   SimOptions o = s.options;
   o.t_out = {0, 600, 1200};
@@ -79,7 +79,7 @@ TEST(OutputSensitivities, EqualFiniteDifferencesOfSimulations) {
     const int j = output_index(r, out);
     for (size_t k = 0; k < params.size(); ++k) {
       const double p = s.flowsheet->param(params[k]);
-      const double h = params[k] == "bed.ln_beta0" ? 1e-3 : 1e-3 * p;  // small: no class edge in between
+      const double h = params[k] == "bed.agg_ln_beta0" ? 1e-3 : 1e-3 * p;  // small: no class edge in between
       auto run = [&](double v) {
         Scene q = short_headline();
         q.flowsheet->set_param(params[k], v);
@@ -105,13 +105,13 @@ TEST(StageProblem, JacobianEqualsFiniteDifferencesOfTheResiduals) {
   Stage st;
   st.name = "mixed";
   st.free = {{"wall.k_wall", Transform::kLog, 1.0, 200.0, {}},
-             {"bed.ln_beta0", Transform::kNone, -25.0, -10.0, {}},
+             {"bed.agg_ln_beta0", Transform::kNone, -25.0, -10.0, {}},
              {"spray_zone.h_pen", Transform::kLog, 1e-5, 5e-3, {}}};
   CalibrationOptions o;
   o.rtol = 1e-10;
   o.atol = 1e-12;
   o.sens_error_control = true;
-  StageProblem sp(s, units::builtin(), exps, st, o, {{"wall.k_wall", 18.0}, {"bed.ln_beta0", -17.0}});
+  StageProblem sp(s, units::builtin(), exps, st, o, {{"wall.k_wall", 18.0}, {"bed.agg_ln_beta0", -17.0}});
   ASSERT_EQ(sp.num_parameters(), 3);
   ASSERT_EQ(sp.num_residuals(), 2 * 4 * 4);
   const auto th = sp.theta0();
@@ -138,13 +138,14 @@ TEST(StageProblem, JacobianEqualsFiniteDifferencesOfTheResiduals) {
 Stage two_parameter_stage() {
   Stage st;
   st.name = "wall_and_agglomeration";
-  st.free = {{"wall.k_wall", Transform::kLog, 1.0, 200.0, {}}, {"bed.ln_beta0", Transform::kNone, -25.0, -10.0, {}}};
+  st.free = {{"wall.k_wall", Transform::kLog, 1.0, 200.0, {}},
+             {"bed.agg_ln_beta0", Transform::kNone, -25.0, -10.0, {}}};
   return st;
 }
 
 TEST(Calibrate, RecoversTheParametersOfNoiseFreeDataExactly) {
   Scene s = short_headline();
-  const double k_wall = s.flowsheet->param("wall.k_wall"), ln_beta0 = s.flowsheet->param("bed.ln_beta0");
+  const double k_wall = s.flowsheet->param("wall.k_wall"), ln_beta0 = s.flowsheet->param("bed.agg_ln_beta0");
   auto exps = experiments({"gas.T", "bed.d50", "bed.d90"});
   fill_with_model(s, exps, {});
   CalibrationOptions o;
@@ -157,14 +158,14 @@ TEST(Calibrate, RecoversTheParametersOfNoiseFreeDataExactly) {
   for (auto method : {JacobianMethod::kSensitivities, JacobianMethod::kCentralDifferences}) {
     o.jacobian = method;
     const CalibrationResult r = calibrate(s, units::builtin(), exps, {two_parameter_stage()}, o,
-                                          {{"wall.k_wall", 20.0}, {"bed.ln_beta0", -16.8}});
+                                          {{"wall.k_wall", 20.0}, {"bed.agg_ln_beta0", -16.8}});
     ASSERT_EQ(r.stages.size(), 1u);
     const StageResult& st = r.stages[0];
     EXPECT_EQ(st.jacobian_method, to_string(method));
     EXPECT_EQ(st.termination, "CONVERGENCE") << st.message;
     EXPECT_LT(st.cost, 1e-6);
     EXPECT_NEAR(r.parameters.at("wall.k_wall"), k_wall, 1e-4 * k_wall);
-    EXPECT_NEAR(r.parameters.at("bed.ln_beta0"), ln_beta0, 1e-4);
+    EXPECT_NEAR(r.parameters.at("bed.agg_ln_beta0"), ln_beta0, 1e-4);
     if (method == JacobianMethod::kCentralDifferences)
       EXPECT_EQ(r.sensitivity_solves, 0);
     else
@@ -279,7 +280,7 @@ TEST(Calibrate, AFailedSensitivitySolveDoesNotEndTheCalibration) {
   fill_with_model(s, exps, {});
   CalibrationOptions o;
   o.profile = false;
-  const std::map<std::string, double> start{{"wall.k_wall", 20.0}, {"bed.ln_beta0", -16.8}};
+  const std::map<std::string, double> start{{"wall.k_wall", 20.0}, {"bed.agg_ln_beta0", -16.8}};
   const CalibrationResult ref = calibrate(s, units::builtin(), exps, {two_parameter_stage()}, o, start);
   EXPECT_EQ(ref.stages[0].sensitivity_retries, 0);
   // the first sensitivity solve of run1 fails: retried with smaller steps, the same answer

@@ -63,13 +63,13 @@ TEST(CalibrationQ3, JacobianEqualsFiniteDifferencesOfTheResiduals) {
   std::vector<Experiment> exps{q3_experiment({"bed.Q3(150 um)", "bed.Q3(300 um)", "bed.Q3(600 um)"}, {600, 1200})};
   Stage st;
   st.name = "q3";
-  st.free = {{"bed.ln_beta0", Transform::kNone, -25.0, -10.0, {}},
+  st.free = {{"bed.agg_ln_beta0", Transform::kNone, -25.0, -10.0, {}},
              {"spray_zone.h_pen", Transform::kLog, 1e-5, 5e-3, {}}};
   CalibrationOptions o;
   o.rtol = 1e-10;
   o.atol = 1e-12;
   o.sens_error_control = true;
-  StageProblem sp(s, units::builtin(), exps, st, o, {{"bed.ln_beta0", -17.0}});
+  StageProblem sp(s, units::builtin(), exps, st, o, {{"bed.agg_ln_beta0", -17.0}});
   ASSERT_EQ(sp.num_residuals(), 6);
   const auto th = sp.theta0();
   std::vector<double> r, J, rp, rm;

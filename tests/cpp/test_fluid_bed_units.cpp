@@ -336,9 +336,9 @@ TEST(SieveMillLoop, InlinedJacobianIsTheSchurComplementOfTheFullOne) {
 
 TEST(Gf25Scene, SensitivitiesEqualFiniteDifferences) {
   // the bed's parameter tables (particle mass, breakage matrix) and its initial PSD carry parameter derivatives too
-  const std::vector<std::string> params{"bed.ln_beta0",    "bed.k_break",     "wall.k_wall", "bed.X_cr",
-                                        "droplets.k_evap", "particles.rho_s", "bed.q_frag",  "bed.d_frag_min",
-                                        "bed.d50_0",       "bed.sigma_0"};
+  const std::vector<std::string> params{"bed.agg_ln_beta0", "bed.sel_k_break", "wall.k_wall",     "bed.X_cr",
+                                        "droplets.k_evap",  "particles.rho_s", "bed.frag_q_frag", "bed.frag_d_frag_min",
+                                        "bed.d50_0",        "bed.sigma_0"};
   Scene s = headline();
   SimOptions o = s.options;
   o.t_out = {0, 1200};
@@ -352,7 +352,7 @@ TEST(Gf25Scene, SensitivitiesEqualFiniteDifferences) {
     for (size_t k = 0; k < params.size(); ++k) {
       const double p = s.flowsheet->param(params[k]);
       // integration noise (rtol 1e-10) stays below 1e-6 relative with these steps
-      const double h = params[k] == "bed.ln_beta0" ? 0.01 : 1e-2 * std::abs(p);
+      const double h = params[k] == "bed.agg_ln_beta0" ? 0.01 : 1e-2 * std::abs(p);
       auto run = [&](double v) {
         Scene q = headline();
         q.flowsheet->set_param(params[k], v);

@@ -80,7 +80,7 @@ TEST(Positivity, GridBeyondTheFluidizedRangeKeepsTheBedInventoriesNonNegative) {
 // same steps as before (d50 499.701648945565 um, run through the command line by the scene snapshot).
 TEST(Positivity, IdasKeepsTheBedWaterOfEmptyingClassesNonNegative) {
   Scene s = testing::scene_from_file("flowsheets/stoeckl_gf25_batch.yaml");
-  s.flowsheet->set_param("bed.k_break", 0.0);
+  s.flowsheet->set_param("bed.sel_k_break", 0.0);
   const SimResult r = simulate(*s.flowsheet, s.options);
   const Flowsheet& fs = *s.flowsheet;
   double least = 1.0;

@@ -17,7 +17,7 @@ from granuflow import calibration as cal
 
 STAGES = os.path.join(ROOT, "flowsheets", "calibration", "stages_paper001.yaml")
 EXPERIMENTS = os.path.join(ROOT, "flowsheets", "calibration", "synthetic_gf25_table1.yaml")
-PARAMS = ["wall.k_wall", "droplets.k_evap", "bed.X_cr", "bed.ln_beta0", "spray_zone.h_pen", "bed.k_break"]
+PARAMS = ["wall.k_wall", "droplets.k_evap", "bed.X_cr", "bed.agg_ln_beta0", "spray_zone.h_pen", "bed.sel_k_break"]
 
 
 @pytest.fixture(scope="module")
@@ -112,7 +112,7 @@ def test_sigma_on_the_data_biases_the_size_low(fs, synthetic, staged):
     """Relative sigmas applied to the noisy measurement weight the low readings more: the fitted d-values drop by
     about 2 sigma_rel^2 (about 1 %) against the model-based weights."""
     res, _ = staged
-    size = cal.Stage("size", [cal.FreeParameter("bed.ln_beta0", "none", -25, -10)], list(cal.D_VALUES))
+    size = cal.Stage("size", [cal.FreeParameter("bed.agg_ln_beta0", "none", -25, -10)], list(cal.D_VALUES))
     start = dict(res.parameters)
     kw = dict(start=start, options={"profile": False})
     model = cal.calibrate(fs, synthetic.calibration, [size], **kw)
@@ -122,10 +122,10 @@ def test_sigma_on_the_data_biases_the_size_low(fs, synthetic, staged):
     pd_ = cal.predict(fs, synthetic.calibration, data.parameters)
     ratio = np.mean([np.mean(np.asarray(b["model"]) / np.asarray(a["model"])) for a, b in zip(pm, pd_)
                      if a["observable"] == "bed.d50"])
-    print(f"\nln_beta0: model-sigma {model.parameters['bed.ln_beta0']:.4f}, data-sigma "
-          f"{data.parameters['bed.ln_beta0']:.4f}; d50 ratio data/model {ratio:.4f}")
+    print(f"\nln_beta0: model-sigma {model.parameters['bed.agg_ln_beta0']:.4f}, data-sigma "
+          f"{data.parameters['bed.agg_ln_beta0']:.4f}; d50 ratio data/model {ratio:.4f}")
     assert ratio < 0.998
-    assert data.parameters["bed.ln_beta0"] < model.parameters["bed.ln_beta0"]
+    assert data.parameters["bed.agg_ln_beta0"] < model.parameters["bed.agg_ln_beta0"]
 
 
 def test_experiment_file_round_trip_and_errors(fs, synthetic, tmp_path):

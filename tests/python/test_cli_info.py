@@ -27,8 +27,8 @@ def test_describe_csv_and_json_hold_every_parameter_and_column():
     fs = gf.load(SCENE)
     rows = list(csv.DictReader(io.StringIO(run("describe", SCENE, "--format", "csv").stdout)))
     assert [r["param"] for r in rows] == fs.params
-    bed = {r["param"]: r for r in rows}["bed.ln_beta0"]
-    spec = fs.spec("bed.ln_beta0")
+    bed = {r["param"]: r for r in rows}["bed.agg_ln_beta0"]
+    spec = fs.spec("bed.agg_ln_beta0")
     assert bed["source"] == spec["source"] and bed["description"] == spec["description"]
     assert float(bed["value"]) == spec["value"] and float(bed["lower"]) == spec["lower"]
     data = json.loads(run("describe", SCENE, "--format", "json").stdout)

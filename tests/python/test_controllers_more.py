@@ -46,13 +46,13 @@ def test_the_spray_rate_holds_the_bed_moisture():
 def test_a_calibration_runs_over_a_controlled_scene():
     fs = gf.load(HEADLINE_PI)
     fs.set_t_end(1800.0)
-    truth = fs.get("bed.ln_beta0")
+    truth = fs.get("bed.agg_ln_beta0")
     points = [{"name": f"V{v}", "kind": "corner", "set": {"inlet.V_dot": f"{v} m3/h"}} for v in (600, 800)]
     exps = cal.synthetic_experiments(fs, points, times=np.arange(5, 31, 5) * 60.0, observables=["bed.d50"],
                                      sigma={"bed.d50": {"rel": 0.02}}, noise=False, name="controlled").experiments
-    stage = cal.Stage("kinetics", [cal.FreeParameter("bed.ln_beta0", "none", -19.0, -15.0)], ["bed.d50"])
-    r = cal.calibrate(fs, exps, [stage], start={"bed.ln_beta0": truth + 0.4}, options={"profile": False})
-    assert r.parameters["bed.ln_beta0"] == pytest.approx(truth, abs=1e-3)
+    stage = cal.Stage("kinetics", [cal.FreeParameter("bed.agg_ln_beta0", "none", -19.0, -15.0)], ["bed.d50"])
+    r = cal.calibrate(fs, exps, [stage], start={"bed.agg_ln_beta0": truth + 0.4}, options={"profile": False})
+    assert r.parameters["bed.agg_ln_beta0"] == pytest.approx(truth, abs=1e-3)
     with pytest.raises(gf.ConfigError, match="tic"):   # the driven inlet temperature is the controller's
         cal.synthetic_experiments(fs, [{"name": "T", "kind": "corner", "set": {"inlet.T": "70 degC"}}],
                                   observables=["bed.d50"], sigma={"bed.d50": {"rel": 0.02}}, noise=False)

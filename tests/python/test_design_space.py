@@ -129,7 +129,7 @@ def test_invalid_algorithms_are_clear_errors(fs):
 
 
 def test_probabilistic_map_is_a_probability_and_saturates_far_from_the_bounds(fs):
-    params = ["bed.ln_beta0", "bed.X_cr"]
+    params = ["bed.agg_ln_beta0", "bed.X_cr"]
     cov = [[0.05 ** 2, 0.0], [0.0, 0.003 ** 2]]
     x, y = ("inlet.T", "degC", [45, 75]), ("nozzle.mdot", "g/min", [62, 80, 118])
     pm = ds.probabilistic_design_space(fs, x, y, CONSTRAINTS, params=params, covariance=cov, progress=False)

@@ -146,7 +146,7 @@ def test_the_checks_see_what_the_readme_shows():
     seen = {m.group(1) for _, code in _code("README.md") for m in re.finditer(r"granuflow\s+([a-z]+)", code)}
     assert {"run", "steady", "sweep", "contour", "calibrate", "describe", "draw"} <= seen
     cited = {ref for ref, _ in _cited("README.md")}
-    assert "nozzle.mdot" in cited and "bed.ln_beta0" in cited
+    assert "nozzle.mdot" in cited and "bed.agg_ln_beta0" in cited
 
 
 def test_a_moved_parameter_or_setting_names_its_new_place():

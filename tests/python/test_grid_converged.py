@@ -49,19 +49,19 @@ def test_the_reference_data_are_the_10_class_model_and_a_refit_on_another_grid_m
     ten = gf.load(os.path.join(ROOT, "flowsheets", "stoeckl_gf25_batch.yaml"))
     assert (_d50_rel(ten, es.experiments) == 0).all()
     paper = {k: p["paper"] for k, p in FIT["parameters"].items()}
-    stage = [cal.Stage("size", [cal.FreeParameter("bed.ln_beta0", "none", -25.0, -10.0)],
+    stage = [cal.Stage("size", [cal.FreeParameter("bed.agg_ln_beta0", "none", -25.0, -10.0)],
                        ["bed.d10", "bed.d25", "bed.d50", "bed.d75"])]
 
     def refit(classes):  # a reduced problem: one run, one parameter, the paper's other values
         fs = gf.load(es.scene).with_settings({"particles.classes": classes, "particles.d_max": "1 mm"})
         fs.update(paper)
-        return cal.calibrate(fs, es.experiments, stage, start={"bed.ln_beta0": -17.0},
+        return cal.calibrate(fs, es.experiments, stage, start={"bed.agg_ln_beta0": -17.0},
                              options={"sigma_basis": "model"})
 
     # on the grid the data come from, the refit finds the paper's value again: the pipeline adds nothing
-    assert refit(10).parameters["bed.ln_beta0"] == pytest.approx(paper["bed.ln_beta0"], abs=1e-3)
+    assert refit(10).parameters["bed.agg_ln_beta0"] == pytest.approx(paper["bed.agg_ln_beta0"], abs=1e-3)
     a, b = refit(20), refit(20)
     assert a.parameters == b.parameters  # reproducible
     # a finer grid smears less towards large sizes: the same d50 needs faster aggregation
     se = a.stages[-1]["estimates"][0]["se"]
-    assert a.parameters["bed.ln_beta0"] > paper["bed.ln_beta0"] + 2 * se
+    assert a.parameters["bed.agg_ln_beta0"] > paper["bed.agg_ln_beta0"] + 2 * se

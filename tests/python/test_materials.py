@@ -72,7 +72,7 @@ def test_a_material_changes_the_solid_and_what_it_lacks_is_said(tmp_path):
     assert fs.spec("particles.rho_s")["source"].startswith("material sodium_benzoate: PubChem")
     assert fs.spec("particles.rho_s")["default"] == 1440.0
     built_in = fs.material["built_in"]
-    for q in ("particles.cp_s", "particles.eps_intra", "bed.Tg_solid", "bed.gt_k", "bed.bet_mm"):
+    for q in ("particles.cp_s", "particles.eps_intra", "bed.agg_Tg_solid", "bed.agg_gt_k", "bed.bet_mm"):
         assert q in built_in, q
         assert fs.spec(q)["source"].startswith("not given by material sodium_benzoate; built-in value from paper 001")
     assert "particles.rho_s" not in built_in
@@ -85,12 +85,12 @@ def test_a_material_changes_the_solid_and_what_it_lacks_is_said(tmp_path):
 
 def test_the_scene_overrides_any_material_value(tmp_path):
     text = headline_with("  material: sodium_benzoate\n  params: {rho_s: 1500 kg/m3, cp_s: 1300}\n",
-                         "Tg_solid: 150 degC")
+                         "agg_Tg_solid: 150 degC")
     fs = load(text, tmp_path)
     assert fs.get("particles.rho_s") == 1500.0
     assert fs.get("particles.cp_s") == 1300.0
-    assert fs.get("bed.Tg_solid") == pytest.approx(423.15)
-    assert "particles.cp_s" not in fs.material["built_in"] and "bed.Tg_solid" not in fs.material["built_in"]
+    assert fs.get("bed.agg_Tg_solid") == pytest.approx(423.15)
+    assert "particles.cp_s" not in fs.material["built_in"] and "bed.agg_Tg_solid" not in fs.material["built_in"]
     assert "particles.eps_intra" in fs.material["built_in"]
 
 
@@ -125,7 +125,7 @@ def test_command_line_lists_and_shows_materials():
     r = run_cli("materials", "maltodextrin_de21")
     assert r.returncode == 0, r.stderr
     assert "`particles.rho_s`" in r.stdout and "paper 001, Table 6" in r.stdout and "1545" in r.stdout
-    assert "`fluid_bed.Tg_solid`" in r.stdout
+    assert "`fluid_bed.agg_Tg_solid`" in r.stdout
     r = run_cli("materials", "nope")
     assert r.returncode == 2 and "known: maltodextrin_de21" in r.stderr
 

@@ -141,7 +141,7 @@ units:
 def q3_fit():
     exps = cal.load_experiments(EXPS)
     fs = exps.flowsheet()
-    stage = cal.Stage("aggregation", [cal.FreeParameter("bed.ln_beta0", lower=-19.0, upper=-15.0)], [])
+    stage = cal.Stage("aggregation", [cal.FreeParameter("bed.agg_ln_beta0", lower=-19.0, upper=-15.0)], [])
     fit = cal.calibrate(fs, exps.calibration, [stage],
                         options={"profile": False, "flat_scan_points": 0, "max_iterations": 20})
     return exps, fs, fit
@@ -151,12 +151,12 @@ def test_calibration_on_whole_q3_curves_recovers_the_aggregation_rate(q3_fit):
     exps, fs, fit = q3_fit
     names = [o.name for o in exps.calibration[0].observations]
     assert len(names) == 8 and all(n.startswith("bed.Q3(") for n in names)
-    e = fit.estimate("bed.ln_beta0")
+    e = fit.estimate("bed.agg_ln_beta0")
     true = generator().TRUE_LN_BETA0
     assert fit.status == "ok"
     assert abs(e["value"] - true) <= 2.5 * e["se"], (e["value"], e["se"])
-    assert abs(fs.get("bed.ln_beta0") - true) > 10 * e["se"]  # the start (Table 9) was far off
+    assert abs(fs.get("bed.agg_ln_beta0") - true) > 10 * e["se"]  # the start (Table 9) was far off
     # 16 samples of noise 0.01 around the truth: chi2/dof near 1
     assert 0.3 < fit.final["chi2_reduced"] < 2.5
-    print(f"bed.ln_beta0: true {true}, fitted {e['value']:.4f} +- {e['se']:.4f}; "
+    print(f"bed.agg_ln_beta0: true {true}, fitted {e['value']:.4f} +- {e['se']:.4f}; "
           f"chi2/dof {fit.final['chi2_reduced']:.3f}")

@@ -44,10 +44,10 @@ def test_a_length_setting_takes_a_unit_at_the_edge_and_parameters_carry_over():
 
 
 def test_a_kernel_chosen_by_setting_changes_the_result():
-    fs = gf.load(SCENE).set("bed.ln_beta0", -30.0)  # a parameter the constant kernel does not have: dropped
+    fs = gf.load(SCENE).set("bed.agg_ln_beta0", -30.0)  # a parameter the constant kernel does not have: dropped
     const = structure.apply(fs, {"bed.aggregation": "constant", "inlet.T": "70 degC"})
     assert const.unit_settings()["bed"][1]["aggregation"] == "constant"
-    assert "bed.ln_beta0" not in const.params and const.get("inlet.T") == pytest.approx(343.15)
+    assert "bed.agg_ln_beta0" not in const.params and const.get("inlet.T") == pytest.approx(343.15)
 
 
 @pytest.mark.parametrize("item, words", [

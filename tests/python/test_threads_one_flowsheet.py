@@ -46,14 +46,15 @@ def test_a_run_on_a_kept_system_equals_a_run_on_a_new_flowsheet():
     for run, reference in [
         (lambda: fs.simulate(t_end=900.0, warn=False), lambda: fresh().simulate(t_end=900.0, warn=False)),
         # a kernel parameter (the engine's tables are rebuilt) and an operating one
-        (lambda: (fs.update({"bed.ln_beta0": -16.5, "nozzle.mdot": 1.5e-3}), fs.simulate(t_end=900.0, warn=False))[1],
-         lambda: fresh(**{"bed.ln_beta0": -16.5, "nozzle.mdot": 1.5e-3}).simulate(t_end=900.0, warn=False)),
+        (lambda: (fs.update({"bed.agg_ln_beta0": -16.5, "nozzle.mdot": 1.5e-3}),
+                  fs.simulate(t_end=900.0, warn=False))[1],
+         lambda: fresh(**{"bed.agg_ln_beta0": -16.5, "nozzle.mdot": 1.5e-3}).simulate(t_end=900.0, warn=False)),
         # with sensitivities, then without again
-        (lambda: fs.simulate(t_end=900.0, warn=False, sensitivities=["bed.ln_beta0"]),
-         lambda: fresh(**{"bed.ln_beta0": -16.5, "nozzle.mdot": 1.5e-3}).simulate(
-             t_end=900.0, warn=False, sensitivities=["bed.ln_beta0"])),
+        (lambda: fs.simulate(t_end=900.0, warn=False, sensitivities=["bed.agg_ln_beta0"]),
+         lambda: fresh(**{"bed.agg_ln_beta0": -16.5, "nozzle.mdot": 1.5e-3}).simulate(
+             t_end=900.0, warn=False, sensitivities=["bed.agg_ln_beta0"])),
         (lambda: fs.simulate(t_end=900.0, warn=False),
-         lambda: fresh(**{"bed.ln_beta0": -16.5, "nozzle.mdot": 1.5e-3}).simulate(t_end=900.0, warn=False)),
+         lambda: fresh(**{"bed.agg_ln_beta0": -16.5, "nozzle.mdot": 1.5e-3}).simulate(t_end=900.0, warn=False)),
     ]:
         got, want = run(), reference()
         assert np.array_equal(got.y, want.y) and np.array_equal(got.outputs, want.outputs)
@@ -63,5 +64,5 @@ def test_a_run_on_a_kept_system_equals_a_run_on_a_new_flowsheet():
     with pytest.raises(gf.SolverError):
         fs.simulate(t_end=900.0, warn=False, max_steps=20)
     got = fs.simulate(t_end=900.0, warn=False)
-    want = fresh(**{"bed.ln_beta0": -16.5, "nozzle.mdot": 1.5e-3}).simulate(t_end=900.0, warn=False)
+    want = fresh(**{"bed.agg_ln_beta0": -16.5, "nozzle.mdot": 1.5e-3}).simulate(t_end=900.0, warn=False)
     assert np.array_equal(got.y, want.y) and got.stats["residuals"] == want.stats["residuals"]

@@ -57,7 +57,7 @@ def variants():
     tanks = os.path.join(ROOT, "flowsheets", "demo_tanks.yaml")
     loop = os.path.join(ROOT, "flowsheets", "continuous_layering_sieve_mill.yaml")
     out += [
-        ("headline sens", head, {}, {"sensitivities": ["bed.ln_beta0"]}),
+        ("headline sens", head, {}, {"sensitivities": ["bed.agg_ln_beta0"]}),
         ("headline sens 3", head, {}, {"sensitivities": None}),
         ("headline 40 classes", head, {"refine": 4}, {}),
         ("headline sparse", head, {}, {"linear_solver": "sparse"}),

@@ -1,5 +1,6 @@
 // Registration by name, explicit and deterministic: each plugin file exports register_<name>(Registry&), and one
-// list per family (units/registry.cpp, kernels/registry.cpp) calls them. Registering a name twice is an error;
+// list per family (units/registry.cpp, kernels/registry.cpp) calls them; libraries loaded at run time add theirs
+// after the built-in ones (granuflow/plugin.hpp). Registering a name twice is an error;
 // create() of an unknown name throws ConfigError listing the valid names.
 #pragma once
 #include <functional>
@@ -12,6 +13,9 @@
 
 namespace granuflow {
 
+// The plugin file whose registration is running, "" outside of one (framework/src/plugins.cpp).
+const std::string& registering_plugin();
+
 template <class Base>
 class Registry {
  public:
@@ -19,13 +23,14 @@ class Registry {
   struct Entry {
     std::string description;
     Factory make;
+    std::string origin;  // the plugin file that registered it, "" for built-in code (granuflow/plugin.hpp)
   };
 
   explicit Registry(std::string family) : family_(std::move(family)) {}
 
   void add(const std::string& name, std::string description, Factory make) {
     if (entries_.count(name)) throw std::logic_error(family_ + " '" + name + "' is registered twice");
-    entries_.emplace(name, Entry{std::move(description), std::move(make)});
+    entries_.emplace(name, Entry{std::move(description), std::move(make), registering_plugin()});
   }
 
   std::unique_ptr<Base> create(const std::string& name, const std::string& where = "") const {
@@ -38,6 +43,7 @@ class Registry {
 
   bool contains(const std::string& name) const { return entries_.count(name) > 0; }
   const std::string& description(const std::string& name) const { return entries_.at(name).description; }
+  const std::string& origin(const std::string& name) const { return entries_.at(name).origin; }
 
   std::vector<std::string> names() const {
     std::vector<std::string> v;

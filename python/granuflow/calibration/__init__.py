@@ -47,7 +47,8 @@ Stage file (YAML)::
           droplets.k_evap: {transform: log, lower: 1e-5, upper: 1}
         observables: [gas.T, bed.moisture]
       - name: size
-        free: {bed.ln_beta0: {lower: -25, upper: -10}, spray_zone.h_pen: {transform: log, lower: 10 um, upper: 5 mm}}
+        free: {bed.agg_ln_beta0: {lower: -25, upper: -10},
+               spray_zone.h_pen: {transform: log, lower: 10 um, upper: 5 mm}}
         observables: [bed.d10, bed.d50, bed.d90]
       - name: all
         free: inherit                         # every parameter of the stages before, same bounds

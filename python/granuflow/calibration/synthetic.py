@@ -78,7 +78,7 @@ def paper001_stages() -> StagePlan:
     """The staged route of paper 001, Fig. 10, for the headline scene (the bounds of stages_paper001.yaml)."""
     hmt = [FreeParameter("wall.k_wall", "log", 1.0, 200.0), FreeParameter("droplets.k_evap", "log", 1e-5, 1.0),
            FreeParameter("bed.X_cr", "log", 0.01, 0.5)]
-    size = [FreeParameter("bed.ln_beta0", "none", -25.0, -10.0), FreeParameter("spray_zone.h_pen", "log", 1e-5, 5e-3),
-            FreeParameter("bed.k_break", "log", 1e-6, 1.0)]
+    size = [FreeParameter("bed.agg_ln_beta0", "none", -25.0, -10.0),
+            FreeParameter("spray_zone.h_pen", "log", 1e-5, 5e-3), FreeParameter("bed.sel_k_break", "log", 1e-6, 1.0)]
     return StagePlan("paper001_fig10", [Stage("heat_and_mass_transfer", hmt, ["gas.T", "bed.moisture"]),
                                         Stage("size", size, list(D_VALUES)), Stage("all", hmt + size, [])])

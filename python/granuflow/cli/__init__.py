@@ -51,9 +51,21 @@ def _version() -> str:
     return f"granuflow {__version__}"
 
 
+def _load_plugins(libs: list[str]) -> None:
+    """GRANUFLOW_PLUGIN_PATH's refusal at import, then the --plugin libraries: bad input like any other."""
+    from .. import _core, plugins
+
+    if plugins.env_error:
+        raise _core.ConfigError(f"{plugins.ENV_PATH}: {plugins.env_error}")
+    for lib in libs:
+        plugins.load_plugin(lib)
+
+
 def main(argv=None) -> int:
     p = Parser(prog="granuflow", description="spray fluidized-bed flowsheet simulation")
     p.add_argument("--version", action="version", version=_version())
+    p.add_argument("--plugin", action="append", default=[], metavar="LIB",
+                   help="load units and kernels from a plugin library first (repeatable; docs/install_and_plugins.md)")
     sub = p.add_subparsers(dest="cmd", required=True, parser_class=Parser)
     r = sub.add_parser("run", help="simulate a scene and write summary.json, CSV and plots")
     r.add_argument("scene")
@@ -174,6 +186,7 @@ def main(argv=None) -> int:
     from .. import _core
 
     try:
+        _load_plugins(args.plugin)
         code = args.func(args)
         if code == 0 and args.cmd in _PROVENANCE:
             from .provenance import write_provenance

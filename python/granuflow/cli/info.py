@@ -13,21 +13,22 @@ DESCRIBE_COLUMNS = ("param", "value", "unit", "default", "lower", "upper", "inpu
 
 
 def cmd_units(args) -> int:
-    from .. import reference
+    from .. import plugins, reference
 
     if args.name:
         if args.name not in reference.unit_types():
             raise ConfigError(f"units {args.name}: unknown unit type (allowed: {', '.join(reference.unit_types())})")
         sys.stdout.write(reference.unit_text(args.name))
         return 0
+    origin = plugins.origins()["units"]
     for name, desc in reference.unit_types().items():
-        print(f"{name:24s} {desc}")
+        print(f"{name:24s} {desc}" + (f" [plugin {origin[name]}]" if name in origin else ""))
     print("\n(granuflow units NAME: ports, settings, parameters and outputs of one unit type)")
     return 0
 
 
 def cmd_kernels(args) -> int:
-    from .. import reference
+    from .. import plugins, reference
 
     ref = reference.kernel_reference()
     if args.family:
@@ -37,8 +38,10 @@ def cmd_kernels(args) -> int:
         return 0
     for family, entries in ref.items():
         print(f"{family}:")
+        origin = plugins.origins().get(family, {})
         for e in entries:
-            print(f"  {e['name']:24s} {e['description']}")
+            tag = f" [plugin {origin[e['name']]}]" if e["name"] in origin else ""
+            print(f"  {e['name']:24s} {e['description']}{tag}")
     print("\n(granuflow kernels FAMILY: parameters and settings of every kernel of one family)")
     return 0
 

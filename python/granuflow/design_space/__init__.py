@@ -25,7 +25,7 @@ Python::
                       constraints=["d50_um>=400", "bed_moisture_wet<0.04"], algorithm="LN_COBYLA")
     opt.x, opt.constraints, opt.n_simulations, opt.nlopt_result
 
-    pmap = ds.probabilistic_design_space(fs, x=..., y=..., constraints=..., params=["bed.ln_beta0", "bed.X_cr"],
+    pmap = ds.probabilistic_design_space(fs, x=..., y=..., constraints=..., params=["bed.agg_ln_beta0", "bed.X_cr"],
                                          covariance=[[0.15**2, 0], [0, 0.005**2]], method="linear")
     pmap.probability                     # P(all constraints met), (ny, nx)
 
