@@ -1,5 +1,7 @@
 #include "droplet_evaporation.hpp"
 
+#include <cmath>
+
 #include <tuple>
 
 #include "granuflow/properties.hpp"
@@ -78,7 +80,8 @@ class DropletEvaporation : public UnitBase<DropletEvaporation> {
     const T& m_l = c.port(spray_, liquid::kMdot);
     const T raw = raw_rate(c);
     const T water = m_l * (1.0 - c.port(spray_, liquid::kW));
-    c.out(o_frac_) = m_l > 0.0 ? T(c.x(sEvap_) / m_l) : T(0.0);
+    // the share of no spray is undefined, not 0 (NaN in the time series, null in a summary)
+    c.out(o_frac_) = m_l > 0.0 ? T(c.x(sEvap_) / m_l) : T(std::nan(""));
     c.out(o_cap_) = (raw < 0.0 || raw > water) && m_l > 0.0 ? T(1.0) : T(0.0);
   }
 

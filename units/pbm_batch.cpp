@@ -97,7 +97,9 @@ class PbmBatch : public UnitBase<PbmBatch> {
       if (pop_.needs().field(static_cast<Field>(f))) p_field_[f] = s.add_param(field_specs[f]);
 
     sN_ = s.add_states("N", n_, StateKind::Differential, "-", number_scale);
-    s.set_nonnegative(sN_, n_);
+    // checked, not constrained: the schemes keep pure aggregation and breakage non-negative by construction, and this
+    // verification unit is held to exact conservation, which IDAS's constraint handling, once it acts, gives up
+    s.set_nonnegative(sN_, n_, false);
     const double v_mid = grid_->pivot(n_ / 2);
     if (pop_.aggregation() || pop_.growth()) {
       s_out_[kOutNumberAbove] = s.add_accumulator("number_above", "-", number_scale);

@@ -268,11 +268,8 @@ std::vector<double> DaeSystem::scales() const {
 std::vector<double> DaeSystem::constraints() const {
   std::vector<double> c(n_, 0.0);
   bool any = false;
-  // The verification unit is left out: its schemes keep pure aggregation and breakage non-negative by construction,
-  // and it is held to exact conservation, which IDAS's constraint handling, once it acts, gives up for positivity.
   for (int i = 0; i < n_; ++i)
-    if (fs_.state_spec(i).nonnegative && fs_.units()[fs_.state_unit(i)].unit->type() != "pbm_batch")
-      c[i] = 1.0, any = true;
+    if (fs_.state_spec(i).nonnegative && fs_.state_spec(i).enforced) c[i] = 1.0, any = true;
   if (!any) c.clear();
   return c;
 }

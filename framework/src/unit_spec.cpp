@@ -1,3 +1,4 @@
+#include <charconv>
 #include <cmath>
 
 #include "granuflow/errors.hpp"
@@ -27,8 +28,11 @@ StateId UnitSpec::add_states(const std::string& name, int n, StateKind kind, con
   return first;
 }
 
-void UnitSpec::set_nonnegative(StateId first, int n) {
-  for (int i = 0; i < n; ++i) states_.at(first.i + i).nonnegative = true;
+void UnitSpec::set_nonnegative(StateId first, int n, bool enforce) {
+  for (int i = 0; i < n; ++i) {
+    states_.at(first.i + i).nonnegative = true;
+    states_.at(first.i + i).enforced = enforce;
+  }
 }
 
 ParamId UnitSpec::add_param(ParamSpec spec) {
@@ -236,7 +240,11 @@ std::string to_string(SettingType t) {
 
 std::string setting_to_string(const SettingValue& v) {
   if (auto p = std::get_if<long>(&v)) return std::to_string(*p);
-  if (auto p = std::get_if<double>(&v)) return std::to_string(*p);
+  if (auto p = std::get_if<double>(&v)) {  // the shortest text that reads back as the same number (1e-09, not 0.000000)
+    char buf[32];
+    const auto r = std::to_chars(buf, buf + sizeof buf, *p);
+    return std::string(buf, r.ptr);
+  }
   if (auto p = std::get_if<bool>(&v)) return *p ? "true" : "false";
   return std::get<std::string>(v);
 }

@@ -138,7 +138,7 @@ class Flowsheet:
         # the core keeps these keys as YAML, aliases unexpanded: held to the limits of every YAML file before PyYAML
         # builds them (an alias bomb under plots: would expand in any message that shows it)
         check_yaml(text, f"{self.path or self.name} (keys plots, sweep, notes as the core keeps them)", "scene file")
-        return yaml.safe_load(text) or {}
+        return yaml.load(text, Loader=_yaml_loader()) or {}
 
     # -- parameters -----------------------------------------------------------------------------
     def get(self, name: str) -> float:

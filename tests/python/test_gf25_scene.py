@@ -421,3 +421,15 @@ def test_summary_names_the_integrator_that_ran(headline):
     ode = gf.load(os.path.join(ROOT, "flowsheets", "pbm_constant_kernel.yaml"))
     assert ode.simulate(warn=False).summary["solver"]["method"].startswith("erk")
     assert "CVODES" in ode.simulate(method="bdf", warn=False).summary["solver"]["method"]
+
+
+def test_the_evaporated_share_of_no_spray_is_undefined():
+    """droplets.evaporated_fraction is the evaporating rate over the sprayed rate (paper 001, Eq. (66)); once the
+    nozzle stops there is no spray to take a share of: NaN in the time series, never 0 (which reads as "nothing
+    evaporates in flight")."""
+    fs = gf.load(SCENE).set("nozzle.t_off", 1800.0)
+    r = fs.simulate(warn=False, grid_check=False, accuracy=False)
+    f = r["droplets.evaporated_fraction"]
+    spraying, stopped = r.t < 1800.0, r.t > 1800.0
+    assert np.all(np.isfinite(f[spraying])) and np.all((f[spraying] > 0) & (f[spraying] < 1))
+    assert stopped.sum() > 10 and np.all(np.isnan(f[stopped]))

@@ -71,6 +71,7 @@ struct StateSpec {
   double scale;              // typical magnitude: absolute tolerance = atol * scale
   bool accumulator = false;  // integrates a flow no equation reads (what left a grid): outside a steady state
   bool nonnegative = false;  // an inventory (class mass, particle number): a run fails when it goes negative
+  bool enforced = true;      // a nonnegative state is also held there by the integrator's constraints
 };
 
 struct PortSpec {
@@ -139,8 +140,9 @@ class UnitSpec {
   StateId add_states(const std::string& name, int n, StateKind kind, const std::string& unit, double scale);
   // Inventories that cannot be negative: a run whose solution takes one below zero by more than the solver's
   // tolerance stops with a SolverError naming it (a rate that is not positivity-preserving there) instead of
-  // returning it.
-  void set_nonnegative(StateId first, int n = 1);
+  // returning it. `enforce` false: checked only, not constrained by the integrator (a unit whose scheme keeps it
+  // non-negative by construction and that is held to exact conservation, which constraint handling gives up).
+  void set_nonnegative(StateId first, int n = 1, bool enforce = true);
   ParamId add_param(ParamSpec spec);
   PortId add_port(std::string name, StreamKind kind, PortDir dir, int classes = 0, bool optional = false);
   // Declares the size grid (pivot diameters, m) a per-class port refers to.

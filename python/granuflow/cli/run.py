@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import os
+import stat
 import sys
 
 from ..flowsheet import load
@@ -56,10 +57,13 @@ def _may_be_monte_carlo(path: str) -> bool:
     """False when the scene file cannot ask for the Monte Carlo engine: its text does not name it (nor escapes a
     character, which could spell it), so its YAML need not be parsed twice, once here in pure Python."""
     try:
+        st = os.stat(path)
+        if not stat.S_ISREG(st.st_mode) or st.st_size > 1 << 20:
+            return True  # a fifo would block, a device never end: the loader names what is wrong with it
         with open(path, "rb") as f:
             data = f.read()
     except OSError:
-        return True  # the loader names what is wrong with it
+        return True
     return b"monte_carlo" in data or b"\\" in data
 
 
