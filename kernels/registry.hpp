@@ -34,6 +34,23 @@ struct KernelRegistries {
   // The drying closures of a particle hold-up (paper 000, sections 5.2, 5.4.1).
   Registry<DryingCurve> drying_curves{"drying curve"};
   Registry<DryingSurface> drying_surfaces{"drying surface"};
+
+  // Every family under the name the reference and the plugin listing give it: one list, so that a new family shows
+  // everywhere at once (the plugin listing had missed the drying families).
+  template <class F>
+  void for_each(F&& f) const {
+    f("aggregation", aggregation);
+    f("breakage_selection", selection);
+    f("breakage_fragments", fragments);
+    f("growth", growth);
+    f("aggregation_scheme", aggregation_schemes);
+    f("breakage_scheme", breakage_schemes);
+    f("growth_scheme", growth_schemes);
+    f("separation", separation);
+    f("comminution", comminution);
+    f("drying_curve", drying_curves);
+    f("drying_surface", drying_surfaces);
+  }
 };
 
 void register_all(KernelRegistries& r);

@@ -24,16 +24,7 @@ void add_origins(py::dict& out, const char* family, const Registry<Base>& reg) {
 py::dict plugin_origins() {
   py::dict out;
   add_origins(out, "units", units::builtin());
-  const auto& r = kernels::registries();
-  add_origins(out, "aggregation", r.aggregation);
-  add_origins(out, "breakage_selection", r.selection);
-  add_origins(out, "breakage_fragments", r.fragments);
-  add_origins(out, "growth", r.growth);
-  add_origins(out, "aggregation_scheme", r.aggregation_schemes);
-  add_origins(out, "breakage_scheme", r.breakage_schemes);
-  add_origins(out, "growth_scheme", r.growth_schemes);
-  add_origins(out, "separation", r.separation);
-  add_origins(out, "comminution", r.comminution);
+  kernels::registries().for_each([&](const char* family, const auto& reg) { add_origins(out, family, reg); });
   return out;
 }
 

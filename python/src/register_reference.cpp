@@ -147,19 +147,8 @@ void add_family(py::dict& out, const char* family, const Registry<Base>& reg) {
 }
 
 py::dict kernel_reference() {
-  const auto& r = kernels::registries();
   py::dict out;
-  add_family(out, "aggregation", r.aggregation);
-  add_family(out, "breakage_selection", r.selection);
-  add_family(out, "breakage_fragments", r.fragments);
-  add_family(out, "growth", r.growth);
-  add_family(out, "aggregation_scheme", r.aggregation_schemes);
-  add_family(out, "breakage_scheme", r.breakage_schemes);
-  add_family(out, "growth_scheme", r.growth_schemes);
-  add_family(out, "separation", r.separation);
-  add_family(out, "comminution", r.comminution);
-  add_family(out, "drying_curve", r.drying_curves);
-  add_family(out, "drying_surface", r.drying_surfaces);
+  kernels::registries().for_each([&](const char* family, const auto& reg) { add_family(out, family, reg); });
   return out;
 }
 

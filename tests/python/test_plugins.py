@@ -134,3 +134,13 @@ def test_a_bad_plugin_path_is_one_line_on_the_command_line_and_a_warning_in_pyth
                        capture_output=True, text=True, timeout=120, env=env, cwd=tmp_path)
     assert q.returncode == 0 and int(q.stdout) > 20
     assert "PluginWarning" in q.stderr and str(bad) in q.stderr
+
+
+def test_every_kernel_family_is_listed_for_plugins():
+    """The plugin listing and the reference draw their families from one list (KernelRegistries::for_each): a
+    family the reference documents (the drying curves and surfaces among them) is one a plugin's names show in."""
+    from granuflow import _core, plugins
+
+    families = set(_core.kernel_reference())
+    assert {"drying_curve", "drying_surface", "aggregation", "comminution"} <= families
+    assert set(plugins.origins()) == families | {"units"}
