@@ -1,7 +1,6 @@
 #include "droplet_evaporation.hpp"
 
 #include <cmath>
-
 #include <tuple>
 
 #include "granuflow/properties.hpp"
