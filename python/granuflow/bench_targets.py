@@ -23,6 +23,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 import statistics
 import subprocess
 import sys
@@ -120,17 +121,17 @@ def target_writing(size: int, repeats: int, progress: bool) -> dict:
             writes.append(time.perf_counter() - t0)
             solves.append(res.wall_time_s)
         csv_bytes = os.path.getsize(os.path.join(out, "timeseries.csv"))
-        # the whole command on the same scene (the file sits beside the shipped one: its data path resolves)
-        scene = os.path.join(os.path.dirname(bench_2d.scene_path()), f".bench_sen_2d_{size}_{os.getpid()}.yaml")
+        # the whole command on the same scene, written into the temporary folder (never beside the shipped one: a
+        # checkout may be read-only) with its collision file named by its full path
+        data = os.path.join(os.path.dirname(bench_2d.scene_path()), "data")
+        scene = os.path.join(out, f"bench_sen_2d_{size}.yaml")
         with open(scene, "w") as f:
-            f.write(text)
-        try:
-            _say(progress, f"writing: granuflow run of the 2-D scene {size}x{size}")
-            proc = timed_process(launcher() + ["run", scene, "--out", out, "--no-plots", "--no-grid-check",
-                                               "--quiet"], repeats)
-        finally:
-            os.remove(scene)
-        with open(os.path.join(out, "summary.json")) as f:
+            f.write(re.sub(r"agg_collisions_file: data/(\S+)",
+                           lambda m: "agg_collisions_file: " + json.dumps(os.path.join(data, m.group(1))), text))
+        _say(progress, f"writing: granuflow run of the 2-D scene {size}x{size}")
+        proc = timed_process(launcher() + ["run", scene, "--out", os.path.join(out, "run"), "--no-plots",
+                                           "--no-grid-check", "--quiet"], repeats)
+        with open(os.path.join(out, "run", "summary.json")) as f:
             proc_solve = json.load(f)["wall_time_s"]
     startup = timed_process(launcher() + ["--version"], repeats)["wall_s"]
     solve, write = statistics.median(solves), statistics.median(writes)
