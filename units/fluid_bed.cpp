@@ -102,16 +102,17 @@ class FluidBed : public UnitBase<FluidBed> {
 
  private:
   void declare_population(UnitSpec& s, Settings& st) {
-    // Aggregation, breakage (and growth) by the population engine, each kernel's parameters under the names they
-    // carry in every unit (agg_ln_beta0, sel_k_break ...; the bare names of earlier versions are deprecated aliases).
+    // Aggregation, breakage (and growth) by the population engine, each kernel's parameters and settings under the
+    // names they carry in every unit (agg_ln_beta0, sel_k_break, agg_beta0_basis, sel_size_unit ...; the bare and
+    // breakage_ names of earlier versions are deprecated aliases).
     // Paper 001: glass-transition kernel on the fixed pivot, Vogel-Peukert breakage with tanh power-law fragments,
     // aggregates beyond the grid kept in the top class (fold).
     kernels::PopulationOptions o;
     o.aggregation = "glass_transition", o.aggregation_scheme = "fixed_pivot";
     o.breakage = "vogel_peukert", o.fragments = "tanh_power_law", o.breakage_scheme = "fixed_pivot";
     o.outside = kernels::Outside::kFold;
-    o.agg_settings = o.frag_settings = o.growth_settings = "";
-    o.sel_settings = "breakage_";
+    for (const char* family : {"agg_", "frag_", "growth_"}) st.rename_prefix(family, "");
+    st.rename_prefix("sel_", "breakage_");
     o.properties = {"water"};
     const size_t first = s.params().size();
     pop_.declare(s, st, grid_, o);

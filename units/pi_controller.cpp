@@ -17,6 +17,7 @@
 
 #include "granuflow/errors.hpp"
 #include "granuflow/flowsheet.hpp"
+#include "granuflow/renamed.hpp"
 #include "granuflow/signals.hpp"
 
 namespace granuflow::units {
@@ -46,6 +47,7 @@ class PiController : public UnitBase<PiController>, public SignalUnit, public Ho
                       "direct: it rises when the measurement is above it (a discharge holding a level)") == "direct";
     const std::string ym = measure_.empty() ? "-" : measured_unit(st);
     ParamSpec u{"u0", "-", 0.0, -kWide, kWide, "", "docs/controllers.md"};
+    if (!drive_.empty()) drive_ = driven_name(st);  // a deprecated spelling drives the parameter's new name
     if (!drive_.empty()) u = driven_spec(st);
     const std::string src = "docs/controllers.md";
     p_sp_ = s.add_param({"set_point", ym, 0.0, -kWide, kWide, "set point, in the unit of the measured quantity", src});
@@ -140,6 +142,12 @@ class PiController : public UnitBase<PiController>, public SignalUnit, public Ho
       if (o.name == name) return o.unit;
     throw ConfigError(st.where() + ".measure = '" + measure_ + "': unit " + u->name + " has no state or output '" +
                       name + "'");
+  }
+  std::string driven_name(Settings& st) const {
+    const auto [u, name] = named(st, "drive", drive_);
+    if (u->spec.param_index(name) >= 0) return drive_;
+    const std::string renamed = use_renamed_param(u->unit->type(), u->name, name);
+    return renamed.empty() ? drive_ : u->name + "." + renamed;
   }
   ParamSpec driven_spec(Settings& st) const {
     const auto [u, name] = named(st, "drive", drive_);

@@ -55,15 +55,16 @@ EventAction setting_action(const Flowsheet& fs, const Registry<Unit>& units, con
   int u = -1;
   for (size_t k = 0; k < fs.units().size() && dot != std::string::npos; ++k)
     if (fs.units()[k].name == target.substr(0, dot) && fs.units()[k].owner < 0) u = static_cast<int>(k);
-  bool declared = false;
+  std::string setting;  // its name now: an event written with a deprecated spelling switches the same setting
   if (u >= 0)
-    for (const auto& st : fs.units()[u].settings) declared = declared || st.name == target.substr(dot + 1);
-  if (!declared)
+    for (const auto& st : fs.units()[u].settings)
+      if (st.name == target.substr(dot + 1) || st.old_name == target.substr(dot + 1)) setting = st.name;
+  if (setting.empty())
     throw ConfigError(at +
                       ": neither a parameter nor a setting of the flowsheet (an event sets unit.param or "
                       "unit.setting; `granuflow describe` lists them)");
   EventAction a;
-  a.target = target, a.text = text;
+  a.target = target.substr(0, dot + 1) + setting, a.text = text;
   const std::string type = fs.units()[u].unit->type();
   const Registry<Unit>* reg = &units;
   a.make = [reg, type] { return reg->create(type); };

@@ -2,6 +2,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <iostream>
+#include <mutex>
+#include <set>
 
 #include "granuflow/errors.hpp"
 #include "granuflow/flowsheet.hpp"
@@ -11,9 +14,27 @@ namespace granuflow {
 Settings::Settings(std::string where, std::map<std::string, std::string> given)
     : where_(std::move(where)), given_(std::move(given)) {}
 
+// Called right after the setting `name` was declared (declared_.back()).
 const std::string* Settings::given(const std::string& name) {
   used_.push_back(name);
-  auto it = given_.find(name);
+  const auto it = given_.find(name);
+  for (const auto& [now, before] : renamed_) {
+    if (name.compare(0, now.size(), now) != 0) continue;
+    const std::string old = before + name.substr(now.size());
+    declared_.back().old_name = old;
+    const auto o = given_.find(old);
+    if (o == given_.end()) break;
+    used_.push_back(old);
+    if (it != given_.end())
+      throw ConfigError(where_ + ": both '" + old + "' and its new name '" + name + "' are given; keep '" + name + "'");
+    static std::mutex mutex;
+    static std::set<std::string> warned;
+    std::lock_guard<std::mutex> lock(mutex);
+    if (warned.insert(old).second)
+      std::cerr << "granuflow: warning: setting '" << where_ << "." << old << "' is deprecated, it is now '" << name
+                << "' (a kernel's setting has one name in every unit)\n";
+    return &o->second;
+  }
   return it == given_.end() ? nullptr : &it->second;
 }
 

@@ -152,13 +152,13 @@ TEST(FluidBed, StructuredJacobianMatchesPlainAdAndFiniteDifferencesForEachMechan
   // the engine's analytic part plus class-coloured AD with reductions: check each branch against plain AD
   for (const std::string settings :
        {"{aggregation: none, breakage: none}", "{aggregation: constant, breakage: none}",
-        "{aggregation: constant, aggregation_scheme: cell_average, breakage: vogel_peukert, breakage_size_unit: mm}",
+        "{aggregation: constant, aggregation_scheme: cell_average, breakage: vogel_peukert, sel_size_unit: mm}",
         "{aggregation: constant, breakage: vogel_peukert, breakage_scheme: cell_mass}"}) {
     std::string text =
         std::regex_replace(std::string(kDrying), std::regex("\\{aggregation: none, breakage: none\\}"), settings);
     if (settings.find("constant") != std::string::npos)
       text = std::regex_replace(text, std::regex("params: \\{X0: 0.12, T0: 30 degC\\}"),
-                                "params: {X0: 0.12, T0: 30 degC, beta0: 1e-13}");  // beta N ~ 1e-3 / s
+                                "params: {X0: 0.12, T0: 30 degC, agg_beta0: 1e-13}");  // beta N ~ 1e-3 / s
     Scene s = scene_from_text(text);
     SimOptions o = s.options;
     o.t_out = {0, 300};
@@ -228,7 +228,7 @@ TEST(FluidBed, ContinuousHoldUpRelaxesToFeedOverDischargeRateWithTheFeedPsd) {
 
 TEST(FluidBed, DischargeAndFeedPortsKeepTheJacobianExact) {
   Scene s = continuous_bed("aggregation: constant");
-  s.flowsheet->set_param("bed.beta0", 1e-13);
+  s.flowsheet->set_param("bed.agg_beta0", 1e-13);
   SimOptions o = s.options;
   o.t_out = {0, 300};
   const SimResult r = simulate(*s.flowsheet, o);

@@ -32,6 +32,10 @@ class Settings {
                          const std::string& description);
   // Throws ConfigError naming the first setting that was given but never read, with the valid names.
   void check_all_used() const;
+  // Settings named `now`... were named `before`... in earlier versions: a read of `now`X that is not given takes a
+  // given `before`X, warning once per process that it is deprecated (a kernel's settings carry one name in every
+  // unit). Both spellings given is an error.
+  void rename_prefix(std::string now, std::string before) { renamed_.emplace_back(std::move(now), std::move(before)); }
   const std::vector<SettingSpec>& declared() const { return declared_; }
   const std::string& where() const { return where_; }
   // A unit instance added to the flowsheet before this one (a particle system other units share), or nullptr.
@@ -44,6 +48,7 @@ class Settings {
   std::map<std::string, std::string> given_;
   std::vector<std::string> used_;
   std::vector<SettingSpec> declared_;
+  std::vector<std::pair<std::string, std::string>> renamed_;  // (now, before) prefixes
   const Flowsheet* fs_ = nullptr;
 };
 

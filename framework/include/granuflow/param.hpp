@@ -31,6 +31,7 @@ struct SettingSpec {
   double lower = -1e300;             // for Int and Real
   double upper = 1e300;
   std::string description;
+  std::string old_name;  // a deprecated spelling still accepted (Settings::rename_prefix), or ""
 };
 
 std::string to_string(SettingType t);
