@@ -380,8 +380,13 @@ class Flowsheet:
             raise ConfigError(f"simulate(): sensitivities = {short(sensitivities)}: expected a list of parameter "
                               "names, e.g. ['inlet.T']")
         layout = self._layout  # names, roles and units: the first run brings them
+        t_end = None if t_end is None else _end_time(t_end, "simulate()")
+        ahead = None  # a grid check asked for: its solve beside the run's (grid_check.Ahead)
+        if grid_check and not (sensitivities or restart or checkpoints or self.scene_checkpoints):
+            ahead = _grid_check.start_ahead(self, t_end=t_end, t_out=t_out, n_out=n_out, rtol=rtol, atol=atol,
+                                            linear_solver=linear_solver, max_steps=max_steps, method=method)
         raw = self._scene.simulate(
-            t_end=None if t_end is None else _end_time(t_end, "simulate()"),
+            t_end=t_end,
             t_out=t_out, n_out=None if n_out is None else int(n_out), rtol=rtol, atol=atol,
             sensitivities=list(sensitivities), linear_solver=linear_solver,
             max_steps=None if max_steps is None else int(max_steps), method=method, names=layout is None,
@@ -404,7 +409,8 @@ class Flowsheet:
         if grid_check:
             from .accuracy import grid_check as gc
 
-            res.grid_check = gc.check(self, res, linear_solver=linear_solver, max_steps=max_steps, method=method)
+            res.grid_check = gc.check(self, res, ahead, linear_solver=linear_solver, max_steps=max_steps,
+                                      method=method)
         self._warn(res, warn)
         return res
 
