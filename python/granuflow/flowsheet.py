@@ -383,8 +383,9 @@ class Flowsheet:
         t_end = None if t_end is None else _end_time(t_end, "simulate()")
         ahead = None  # a grid check asked for: its solve beside the run's (grid_check.Ahead)
         if grid_check and not (sensitivities or restart or checkpoints or self.scene_checkpoints):
-            ahead = _grid_check.start_ahead(self, t_end=t_end, t_out=t_out, n_out=n_out, rtol=rtol, atol=atol,
-                                            linear_solver=linear_solver, max_steps=max_steps, method=method)
+            planned = self._planned_run(t_end, t_out, n_out, rtol, atol)
+            ahead = planned and _grid_check.start_ahead(self, *planned, linear_solver=linear_solver,
+                                                        max_steps=max_steps, method=method)
         raw = self._scene.simulate(
             t_end=t_end,
             t_out=t_out, n_out=None if n_out is None else int(n_out), rtol=rtol, atol=atol,
@@ -413,6 +414,21 @@ class Flowsheet:
                                       method=method)
         self._warn(res, warn)
         return res
+
+    def _planned_run(self, t_end, t_out, n_out, rtol, atol) -> tuple[list[float], float, float] | None:
+        """(output times, rtol, atol) a run with these options of simulate() will have, by the core's rule
+        (register_flowsheet.cpp simulate, run_common.cpp output_times); None where the run will refuse them. What
+        the run then reports is the fact: grid_check.Ahead compares the two."""
+        s = self._scene
+        if t_out is not None:
+            times = list(t_out)
+        elif t_end is None and n_out is None and s.t_out:
+            times = [float(t) for t in s.t_out]
+        else:
+            end, n = s.t_end if t_end is None else t_end, s.n_out if n_out is None else int(n_out)
+            times = [end * i / (n - 1) for i in range(n)] if n >= 2 else []
+        return (times, s.rtol if rtol is None else float(rtol), s.atol if atol is None else float(atol)) if times \
+            else None
 
     def _unfired_events(self, res: Result) -> list[str]:
         """A declared one-shot event that never fired in a run that reached its end is named: an event fires on a

@@ -136,7 +136,7 @@ def test_the_check_solved_beside_the_run_is_the_one_solved_after_it(monkeypatch)
     assert (r.grid_check.errors, r.grid_check.end_fractions) == (after.errors, after.end_fractions)
     assert r.grid_check.errors["d50_um"] > grid_check.THRESHOLD
     # started for other output times: discarded, and the check solves after the run, as without it
-    missed = grid_check.start_ahead(fs, t_end=1800.0, n_out=5)
+    missed = grid_check.start_ahead(fs, [0.0, 900.0, 1800.0], 1e-6, 1e-6)
     again = grid_check.check(fs, r, missed)
     assert used[-1] is None and (again.errors, again.end_fractions) == (after.errors, after.end_fractions)
 

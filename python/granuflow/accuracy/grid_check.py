@@ -103,26 +103,10 @@ class Ahead:
         return self.fine_fs, self.outcome, self.t0
 
 
-def start_ahead(fs, *, t_end=None, t_out=None, n_out=None, rtol=None, atol=None, **kw) -> Ahead | None:
-    """The check's solve started before a run with these options (see Ahead); None when the scene has no size grid
-    or the run's output times are not known before it."""
-    if fs.grid() is None:
-        return None
-    scene = fs._scene
-    end = scene.t_end if t_end is None else float(t_end)
-    if t_out is not None:
-        times = [float(t) for t in t_out]
-    elif t_end is None and n_out is None and scene.t_out:
-        times = [float(t) for t in scene.t_out]
-    else:
-        n = scene.n_out if n_out is None else int(n_out)
-        if n < 2:
-            return None  # the run refuses it
-        times = [end * i / (n - 1) for i in range(n)]  # run_common.cpp output_times: t_end * i / (n_out - 1)
-    if not times:
-        return None
-    return Ahead(fs, times, scene.rtol if rtol is None else float(rtol), scene.atol if atol is None else float(atol),
-                 kw)
+def start_ahead(fs, t_out: list[float], rtol: float, atol: float, **kw) -> Ahead | None:
+    """The check's solve started before a run whose output times and tolerances will be these (see Ahead); None
+    when the scene has no size grid."""
+    return Ahead(fs, t_out, rtol, atol, kw) if fs.grid() is not None and t_out else None
 
 
 def check(fs, res, ahead: Ahead | None = None, **kw) -> GridCheck | None:
