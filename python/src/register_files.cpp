@@ -4,8 +4,8 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <charconv>
 #include <cmath>
-#include <cstdio>
 #include <string>
 
 namespace py = pybind11;
@@ -13,8 +13,9 @@ namespace py = pybind11;
 namespace granuflow::python {
 namespace {
 
-// Each value as Python's "%.10g" % x: C's %.10g (both correctly rounded to 10 digits, the same exponent form), but
-// a NaN is "nan" whatever its sign bit (C would write "-nan").
+// Each value as Python's "%.10g" % x: std::to_chars at precision 10, which is C's %.10g (both correctly rounded to 10
+// digits, the same exponent form) at a fraction of snprintf's cost, but a NaN is "nan" whatever its sign bit (C would
+// write "-nan").
 std::string csv_rows(const py::array_t<double, py::array::c_style | py::array::forcecast>& data) {
   if (data.ndim() != 2) throw py::value_error("csv_rows: expected a 2-D array of values");
   const auto rows = data.shape(0), cols = data.shape(1);
@@ -30,8 +31,8 @@ std::string csv_rows(const py::array_t<double, py::array::c_style | py::array::f
       if (std::isnan(x)) {
         out += "nan";
       } else {
-        const int n = std::snprintf(buf, sizeof buf, "%.10g", x);
-        out.append(buf, static_cast<size_t>(n));
+        const auto r = std::to_chars(buf, buf + sizeof buf, x, std::chars_format::general, 10);
+        out.append(buf, r.ptr);
       }
     }
     out += '\n';
