@@ -26,6 +26,23 @@ def test_no_command_lists_the_commands(capsys):
     assert "required: cmd" not in err
 
 
+ONE_COMMAND = [(["run", "x"], "run"), (["--plugin", "a.so", "--plugin=b.so", "sweep"], "sweep"),
+               (["rn", "x"], None), (["--plug", "run", "run"], None), (["-h"], None), (["--version"], None)]
+
+
+@pytest.mark.parametrize("argv, built", ONE_COMMAND)
+def test_only_the_named_command_has_its_parser_built(capsys, argv, built):
+    # issue 32: a run builds its own command's parser only; anything else all of them, so that help and errors
+    # list them ("rn": invalid choice, choose from ...)
+    _, sub = cli._parser_for(argv)
+    assert list(sub.choices) == ([built] if built else list(cli._parser(None)[1].choices))
+    assert len(sub.choices) == (1 if built else 13)
+    if argv[0] == "rn":
+        with pytest.raises(SystemExit):
+            cli.main(argv)
+        assert "invalid choice: 'rn' (choose from 'run', 'steady'" in capsys.readouterr().err
+
+
 @pytest.mark.parametrize("repeats", ["99999999999999999999", "10001"])
 def test_bench_repeats_beyond_any_sane_run_are_refused_at_once(capsys, repeats):
     code, err, seconds = _main(capsys, ["bench", "scene", "--repeats", repeats])

@@ -206,12 +206,17 @@ def _parser(named: str | None):
     return p, sub
 
 
-def main(argv=None) -> int:
-    argv = sys.argv[1:] if argv is None else [str(a) for a in argv]
+def _parser_for(argv: list[str]):
+    """(parser, subparsers) for this command line: of the command it names, else of all (help and errors list
+    them)."""
     named = _named_command(argv)
     p, sub = _parser(named)
-    if named is not None and named not in sub.choices:  # not a command: the error lists them all
-        p, sub = _parser(None)
+    return (p, sub) if named is None or named in sub.choices else _parser(None)
+
+
+def main(argv=None) -> int:
+    argv = sys.argv[1:] if argv is None else [str(a) for a in argv]
+    p, sub = _parser_for(argv)
     if not argv:
         p.error(f"no command given; the commands are {', '.join(sub.choices)} (granuflow COMMAND --help for each)")
     args = p.parse_args(argv)
