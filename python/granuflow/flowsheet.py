@@ -380,14 +380,8 @@ class Flowsheet:
             raise ConfigError(f"simulate(): sensitivities = {short(sensitivities)}: expected a list of parameter "
                               "names, e.g. ['inlet.T']")
         layout = self._layout  # names, roles and units: the first run brings them
-        t_end = None if t_end is None else _end_time(t_end, "simulate()")
-        ahead = None  # a grid check asked for: its solve beside the run's (grid_check.Ahead)
-        if grid_check and not (sensitivities or restart or checkpoints or self.scene_checkpoints):
-            planned = self._planned_run(t_end, t_out, n_out, rtol, atol)
-            ahead = planned and _grid_check.start_ahead(self, *planned, linear_solver=linear_solver,
-                                                        max_steps=max_steps, method=method)
         raw = self._scene.simulate(
-            t_end=t_end,
+            t_end=None if t_end is None else _end_time(t_end, "simulate()"),
             t_out=t_out, n_out=None if n_out is None else int(n_out), rtol=rtol, atol=atol,
             sensitivities=list(sensitivities), linear_solver=linear_solver,
             max_steps=None if max_steps is None else int(max_steps), method=method, names=layout is None,
@@ -410,25 +404,9 @@ class Flowsheet:
         if grid_check:
             from .accuracy import grid_check as gc
 
-            res.grid_check = gc.check(self, res, ahead, linear_solver=linear_solver, max_steps=max_steps,
-                                      method=method)
+            res.grid_check = gc.check(self, res, linear_solver=linear_solver, max_steps=max_steps, method=method)
         self._warn(res, warn)
         return res
-
-    def _planned_run(self, t_end, t_out, n_out, rtol, atol) -> tuple[list[float], float, float] | None:
-        """(output times, rtol, atol) a run with these options of simulate() will have, by the core's rule
-        (register_flowsheet.cpp simulate, run_common.cpp output_times); None where the run will refuse them. What
-        the run then reports is the fact: grid_check.Ahead compares the two."""
-        s = self._scene
-        if t_out is not None:
-            times = list(t_out)
-        elif t_end is None and n_out is None and s.t_out:
-            times = [float(t) for t in s.t_out]
-        else:
-            end, n = s.t_end if t_end is None else t_end, s.n_out if n_out is None else int(n_out)
-            times = [end * i / (n - 1) for i in range(n)] if n >= 2 else []
-        return (times, s.rtol if rtol is None else float(rtol), s.atol if atol is None else float(atol)) if times \
-            else None
 
     def _unfired_events(self, res: Result) -> list[str]:
         """A declared one-shot event that never fired in a run that reached its end is named: an event fires on a

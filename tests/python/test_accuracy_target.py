@@ -123,24 +123,6 @@ def test_a_plain_run_checks_its_grid():
     assert gf.load(SCENE).simulate(warn=False).grid_check is None  # warn=False: callers that silence warnings
 
 
-def test_the_check_solved_beside_the_run_is_the_one_solved_after_it(monkeypatch):
-    # issue 32: the check's solve starts with the run's (grid_check.Ahead); it is used only where the run's output
-    # times, tolerances and parameter values are the ones it was started with, so the check is the same bit for bit
-    used = []
-    result = grid_check.Ahead.result
-    monkeypatch.setattr(grid_check.Ahead, "result", lambda self, *a: used.append(result(self, *a)) or used[-1])
-    fs = gf.load(SCENE)
-    r = fs.simulate(warn=False, grid_check=True, t_end="30 min", n_out=7)
-    assert used[-1] is not None and len(r.t) == 7
-    after = grid_check.check(fs, r)  # the check as made after the run
-    assert (r.grid_check.errors, r.grid_check.end_fractions) == (after.errors, after.end_fractions)
-    assert r.grid_check.errors["d50_um"] > grid_check.THRESHOLD
-    # started for other output times: discarded, and the check solves after the run, as without it
-    missed = grid_check.start_ahead(fs, [0.0, 900.0, 1800.0], 1e-6, 1e-6)
-    again = grid_check.check(fs, r, missed)
-    assert used[-1] is None and (again.errors, again.end_fractions) == (after.errors, after.end_fractions)
-
-
 def test_the_two_causes_of_mass_in_the_top_class():
     # the headline: smearing of a coarse grid (2.6 % at 1000 um on 160 classes): more classes, not d_max
     r = gf.load(SCENE).simulate(warn=False, grid_check=True)

@@ -58,70 +58,15 @@ class GridCheck:
                 "suggest": self.suggest, "wall_time_s": self.wall_time_s, "notes": list(self.notes)}
 
 
-def _fine_solve(fine_fs, t_out: list[float], rtol: float, atol: float, kw: dict):
-    """The check's solve: the flowsheet on the grid twice as fine, at the run's tolerances and output times."""
-    return fine_fs.simulate(**dict(kw, t_end=t_out[-1], t_out=t_out, rtol=rtol, atol=atol), warn=False,
-                            accuracy=False, grid_check=False)
-
-
-class Ahead:
-    """The check's solve started beside the run's own (issue 32: on two cores the whole process then waits for the
-    longer of the two solves, not their sum). It is given the output times and tolerances the run will have (the
-    core's rule: run_common.cpp output_times) and the parameter values the flowsheet has before the run, and used only
-    where the run's turn out to be exactly those, so that the check is bit for bit the one made after the run; else
-    it is discarded and the check solves after the run, as without it."""
-
-    def __init__(self, fs, t_out: list[float], rtol: float, atol: float, kw: dict):
-        import threading
-
-        self.args, self.kw, self.outcome, self.thread = (t_out, rtol, atol), kw, None, None
-        self.values, self.t0 = fs.parameter_values(), time.perf_counter()
-        try:
-            self.fine_fs = fs.refined(2)  # here, not in the thread: the run's solve may change fs meanwhile
-        except _core.ConfigError as e:
-            self.outcome = e
-            return
-
-        def solve():
-            try:
-                self.outcome = _fine_solve(self.fine_fs, t_out, rtol, atol, kw)
-            except BaseException as e:  # handed to the run's thread, which reports it as the check always did
-                self.outcome = e
-        self.thread = threading.Thread(target=solve, name="granuflow-grid-check")
-        self.thread.start()
-
-    def result(self, fs, res, kw: dict):
-        """(fine flowsheet, fine result, start time) when this solve is the one the check of ``res`` asks for, else
-        None."""
-        if self.thread is not None:
-            self.thread.join()
-        if (kw != self.kw or self.args != ([float(t) for t in res.t], res.rtol, res.atol)
-                or fs.parameter_values() != self.values):
-            return None
-        if isinstance(self.outcome, BaseException):
-            raise self.outcome
-        return self.fine_fs, self.outcome, self.t0
-
-
-def start_ahead(fs, t_out: list[float], rtol: float, atol: float, **kw) -> Ahead | None:
-    """The check's solve started before a run whose output times and tolerances will be these (see Ahead); None
-    when the scene has no size grid."""
-    return Ahead(fs, t_out, rtol, atol, kw) if fs.grid() is not None and t_out else None
-
-
-def check(fs, res, ahead: Ahead | None = None, **kw) -> GridCheck | None:
-    """The grid check of ``res`` (a result of ``fs``); None when the scene has no size grid. ``ahead``: its solve
-    started before the run (start_ahead), used when it is the one this check needs."""
+def check(fs, res, **kw) -> GridCheck | None:
+    """The grid check of ``res`` (a result of ``fs``); None when the scene has no size grid."""
     if fs.grid() is None:
         return None
     t0 = time.perf_counter()
     try:
-        done = ahead.result(fs, res, kw) if ahead is not None else None
-        if done is not None:
-            fine_fs, fine, t0 = done
-        else:
-            fine_fs = fs.refined(2)
-            fine = _fine_solve(fine_fs, [float(t) for t in res.t], res.rtol, res.atol, kw)
+        fine_fs = fs.refined(2)
+        fine = fine_fs.simulate(**dict(kw, t_end=float(res.t[-1]), t_out=[float(t) for t in res.t],
+                                       rtol=res.rtol, atol=res.atol), warn=False, accuracy=False, grid_check=False)
     except (_core.ConfigError, _core.SolverError) as e:
         return GridCheck(fs.grid_label(), "", {}, {}, time.perf_counter() - t0,
                          notes=[f"no grid check: {' '.join(str(e).split())}"])
