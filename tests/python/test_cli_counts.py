@@ -70,3 +70,25 @@ def test_docs_into_a_link_loop_or_onto_a_file_is_one_line_naming_write(tmp_path,
     assert len(err.strip().splitlines()) == 1, err
     assert f"--write {where}: cannot write" in err and reason in err, err
     assert "Traceback" not in err
+
+
+@pytest.mark.parametrize("columns", [None, "", "0", "abc", "-3", "57", "300"])
+def test_help_is_laid_out_at_the_width_shutil_gives(monkeypatch, columns):
+    # the command line leaves shutil unimported (issue 32): its own reading of the terminal's width is shutil's
+    import argparse
+    import shutil
+
+    from granuflow.cli import common
+
+    if columns is None:
+        monkeypatch.delenv("COLUMNS", raising=False)
+    else:
+        monkeypatch.setenv("COLUMNS", columns)
+    assert common._columns() == shutil.get_terminal_size().columns
+    mine = cli._parser(None)[0]
+    plain = cli._parser(None)[0]
+    for p in [plain, *plain._subparsers._group_actions[0].choices.values()]:
+        p.formatter_class = argparse.HelpFormatter
+    assert mine.format_help() == plain.format_help()
+    assert mine._subparsers._group_actions[0].choices["run"].format_help() == \
+        plain._subparsers._group_actions[0].choices["run"].format_help()
