@@ -1,6 +1,6 @@
-// Result files from Python: the rows of timeseries.csv formatted here, not value by value in Python (issue 32: on
-// the 2-D scene at 80x80 the Python formatting took a third of the solve's time). Python opens and names the file,
-// so a folder that cannot be written fails as every other file does.
+// Result files from Python: the rows of timeseries.csv formatted here, not value by value in Python (issue 32: the
+// 2-D scene's file at 80x80, 139 000 values, took 36 ms of CPU to format in Python, 12 ms here). Python opens and
+// names the file, so a folder that cannot be written fails as every other file does.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
