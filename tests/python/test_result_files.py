@@ -63,3 +63,17 @@ def test_csv_has_the_bytes_of_the_per_column_writer(res, tmp_path):
     table = fresh.table()
     assert list(table.columns) == new.decode().splitlines()[0].split(",")
     assert table.shape[0] == len(fresh.t)
+
+
+def test_the_core_formats_every_double_as_python_does():
+    # the rows of timeseries.csv come from the core (issue 32): "%.10g" of C and of Python agree on rounding (ties
+    # included) and exponents, not on a NaN with its sign bit set, which Python writes "nan" and C "-nan"
+    from granuflow import _core
+
+    rng = np.random.default_rng(32)
+    special = [0.0, -0.0, np.inf, -np.inf, np.nan, -np.nan, 5e-324, 2.2250738585072014e-308, 1.7976931348623157e308,
+               1e-5, 1e16, 0.1, 2.5, 99999.999995, 1234567890.5, 0.00012345678905, 12345.678905]
+    bits = rng.integers(0, 2**64 - 1, size=20000, dtype=np.uint64, endpoint=True)  # every double: NaNs, subnormals
+    data = np.concatenate([special * 4, bits.view(np.float64), rng.lognormal(0, 20, 4000)])[:24060].reshape(-1, 12)
+    assert _core.csv_rows(data) == "".join(",".join("%.10g" % x for x in row) + "\n" for row in data.tolist())
+    assert _core.csv_rows(np.zeros((0, 3))) == ""

@@ -61,13 +61,38 @@ def _load_plugins(libs: list[str]) -> None:
         plugins.load_plugin(lib)
 
 
-def main(argv=None) -> int:
+class _Unbuilt:
+    """The parser of a command this run does not name: argparse's parsers of all commands would cost every run ~10
+    ms (issue 32); the one named is built as ever, so its options, help and errors are the same."""
+
+    def add_argument(self, *args, **kwargs):
+        pass
+
+    def set_defaults(self, **kwargs):
+        pass
+
+
+def _named_command(argv: list[str]) -> str | None:
+    """The command of a command line whose words before it are only ``--plugin LIB`` (or ``--plugin=LIB``); None
+    for anything else (help, --version, an abbreviated option), for which every command's parser is built."""
+    k = 0
+    while k < len(argv) and (argv[k] == "--plugin" or argv[k].startswith("--plugin=")):
+        k += 2 if argv[k] == "--plugin" else 1
+    return argv[k] if k < len(argv) and not argv[k].startswith("-") else None
+
+
+def _parser(named: str | None):
+    """(the command line's parser, its subparsers) with the parser of command ``named`` only, or of all (None)."""
     p = Parser(prog="granuflow", description="spray fluidized-bed flowsheet simulation")
     p.add_argument("--version", action="version", version=_version())
     p.add_argument("--plugin", action="append", default=[], metavar="LIB",
                    help="load units and kernels from a plugin library first (repeatable; docs/install_and_plugins.md)")
     sub = p.add_subparsers(dest="cmd", required=True, parser_class=Parser)
-    r = sub.add_parser("run", help="simulate a scene and write summary.json, CSV and plots")
+
+    def add_parser(name: str, **kwargs):
+        return sub.add_parser(name, **kwargs) if named in (None, name) else _Unbuilt()
+
+    r = add_parser("run", help="simulate a scene and write summary.json, CSV and plots")
     r.add_argument("scene")
     r.add_argument("--out", required=True, help="output folder (created)")
     r.add_argument("--set", action="append", metavar="UNIT.PARAM=VALUE", help="override a parameter (unit allowed)")
@@ -89,7 +114,7 @@ def main(argv=None) -> int:
                    help="resume from a checkpoint file of the same scene (bit-identical to the run that wrote it)")
     r.add_argument("--quiet", action="store_true", help="no output but errors")
     r.set_defaults(func=_cmd("run", "cmd_run"))
-    st = sub.add_parser("steady", help="solve a scene's steady state directly; write steady.json and steady_psd.csv")
+    st = add_parser("steady", help="solve a scene's steady state directly; write steady.json and steady_psd.csv")
     st.add_argument("scene")
     st.add_argument("--out", required=True, help="output folder (created)")
     st.add_argument("--set", action="append", metavar="UNIT.PARAM=VALUE", help="override a parameter (unit allowed)")
@@ -97,15 +122,15 @@ def main(argv=None) -> int:
     st.add_argument("--no-stability", action="store_true", help="skip the eigenvalues of the linearized dynamics")
     st.add_argument("--quiet", action="store_true", help="no output but errors")
     st.set_defaults(func=_cmd("steady", "cmd_steady"))
-    dr = sub.add_parser("draw", help="draw a scene's flowsheet with Graphviz (units, streams, recycles)")
+    dr = add_parser("draw", help="draw a scene's flowsheet with Graphviz (units, streams, recycles)")
     dr.add_argument("scene")
     dr.add_argument("--out", required=True, help="image file: .svg, .png, .pdf or .dot")
     dr.set_defaults(func=_cmd("info", "cmd_draw"))
-    rp = sub.add_parser("report", help="write OUT_DIR/report.html: one offline page with the diagram, results, "
-                        "balances, warnings, plots, scene and command of a finished output folder")
+    rp = add_parser("report", help="write OUT_DIR/report.html: one offline page with the diagram, results, "
+                    "balances, warnings, plots, scene and command of a finished output folder")
     rp.add_argument("out_dir")
     rp.set_defaults(func=_cmd("info", "cmd_report"))
-    w = sub.add_parser("sweep", help="run a sweep file; write sweep.csv and sweep.json")
+    w = add_parser("sweep", help="run a sweep file; write sweep.csv and sweep.json")
     w.add_argument("sweepfile")
     w.add_argument("--out", required=True, help="output folder (created)")
     _add_batch_options(w)
@@ -113,7 +138,7 @@ def main(argv=None) -> int:
     w.add_argument("--error-estimate", action="store_true",
                    help="each point also on finer size grids and a tighter tolerance: columns <output>_err")
     w.set_defaults(func=_cmd("sweep", "cmd_sweep"))
-    k = sub.add_parser("contour", help="contour map of outputs over two parameters; feasible window; CSV and PNG")
+    k = add_parser("contour", help="contour map of outputs over two parameters; feasible window; CSV and PNG")
     k.add_argument("scene")
     k.add_argument("--x", required=True, metavar="UNIT.PARAM:UNIT:LO:HI:N",
                    help="e.g. inlet.T:degC:40:80:15 (N: 1 to 401 points), or a unit setting's values "
@@ -131,26 +156,26 @@ def main(argv=None) -> int:
     k.add_argument("--steady", action="store_true",
                    help="each point's steady state, solved directly (continuous processes), instead of a run")
     k.set_defaults(func=_cmd("contour", "cmd_contour"))
-    u = sub.add_parser("units", help="the built-in unit types; with NAME its ports, settings, parameters, outputs")
+    u = add_parser("units", help="the built-in unit types; with NAME its ports, settings, parameters, outputs")
     u.add_argument("name", nargs="?", help="a unit type (e.g. fluid_bed)")
     u.set_defaults(func=_cmd("info", "cmd_units"))
-    kk = sub.add_parser("kernels", help="registered kernels and schemes; with FAMILY their parameters and settings")
+    kk = add_parser("kernels", help="registered kernels and schemes; with FAMILY their parameters and settings")
     kk.add_argument("family", nargs="?", help="e.g. aggregation, breakage_selection, growth_scheme")
     kk.set_defaults(func=_cmd("info", "cmd_kernels"))
-    mt = sub.add_parser("materials", help="the catalogue of solid materials; with NAME its values and sources")
+    mt = add_parser("materials", help="the catalogue of solid materials; with NAME its values and sources")
     mt.add_argument("name", nargs="?")
     mt.set_defaults(func=_cmd("info", "cmd_materials"))
-    d = sub.add_parser("describe", help="a scene's parameters: value, SI unit, default, bounds, source, description")
+    d = add_parser("describe", help="a scene's parameters: value, SI unit, default, bounds, source, description")
     d.add_argument("scene")
     d.add_argument("--format", choices=["table", "csv", "json"], default="table",
                    help="table (every column, never truncated), csv or json")
     d.set_defaults(func=_cmd("info", "cmd_describe"))
-    g = sub.add_parser("docs", help="write the generated reference pages (units, kernels) into a docs folder")
+    g = add_parser("docs", help="write the generated reference pages (units, kernels) into a docs folder")
     g.add_argument("--write", dest="dir", metavar="DIR", default="docs", help="docs folder (default: docs)")
     g.add_argument("--check", action="store_true", help="only check that the pages are up to date (exit 2 if not)")
     g.add_argument("--quiet", action="store_true")
     g.set_defaults(func=_cmd("info", "cmd_docs"))
-    b = sub.add_parser("bench", help="benchmarks: speed against error (never pass/fail on time)")
+    b = add_parser("bench", help="benchmarks: speed against error (never pass/fail on time)")
     b.add_argument("what", choices=["core", "pbm", "pbm2d", "scene", "sweep", "loop", "targets"])
     b.add_argument("--json", action="store_true", help="print JSON records")
     b.add_argument("--repeats", type=int, default=7)
@@ -163,7 +188,7 @@ def main(argv=None) -> int:
     b.add_argument("--write-json", metavar="FILE", help="targets: also write the records to FILE (JSON)")
     b.add_argument("--quiet", action="store_true", help="no progress lines")
     b.set_defaults(func=_cmd("bench", "cmd_bench"))
-    c = sub.add_parser("calibrate", help="staged calibration against experiments; report, tables, parity plots")
+    c = add_parser("calibrate", help="staged calibration against experiments; report, tables, parity plots")
     c.add_argument("experiments", help="experiment file (YAML, see granuflow.calibration)")
     c.add_argument("--stages", required=True, help="stage file (YAML): free parameters, bounds, observables")
     c.add_argument("--out", required=True, help="output folder (created)")
@@ -178,7 +203,20 @@ def main(argv=None) -> int:
     c.add_argument("--no-progress", action="store_true", help="no progress bar (default: only on a terminal)")
     c.add_argument("--quiet", action="store_true", help="no output but errors (and no progress bar)")
     c.set_defaults(func=_cmd("calibrate", "cmd_calibrate"))
+    return p, sub
+
+
+def _parser_for(argv: list[str]):
+    """(parser, subparsers) for this command line: of the command it names, else of all (help and errors list
+    them)."""
+    named = _named_command(argv)
+    p, sub = _parser(named)
+    return (p, sub) if named is None or named in sub.choices else _parser(None)
+
+
+def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else [str(a) for a in argv]
+    p, sub = _parser_for(argv)
     if not argv:
         p.error(f"no command given; the commands are {', '.join(sub.choices)} (granuflow COMMAND --help for each)")
     args = p.parse_args(argv)
