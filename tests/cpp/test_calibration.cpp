@@ -133,6 +133,13 @@ TEST(StageProblem, JacobianEqualsFiniteDifferencesOfTheResiduals) {
     }
   }
   EXPECT_EQ(sp.sensitivity_solves(), 1 * 2);
+  // Back at the point of the last Jacobian (where a reweighting pass starts): the residuals of that solve, no new
+  // simulation (a plain one would differ from the sensitivity solve's in the last digits)
+  const long sims = sp.simulations();
+  std::vector<double> again;
+  sp.evaluate(th, again, nullptr);
+  EXPECT_EQ(sp.simulations(), sims);
+  EXPECT_EQ(again, r);
 }
 
 Stage two_parameter_stage() {

@@ -195,3 +195,19 @@ def test_multi_start_runs_in_threads(fs, synthetic, plan):
     costs = [r.cost for r in results]
     assert max(costs) - min(costs) < 0.05 * min(costs) + 1.0
     assert cal.best(results).cost == min(costs)
+
+
+def test_tables_are_the_csv_pandas_writes(tmp_path):
+    """The report writes its tables without pandas (write_table): byte for byte what DataFrame.to_csv writes, with NaN,
+    inf, booleans, tiny and huge floats, a text holding a comma and a quote, and a column some rows lack."""
+    import pandas as pd
+
+    from granuflow.calibration.report import write_table
+
+    rows = [{"set": "calibration", "output": "gas.T", "n": 96, "r2": 0.9670788352518543, "se": float("inf"),
+             "at_bound": False, "flag": "", "x": 1e-05},
+            {"set": "validation", "output": "bed.d5", "n": 84, "r2": float("nan"), "se": 2.0615202699458425e-06,
+             "at_bound": True, "flag": 'rse 0.388 > 0.3; "open", below', "x": 1.5e300, "only_here": -17.26327183198716}]
+    write_table(str(tmp_path / "ours.csv"), ("set", "output"), rows)
+    pd.DataFrame(rows).set_index(["set", "output"]).to_csv(tmp_path / "pandas.csv")
+    assert (tmp_path / "ours.csv").read_text() == (tmp_path / "pandas.csv").read_text()

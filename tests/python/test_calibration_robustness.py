@@ -2,6 +2,7 @@
 left (the penetration depth below about 130 um, where d50 does not respond), starts that end above the best are
 named, data that no stage uses is reported, and every warning reaches report.json, report.txt and stderr."""
 import json
+import os
 
 import numpy as np
 import pytest
@@ -90,8 +91,12 @@ def test_data_no_stage_uses_is_reported_everywhere(tmp_path):
     exp.write_text(EXPERIMENTS)
     st.write_text(STAGES)
     before = [sha256(exp), sha256(st), sha256(SCENE)]
-    p = cli("calibrate", exp, "--stages", st, "--out", tmp_path / "out", "--no-progress")
+    p = cli("calibrate", exp, "--stages", st, "--out", tmp_path / "out", "--no-progress", "--no-plots")
     assert p.returncode == 0, p.stderr
+    # --no-plots: every table and the report, no parity PNG
+    written = sorted(os.listdir(tmp_path / "out"))
+    assert written == ["correlation.csv", "estimates.csv", "fit.csv", "history.csv", "predictions.csv",
+                       "provenance.json", "report.json", "report.txt"], written
     warned = [line for line in p.stderr.splitlines() if line.startswith("granuflow: warning: ")]
     assert len(warned) == 1, p.stderr
     # the stage watches the dry basis, the experiment measured the wet basis

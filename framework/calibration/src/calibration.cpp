@@ -105,6 +105,7 @@ struct StageDriver {
         const double at = th[k], span = sp.theta_upper(k) - sp.theta_lower(k);
         for (int j = 0; j < opt.flat_scan_points; ++j) {
           th[k] = sp.theta_lower(k) + span * j / (opt.flat_scan_points - 1);
+          if (th[k] == at) continue;  // the estimate itself (often a bound): neither lower nor responding
           try {
             run.evaluate(th, res, nullptr, opt.num_threads);
           } catch (const SolverError&) {  // the model fails there: not a point to restart from

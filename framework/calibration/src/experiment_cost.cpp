@@ -18,9 +18,17 @@ bool ExperimentCost::Evaluate(double const* const* parameters, double* residuals
 }
 
 void ExperimentCost::compute(const double* theta, double* r, double* J) const {
+  const int rows = model_->rows();
+  if (cached(theta)) {  // the point of the last Jacobian, e.g. where a reweighting pass starts: no new simulation
+    weigh(last_m_, J ? &last_dm_ : nullptr, r, J);
+    if (J) {
+      last_r_.assign(r, r + rows);
+      last_J_.assign(J, J + size_t(rows) * n_);
+    }
+    return;
+  }
   std::vector<double> m, dm;
   model_->run(theta, m, J ? &dm : nullptr);
-  const int rows = model_->rows();
   if (sigma_.empty()) sigma_ = sigma_at(m);
   weigh(m, J ? &dm : nullptr, r, J);
   if (J) {

@@ -63,7 +63,7 @@ Python::
     res = cal.calibrate(fs, exps.calibration, plan.stages, start=plan.start, options=plan.options)
     rep = cal.report(fs, res, exps.calibration, exps.validation)
     rep.fit                      # R², RMSE per output and set;  res.estimates, res.correlation, res.history
-    rep.write("out/calibration") # report.json, CSV tables, parity PNGs
+    rep.write("out/calibration") # report.json, CSV tables, parity PNGs (plots=False: no PNGs)
 """
 from .files import (CalibrationError, ConfigError, Experiment, ExperimentSet, FreeParameter, Observation, Stage,
                     StagePlan, check_stage_data, load_experiments, load_stages, save_experiments)

@@ -15,6 +15,8 @@ from .files import Experiment, Stage, StagePlan, all_free
 
 ConfigError = _core.ConfigError
 CalibrationError = _core.CalibrationError
+# the columns of an estimates table (estimates.csv), after the parameter's name
+ESTIMATE_COLUMNS = ("start", "value", "se", "rel_se", "transform", "lower", "upper", "at_bound", "identifiable", "flag")
 
 
 class CalibrationResult:
@@ -71,7 +73,7 @@ class CalibrationResult:
 
         st = self._stage(stage)
         df = pd.DataFrame(st["estimates"]).set_index("name")
-        return df[["start", "value", "se", "rel_se", "transform", "lower", "upper", "at_bound", "identifiable", "flag"]]
+        return df[list(ESTIMATE_COLUMNS)]
 
     @property
     def estimates(self):
@@ -86,11 +88,8 @@ class CalibrationResult:
         names = [e["name"] for e in st["estimates"]]
         return pd.DataFrame(np.asarray(st["correlation"]), index=names, columns=names)
 
-    @property
-    def history(self):
-        """Stage by stage: cost, iterations, reweighting passes, simulations, sensitivity solves, time, parameters."""
-        import pandas as pd
-
+    def history_rows(self) -> list[dict]:
+        """:attr:`history` as one dict per stage (the stage's name under ``"stage"``)."""
         rows = []
         for s in self.stages:
             row = {"stage": s["name"], "observables": " ".join(s["observables"]) or "all",
@@ -101,7 +100,14 @@ class CalibrationResult:
             for e in s["estimates"]:
                 row[e["name"]] = e["value"]
             rows.append(row)
-        return pd.DataFrame(rows).set_index("stage")
+        return rows
+
+    @property
+    def history(self):
+        """Stage by stage: cost, iterations, reweighting passes, simulations, sensitivity solves, time, parameters."""
+        import pandas as pd
+
+        return pd.DataFrame(self.history_rows()).set_index("stage")
 
     @property
     def profiles(self) -> list[dict]:

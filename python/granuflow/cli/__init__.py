@@ -200,6 +200,7 @@ def _parser(named: str | None):
     c.add_argument("--error-estimate", action="store_true",
                    help="the model's numerical error at every sample (finer size grids, tighter tolerance) in "
                         "predictions.csv and, against sigma, in fit.csv")
+    c.add_argument("--no-plots", action="store_true", help="write the report and tables without the parity PNGs")
     c.add_argument("--no-progress", action="store_true", help="no progress bar (default: only on a terminal)")
     c.add_argument("--quiet", action="store_true", help="no output but errors (and no progress bar)")
     c.set_defaults(func=_cmd("calibrate", "cmd_calibrate"))

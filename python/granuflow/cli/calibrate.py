@@ -7,8 +7,8 @@ from .common import check_at_least, check_out_dir, check_workers, progress_optio
 
 
 def cmd_calibrate(args) -> int:
-    """Staged calibration (granuflow.calibration): report.json/.txt, CSV tables and parity plots in DIR.
-    Calibrates on the runs marked `use: calibration`, validates on `use: validation`."""
+    """Staged calibration (granuflow.calibration): report.json/.txt, CSV tables and parity plots (not with
+    --no-plots) in DIR. Calibrates on the runs marked `use: calibration`, validates on `use: validation`."""
     from .. import calibration as cal
 
     exps = cal.load_experiments(args.experiments)
@@ -46,7 +46,7 @@ def cmd_calibrate(args) -> int:
         print(f"granuflow: warning: {w}", file=sys.stderr)
     rep = cal.report(fs, res, exps.calibration, exps.validation, comparison=comparison, options=options,
                      error_estimate=args.error_estimate)
-    written = rep.write(args.out)
+    written = rep.write(args.out, plots=not args.no_plots)
     if not args.quiet:
         print(res.full_report())
         if comparison is not None:
