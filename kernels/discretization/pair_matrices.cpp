@@ -236,10 +236,12 @@ void build_run_layout(const S& s, const Grid& g, RunLayout& L) {
   L.separable = separable_layout(s, g, L);
   if (!L.separable) L.rest_separable.clear();
   size_t p0 = 0;
+  L.rest_row.assign(size_t(n) + 1, 0);
   for (int j = 0; j < n; p0 += n - j, ++j) {
     const int a = s.run_first(j), b = s.run_last(j);
     for (int k = j; k < n; ++k)
       if (!(a <= k && k <= b) && !on_diagonal(s, j, k)) L.rest_matrices.push_back({p0 + (k - j), {j, k}});
+    L.rest_row[j + 1] = L.rest_matrices.size();
   }
 }
 

@@ -268,6 +268,23 @@ void aggregate_rows(const S& s, RunTables& t, const AggregationArgs<T>& a) {
       fused = true;
     }
     if (!fused) row_deaths(a, kh, E ? E + (p0 - j) : nullptr, j, rt);
+    if constexpr (std::is_same_v<T, double>) {
+      // The same pairs as the loop below, from the grid's tables: a test per partner there cost as much as the
+      // fused row itself at 80 classes.
+      const auto& diags = s.diagonals();
+      for (int d = 0; d < nd && j + d < n; ++d) {
+        const int k = j + d;
+        if (k <= diags[d].last && !(first <= k && k <= last)) sc.diag[size_t(d) * n + k] = rt[k];
+      }
+      const RunLayout& L = s.layout();
+      for (size_t q = L.rest_row[j]; q < L.rest_row[j + 1]; ++q) {
+        const int k = L.rest_matrices[q].second.second;
+        if (!is_empty(N[k])) place_pair(s, sc, a, L.rest_matrices[q].first, j, k, rt[k]);
+      }
+      if (first > last || fused) continue;
+      run_births(s, sc, a, p0, j, first, last, rt);
+      continue;
+    }
     for (int k = j; k < n; ++k) {
       if (k == first) k = last + 1;  // the run, below
       if (k >= n) break;

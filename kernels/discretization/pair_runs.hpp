@@ -28,11 +28,12 @@ struct RunLayout {
   // Separable size-only kernel without carried properties (AggregationKernel::factor_terms): K_jk = sum_t a_t(j)
   // b_t(k). Row k's run partners are then a prefix j <= J(k) (aggregates placed on k and k + 1 with w_hi = x_j /
   // (x_{k+1} - x_k), affine in x_j, or kept in cell k), so their births and all deaths are prefix sums: O(n) per term.
-  bool separable = false;       // false: a prefix pair's weights differ from the affine form (use the matrices)
-  std::vector<int> prefix_end;  // J(k); -1: no prefix
-  std::vector<double> inv_gap;  // fixed pivot: 1 / (x_{k+1} - x_k), x_n the virtual pivot above the grid
-  PairList rest_separable;      // pairs on neither a prefix nor a diagonal
-  PairList rest_matrices;       // pairs on neither a run nor a diagonal
+  bool separable = false;        // false: a prefix pair's weights differ from the affine form (use the matrices)
+  std::vector<int> prefix_end;   // J(k); -1: no prefix
+  std::vector<double> inv_gap;   // fixed pivot: 1 / (x_{k+1} - x_k), x_n the virtual pivot above the grid
+  PairList rest_separable;       // pairs on neither a prefix nor a diagonal
+  PairList rest_matrices;        // pairs on neither a run nor a diagonal
+  std::vector<size_t> rest_row;  // row j's pairs in rest_matrices: [rest_row[j], rest_row[j + 1])
 };
 
 struct RunTables : AggregationScheme::Tables {
