@@ -77,7 +77,7 @@ IdaStepper::IdaStepper(DaeSystem& sys, const SimOptions& opt, LinearSolverKind k
     : sys_(sys),
       opt_(opt),
       kind_(kind),
-      dense_(kind == LinearSolverKind::kDense),
+      dense_(kind == LinearSolverKind::kDense || kind == LinearSolverKind::kBanded),
       sens_ids_(sens_ids),
       j0_(std::move(j0)),
       ewt_(sys.size()),
@@ -99,6 +99,7 @@ IdaStepper::IdaStepper(DaeSystem& sys, const SimOptions& opt, LinearSolverKind k
   const auto scales = sys.scales();
   for (int i = 0; i < n_; ++i) atol_.data()[i] = opt.atol * scales[i];
   user_.iterative = kind == LinearSolverKind::kGmres;
+  user_.banded = kind == LinearSolverKind::kBanded;
   ida_ = std::make_unique<Ida>(C_.ctx, user_, 0.0, y_, yp_, opt.rtol, atol_);
   void* mem = ida_->mem;
   if (dense_) user_.mem = mem;

@@ -222,7 +222,9 @@ SimResult simulate_ode(Flowsheet& fs, const SimOptions& opt, Method requested,
   // Explicit units are inlined (their states are no unknowns of an ODE); a Newton matrix over inlined units is the
   // dense Schur complement, so BDF on a system too large for dense algebra goes to IDAS instead.
   const LinearSolverKind kind = choose_linear_solver(fs, opt.linear_solver, opt.dense_limit);
-  const bool dense = kind == LinearSolverKind::kDense, gmres = kind == LinearSolverKind::kGmres;
+  // banded: BDF factors its Newton matrix densely (the band + low-rank solver is IDAS's)
+  const bool dense = kind == LinearSolverKind::kDense || kind == LinearSolverKind::kBanded,
+             gmres = kind == LinearSolverKind::kGmres;
   if (requested == Method::kBdf && kind == LinearSolverKind::kSparse && fs.n_explicit_states() > 0)
     throw NotAnOde("BDF with sparse linear algebra needs the explicit units as unknowns");
   if (gmres && !opt.sensitivities.empty())

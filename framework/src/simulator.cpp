@@ -63,11 +63,12 @@ constexpr std::array<std::pair<Method, const char*>, 5> kMethods{{{Method::kAuto
                                                                   {Method::kBdf, "bdf"},
                                                                   {Method::kAdams, "adams"},
                                                                   {Method::kErk, "erk"}}};
-constexpr std::array<std::pair<LinearSolverChoice, const char*>, 4> kLinearSolvers{
+constexpr std::array<std::pair<LinearSolverChoice, const char*>, 5> kLinearSolvers{
     {{LinearSolverChoice::kAuto, "auto"},
      {LinearSolverChoice::kDense, "dense"},
      {LinearSolverChoice::kSparse, "sparse"},
-     {LinearSolverChoice::kGmres, "gmres"}}};
+     {LinearSolverChoice::kGmres, "gmres"},
+     {LinearSolverChoice::kBanded, "banded"}}};
 
 template <class E, size_t N>
 E parse_choice(const std::array<std::pair<E, const char*>, N>& table, const std::string& text, const std::string& key) {
@@ -103,7 +104,7 @@ SimResult simulate_ida(Flowsheet& fs, const SimOptions& opt, const std::string& 
                        std::chrono::steady_clock::time_point wall0) {
   // Explicit units are inlined whenever the system is solved densely.
   const LinearSolverKind kind = choose_linear_solver(fs, opt.linear_solver, opt.dense_limit);
-  const bool dense = kind == LinearSolverKind::kDense;
+  const bool dense = kind == LinearSolverKind::kDense || kind == LinearSolverKind::kBanded;
   if (kind == LinearSolverKind::kGmres && !opt.sensitivities.empty())
     throw ConfigError("sensitivities need a direct linear solver (solver.linear_solver: dense or sparse), not gmres");
   const std::shared_ptr<DaeSystem> held = fs.take_system(dense);

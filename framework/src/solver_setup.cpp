@@ -5,18 +5,19 @@
 #include <cstdlib>
 #include <stdexcept>
 
+#include "banded_lowrank_solver.hpp"
 #include "eigen_linear_solver.hpp"
 
 namespace granuflow::detail {
 
 // Dense: Eigen's blocked LU behind a SUNDenseMatrix; sparse: KLU on the flowsheet's sparsity pattern.
-void make_linear_solver(bool dense, const DaeSystem& sys, N_Vector y, SUNContext ctx, Mat& a, LinSol& ls) {
+void make_linear_solver(bool dense, const DaeSystem& sys, N_Vector y, SUNContext ctx, Mat& a, LinSol& ls, bool banded) {
   const int n = sys.size();
   if (dense) {
     a.m = SUNDenseMatrix(n, n, ctx);
     // DaeSystem::jacobian writes all n^2 entries, so IDA's zeroing before each evaluation is skipped.
     a.m->ops->zero = [](SUNMatrix) -> int { return 0; };
-    ls.s = make_eigen_dense_solver(ctx);
+    ls.s = banded ? make_banded_lowrank_solver(ctx, class_structure(sys)) : make_eigen_dense_solver(ctx);
   } else {
     a.m = SUNSparseMatrix(n, n, sys.pattern().nnz(), CSC_MAT, ctx);
     ls.s = SUNLinSol_KLU(y, a.m, ctx);
@@ -107,6 +108,7 @@ int ida_jac(realtype t, realtype cj, N_Vector y, N_Vector yp, N_Vector, SUNMatri
           const int i = k.differential[d];
           a[size_t(i) * n + i] = k.diag[d] + (cj - k.cj);
         }
+        if (u->structured) banded_lowrank_same_but_diagonal(u->structured);
         return 0;
       }
       k.held = nullptr;  // overwritten below; kept again if reusable
@@ -173,8 +175,9 @@ Ida::Ida(SUNContext ctx, IdaUser& user, double t0, const NVec& y, const NVec& yp
     check(IDASetPreconditioner(mem, ida_psetup, ida_psolve), "IDASetPreconditioner");
     return;
   }
-  make_linear_solver(user.dense, sys, y.v, ctx, A, LS);
+  make_linear_solver(user.dense, sys, y.v, ctx, A, LS, user.banded);
   this->user = &user;
+  if (user.banded) user.structured = LS.s;
   check(IDASetLinearSolver(mem, LS.s, A.m), "IDASetLinearSolver");
   check(IDASetJacFn(mem, ida_jac), "IDASetJacFn");
 }
@@ -206,7 +209,10 @@ Ida::Ida(SUNContext ctx, IdaUser& user, double t0, const NVec& y, const NVec& yp
 constexpr int kLargeBlock = 100, kCostlyJacobian = 64;
 constexpr double kLargeBlockNewtonTest = 0.2;
 void Ida::tune_refactoring() {
-  if (user && user->dense) tune_refactoring(eigen_dense_largest_block(LS.s));
+  // The band + low-rank solver factors the whole matrix, cheaply: tuned as a block of that size.
+  if (user && user->dense)
+    tune_refactoring(is_banded_lowrank_solver(LS.s) ? banded_lowrank_stats(LS.s).states
+                                                    : eigen_dense_largest_block(LS.s));
 }
 
 void Ida::tune_refactoring(int block) {
@@ -236,6 +242,7 @@ namespace granuflow::detail {
 
 LinearSolverKind choose_linear_solver(const Flowsheet& fs, LinearSolverChoice choice, int dense_limit) {
   if (choice == LinearSolverChoice::kGmres) return LinearSolverKind::kGmres;
+  if (choice == LinearSolverChoice::kBanded) return LinearSolverKind::kBanded;
   if (choice == LinearSolverChoice::kAuto && fs.n_states() - fs.n_explicit_states() > dense_limit)
     for (const auto& u : fs.units())
       if (u.spec.has_preconditioner() && static_cast<int>(u.spec.states().size()) > dense_limit)
@@ -249,6 +256,8 @@ const char* linear_solver_name(LinearSolverKind k) {
       return "dense (Eigen LU)";
     case LinearSolverKind::kSparse:
       return "sparse (KLU)";
+    case LinearSolverKind::kBanded:
+      return "banded (SUNDIALS band LU, outer products and border by Schur complement)";
     default:
       return "gmres (SPGMR, unit preconditioners)";
   }

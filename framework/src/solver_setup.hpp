@@ -48,14 +48,17 @@ struct LinSol {
   }
 };
 
-// Dense: Eigen's blocked LU behind a SUNDenseMatrix; sparse: KLU on the flowsheet's sparsity pattern.
-void make_linear_solver(bool dense, const DaeSystem& sys, N_Vector y, SUNContext ctx, Mat& a, LinSol& ls);
+// Dense: Eigen's blocked LU behind a SUNDenseMatrix (with `banded`: the band + low-rank solver of
+// banded_lowrank_solver.hpp on the same matrix); sparse: KLU on the flowsheet's sparsity pattern.
+void make_linear_solver(bool dense, const DaeSystem& sys, N_Vector y, SUNContext ctx, Mat& a, LinSol& ls,
+                        bool banded = false);
 
 // The linear solvers of the Newton iterations. Direct ones factor the exact Jacobian (dense or sparse); the
 // iterative one (gmres) never forms it: GMRES (SUNDIALS SPGMR) on difference-quotient Jacobian-vector products of
 // the residual, left-preconditioned by the units' blocks (DaeSystem::precondition_setup/solve). It is the only
 // choice for units whose Jacobian is both large and dense (a 2-D population: every bin pair aggregates).
-enum class LinearSolverKind { kDense, kSparse, kGmres };
+// kBanded: the dense Jacobian, factored as band + outer products + border (banded_lowrank_solver.hpp).
+enum class LinearSolverKind { kDense, kSparse, kGmres, kBanded };
 // kAuto: dense up to dense_limit unknowns; beyond, gmres if a unit preconditions itself, else use_dense().
 LinearSolverKind choose_linear_solver(const Flowsheet& fs, LinearSolverChoice choice, int dense_limit);
 const char* linear_solver_name(LinearSolverKind k);
@@ -81,6 +84,8 @@ struct IdaUser {
   JacobianCache cache;
   bool fresh_only = false;  // consistent initialization: Newton from a guess needs the Jacobian of each iterate
   bool iterative = false;   // GMRES with the units' preconditioners instead of a factored Jacobian
+  bool banded = false;      // dense Jacobian, band + low-rank factorization (LinearSolverKind::kBanded)
+  SUNLinearSolver structured = nullptr;  // that solver, told when a kept Jacobian is reused
   std::function<int(double, const double*, const double*, double*)> roots;  // state events' g (events_run.hpp)
 };
 int ida_res(realtype t, N_Vector y, N_Vector yp, N_Vector r, void* ud);
