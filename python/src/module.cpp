@@ -13,6 +13,7 @@ void register_reference(py::module_& m);
 void register_measured_psd(py::module_& m);
 void register_montecarlo(py::module_& m);
 void register_plugins(py::module_& m);
+void register_sweep_batch(py::module_& m);
 }  // namespace granuflow::python
 
 PYBIND11_MODULE(_core, m) {
@@ -43,4 +44,5 @@ PYBIND11_MODULE(_core, m) {
   granuflow::python::register_measured_psd(m);
   granuflow::python::register_montecarlo(m);
   granuflow::python::register_plugins(m);
+  granuflow::python::register_sweep_batch(m);
 }
