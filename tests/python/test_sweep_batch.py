@@ -43,6 +43,15 @@ def test_batch_rows_equal_the_per_point_path_with_nulls_warnings_and_failures():
     assert (fast["d50_um"][:4] > 200).all() and (np.diff(fast["d50_um"][:2]) > 0).all()
     # one thread or the serial executor: the same rows
     _same_rows(sweep.run_sweep(fs, points, executor="serial", **kw), fast)
+    # initial distributions outside the grid (in its top, then its bottom class) and a loose tolerance whose water
+    # balance closes worse than it explains: the warnings of both ends and of the balance guard
+    pts = [{"bed.d50_0": 9e-4}, {"bed.d50_0": 6e-5}]
+    kw["simulate"] = {"n_out": 2, "rtol": 0.03, "atol": 0.1}
+    fast, slow = (sweep.run_sweep(fs, pts, batch=b, **kw) for b in (True, False))
+    _same_rows(fast, slow)
+    assert ["initial size distribution lies outside the grid" in m for m in fast["message"]] == [True, True]
+    assert "top size class" in fast["message"][0] and "bottom size class (50 um)" in fast["message"][1]
+    assert "warning: balance: the water balance closes only to" in fast["message"][1]
     # a solver that gives up (too few steps) fails every point with the core's message, on either path
     kw["simulate"] = {"n_out": 2, "max_steps": 5}
     fast, slow = (sweep.run_sweep(fs, points[:1], batch=b, **kw) for b in (True, False))
