@@ -47,6 +47,11 @@ py::dict sweep_batch(const std::vector<Scene*>& scenes, std::vector<std::string>
   BatchRequest req;
   const size_t np = params.size();
   if (scenes.empty()) throw ConfigError("sweep_batch: no scene to solve on");
+  for (size_t a = 0; a < scenes.size(); ++a)  // a thread sets the parameters of its scene: never two on one
+    for (size_t b = a + 1; b < scenes.size(); ++b)
+      if (scenes[a] == scenes[b])
+        throw ConfigError("sweep_batch: scenes[" + std::to_string(a) + "] and scenes[" + std::to_string(b) +
+                          "] are the same scene: give each thread its own clone");
   if (base.size() != np || values.ndim() != 2 || given.ndim() != 2 || size_t(values.shape(1)) != np ||
       values.shape(0) != given.shape(0) || given.shape(1) != values.shape(1))
     throw ConfigError("sweep_batch: base [param], values and given [point, param] do not fit the parameters");

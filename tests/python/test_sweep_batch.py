@@ -1,6 +1,7 @@
 """granuflow.sweep.batch: sweep points solved and reduced in the C++ core give the rows of the per-point Python path
 (Flowsheet.simulate, final_values, Result.warnings) bit for bit: values, nulls, warnings and failures."""
 import numpy as np
+import pytest
 from conftest import SCENE
 
 import granuflow as gf
@@ -66,5 +67,7 @@ def test_batch_is_left_to_the_per_point_path_where_it_cannot_match():
     assert batch.batch_evaluator(fs, [{"inlet.T": True}], *args, {}) is None
     assert batch.batch_evaluator(fs, [{"inlet.T": 330.0}], *args, {"t_end": "10 min"}) is None
     assert batch.batch_evaluator(fs, [{"inlet.T": 330.0}], *args, {"sensitivities": ["inlet.T"]}) is None
+    with pytest.raises(gf.ConfigError, match="the same scene: give each thread its own clone"):
+        batch.BatchEvaluate(*args, {}).batch([fs, fs], [(0, {"inlet.T": 330.0})])
     assert batch.batch_evaluator(fs.with_settings({"particles.classes": 12}), [{"inlet.T": 330.0}], *args,
                                  {"t_end": 60.0}) is not None
