@@ -16,8 +16,8 @@ from numbers import Real
 from typing import Any, Mapping, Sequence
 
 from .. import _core, outputs as roles
-from ..flowsheet import Flowsheet
-from .runner import STATUS_FAILED, STATUS_OK
+from ..flowsheet import Flowsheet, sweep_batch_raw
+from .executors import STATUS_FAILED, STATUS_OK
 
 SIM_KEYS = ("t_end", "t_out", "n_out", "rtol", "atol", "linear_solver", "max_steps", "method")
 # the constants of granuflow.outputs the C++ reductions use (defined there only)
@@ -86,8 +86,8 @@ class BatchEvaluate:
         for r, (_, point) in enumerate(items):
             for k, v in point.items():
                 values[r, col[k]], given[r, col[k]] = v, True
-        out = _core.sweep_batch([f._scene for f in flowsheets], self.params, self.base, values, given, self.outputs,
-                                self.sim_kwargs, RULES, self.on_progress)
+        out = sweep_batch_raw(flowsheets, self.params, self.base, values, given, self.outputs, self.sim_kwargs, RULES,
+                              self.on_progress)
         vals, prm, msgs = out["values"].tolist(), out["params"].tolist(), out["message"]
         rows = []
         for r, (i, _) in enumerate(items):

@@ -10,6 +10,9 @@ from .. import _core
 from ..flowsheet import Flowsheet
 
 ConfigError = _core.ConfigError
+# the status of a sweep row (the executor protocol below)
+STATUS_OK = "ok"
+STATUS_FAILED = "failed"
 
 
 class SerialExecutor:

@@ -8,14 +8,12 @@ from typing import Any, Callable, Mapping, Sequence
 from .. import _core, outputs as roles, progress as progress_bars, structure
 from ..flowsheet import Flowsheet
 from ..quantity import si_or_nan
-from .executors import make_executor
+from .executors import STATUS_FAILED, STATUS_OK, make_executor
 
 ConfigError = _core.ConfigError
 SolverError = _core.SolverError
 
 DEFAULT_OUTPUTS = roles.DEFAULT_SWEEP_OUTPUTS
-STATUS_OK = "ok"
-STATUS_FAILED = "failed"
 
 # ------------------------------------------------------------------------------------------------
 # the generic runner
