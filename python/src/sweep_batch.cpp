@@ -13,6 +13,7 @@
 #include <map>
 #include <mutex>
 #include <set>
+#include <stdexcept>
 #include <thread>
 #include <unordered_map>
 
@@ -159,6 +160,9 @@ std::vector<GridEnd> grid_ends(const View& v) {
     }
     std::sort(d.begin(), d.end());
     std::sort(m.begin(), m.end());
+    if (d.size() != m.size())  // Result.grid_ends would fail on it as well
+      throw std::runtime_error("unit " + unit + ": size distribution with " + std::to_string(m.size()) +
+                               " class masses but " + std::to_string(d.size()) + " pivot diameters");
     std::vector<double> total(nt), row(m.size());
     for (size_t k = 0; k < nt; ++k) {
       for (size_t c = 0; c < m.size(); ++c) row[c] = v.out(k, m[c].second);
@@ -308,6 +312,7 @@ std::pair<std::vector<std::string>, std::vector<std::string>> balance_findings(c
 
 // The sweep row of one run: runner.final_values and Result.warnings (ok), or Result.check_balance's failure.
 void reduce(const View& v, const BatchRequest& req, PointOutcome& p) {
+  if (v.nt() == 0) throw std::runtime_error("a run without output times");  // never made by simulate()
   auto [warns, fails] = balance_findings(v, req.rules);
   if (!fails.empty()) {
     p.message = v.L.scene_name + ": " + fails[0];
