@@ -67,6 +67,16 @@ def test_batch_is_left_to_the_per_point_path_where_it_cannot_match():
     assert batch.batch_evaluator(fs, [{"inlet.T": True}], *args, {}) is None
     assert batch.batch_evaluator(fs, [{"inlet.T": 330.0}], *args, {"t_end": "10 min"}) is None
     assert batch.batch_evaluator(fs, [{"inlet.T": 330.0}], *args, {"sensitivities": ["inlet.T"]}) is None
+    # with a progress callback (the calling thread reports while two others solve): the same rows
+    ev, seen = batch.BatchEvaluate(*args, {"t_end": 60.0}), []
+    items = [(i, {"inlet.T": 320.0 + 5 * i}) for i in range(4)]
+
+    def untimed(rows):
+        return [{k: v for k, v in r.items() if not k.endswith("time_s")} for r in rows]
+    plain = untimed(ev.batch([fs.clone(), fs.clone()], items))
+    ev.on_progress = seen.append
+    assert untimed(ev.batch([fs.clone(), fs.clone()], items)) == plain
+    assert seen == sorted(seen) and all(0 <= k <= 4 for k in seen) and [r["_i"] for r in plain] == [0, 1, 2, 3]
     with pytest.raises(gf.ConfigError, match="the same scene: give each thread its own clone"):
         batch.BatchEvaluate(*args, {}).batch([fs, fs], [(0, {"inlet.T": 330.0})])
     assert batch.batch_evaluator(fs.with_settings({"particles.classes": 12}), [{"inlet.T": 330.0}], *args,
