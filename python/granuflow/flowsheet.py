@@ -573,6 +573,12 @@ def _end_time(value, where: str) -> float:
     return t
 
 
+def sweep_batch_raw(flowsheets: Sequence[Flowsheet], *args) -> dict:
+    """``_core.sweep_batch`` on ``flowsheets``, one thread each (never the same flowsheet twice;
+    granuflow.sweep.batch)."""
+    return _core.sweep_batch([f._scene for f in flowsheets], *args)
+
+
 def load(path: str | os.PathLike) -> Flowsheet:
     """Load a scene file (YAML). Raises ConfigError naming the file, the key and what is allowed."""
     if not isinstance(path, (str, os.PathLike)):

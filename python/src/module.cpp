@@ -14,6 +14,7 @@ void register_measured_psd(py::module_& m);
 void register_montecarlo(py::module_& m);
 void register_plugins(py::module_& m);
 void register_files(py::module_& m);
+void register_sweep_batch(py::module_& m);
 }  // namespace granuflow::python
 
 PYBIND11_MODULE(_core, m) {
@@ -45,4 +46,5 @@ PYBIND11_MODULE(_core, m) {
   granuflow::python::register_montecarlo(m);
   granuflow::python::register_plugins(m);
   granuflow::python::register_files(m);
+  granuflow::python::register_sweep_batch(m);
 }

@@ -12,6 +12,7 @@
 #include "granuflow/quantity.hpp"
 #include "granuflow/scene.hpp"
 #include "granuflow/simulator.hpp"
+#include "sweep_batch.hpp"
 #include "units/registry.hpp"
 
 namespace py = pybind11;
@@ -60,39 +61,15 @@ py::list output_roles(const Flowsheet& fs) {
   return out;
 }
 
-// Options checked by the core, the message naming the Python function's keywords instead of the C++ struct's fields
-// ("simulate(): t_end = 0 s ..." for "SimOptions.t_end = 0 s ...").
-template <class Options>
-void validate_as(const Options& o, const std::string& field_prefix, const std::string& call_prefix) {
-  try {
-    o.validate();
-  } catch (const ConfigError& e) {
-    std::string m = e.what();
-    if (m.rfind(field_prefix, 0) == 0) m = call_prefix + m.substr(field_prefix.size());
-    throw ConfigError(m);
-  }
-}
-
 py::dict simulate(Scene& s, std::optional<double> t_end, std::optional<std::vector<double>> t_out,
                   std::optional<int> n_out, std::optional<double> rtol, std::optional<double> atol,
                   std::vector<std::string> sensitivities, std::optional<std::string> linear_solver,
                   std::optional<long> max_steps, std::optional<std::string> method, bool names,
                   std::optional<std::vector<double>> checkpoints, std::string checkpoint_dir, std::string restart) {
-  SimOptions o = s.options;
-  // An empty list would silently mean "the scene's output times"; the scene file refuses `times: []` too.
-  if (t_out && t_out->empty())
-    throw ConfigError("simulate(): t_out = []: expected a non-empty list of times in [0, t_end] (or n_out)");
-  if (t_end) {
-    o.t_end = *t_end;
-    if (!t_out) o.t_out.clear();
-  }
-  if (t_out) o.t_out = *t_out;
-  if (n_out) o.n_out = *n_out, o.t_out.clear();
-  if (rtol) o.rtol = *rtol;
-  if (atol) o.atol = *atol;
-  if (linear_solver) o.linear_solver = parse_linear_solver(*linear_solver, "simulate(): linear_solver");
-  if (max_steps) o.max_steps = *max_steps;
-  if (method) o.method = parse_method(*method, "simulate(): method");
+  RunOverrides ov;
+  ov.t_end = t_end, ov.t_out = std::move(t_out), ov.n_out = n_out, ov.rtol = rtol, ov.atol = atol;
+  ov.linear_solver = std::move(linear_solver), ov.max_steps = max_steps, ov.method = std::move(method);
+  SimOptions o = run_options(s, ov);
   o.sensitivities = std::move(sensitivities);
   if (checkpoints) o.checkpoints = *checkpoints;
   o.checkpoint_dir = std::move(checkpoint_dir), o.restart_file = std::move(restart);
@@ -102,9 +79,7 @@ py::dict simulate(Scene& s, std::optional<double> t_end, std::optional<std::vect
     py::gil_scoped_release release;
     r = granuflow::simulate(*s.flowsheet, o);
   } catch (const ConfigError& e) {  // found at run time (unit checks, structure): name the scene file as well
-    const std::string m = e.what();
-    if (s.path.empty() || m.rfind(s.path, 0) == 0) throw;
-    throw ConfigError(s.path + ": " + m);
+    throw ConfigError(runtime_config_message(s, e.what()));
   }
   const auto nt = static_cast<py::ssize_t>(r.t.size());
   const auto ns = static_cast<py::ssize_t>(r.state_names.size());

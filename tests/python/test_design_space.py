@@ -163,6 +163,7 @@ def test_dask_local_cluster_reproduces_threads_exactly(fs, grid):
         g = ds.contour_map(fs, X, Y, ["d50_um", "bed_moisture_wet", "bed.T"], executor=client, progress=False)
         for o in grid.outputs:
             np.testing.assert_array_equal(g[o], grid[o])
+        assert g.message.tolist() == grid.message.tolist() and g.status.tolist() == grid.status.tolist()
         assert len(client.nthreads()) == 2
         # the generic runner takes the client as it is, also for a flowsheet with changed parameters
         mod = gf.load(SCENE).set("inlet.V_dot", "650 m3/h")
@@ -170,6 +171,11 @@ def test_dask_local_cluster_reproduces_threads_exactly(fs, grid):
         a = sweep.run_sweep(mod, pts, ["d50_um"], executor=client, progress=False)
         b = sweep.run_sweep(mod, pts, ["d50_um"], executor="serial", progress=False)
         np.testing.assert_array_equal(a["d50_um"].to_numpy(), b["d50_um"].to_numpy())
+        # each Dask task solves its chunk in the core (granuflow.sweep.batch): the rows of the per-point path
+        c = sweep.run_sweep(mod, pts, ["d50_um", "d90_um"], executor=client, progress=False, batch=False)
+        d = sweep.run_sweep(mod, pts, ["d50_um", "d90_um"], executor=client, progress=False)
+        for col in ("d50_um", "d90_um", "nozzle.mdot", "status", "message"):
+            assert c[col].astype(str).tolist() == d[col].astype(str).tolist()
 
 
 def test_contour_cli(tmp_path, capsys):

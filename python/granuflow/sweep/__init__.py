@@ -37,7 +37,10 @@ Executors are pluggable: ``executor="threads"`` (default: a thread pool, each wo
 ``Flowsheet.clone()``; the C++ solve releases the GIL), ``"serial"``, or any object with a
 ``map_unordered(evaluate, flowsheet, items)`` method (see :class:`ThreadExecutor`). A ``distributed.Client`` is
 accepted as it is and runs the sweep on its Dask cluster (:class:`granuflow.sweep.dask.DaskExecutor`, which rebuilds
-the flowsheet on each worker from the scene text and the parameter values).
+the flowsheet on each worker from the scene text and the parameter values). Plain runs are solved in the C++ core
+many points per call, each reduced there to its row (:mod:`granuflow.sweep.batch`; every executor hands it its items
+or chunks); ``run_sweep(..., batch=False)`` takes each point through ``Flowsheet.simulate`` and ``Result`` instead,
+with the same rows.
 """
 from .analysis import corner_points, main_effects
 from .executors import EXECUTORS, SerialExecutor, ThreadExecutor, make_executor

@@ -60,6 +60,8 @@ def worker_flowsheet(spec: dict) -> Flowsheet:
 
 def _run_chunk(spec: dict, evaluate: Callable[[Flowsheet, Any], dict], chunk: Sequence[Any]) -> list[dict]:
     fs = worker_flowsheet(spec)
+    if hasattr(evaluate, "batch"):  # the chunk solved in the core, one call (granuflow.sweep.batch)
+        return evaluate.batch([fs], list(chunk))
     return [evaluate(fs, item) for item in chunk]
 
 

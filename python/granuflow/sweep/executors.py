@@ -10,6 +10,9 @@ from .. import _core
 from ..flowsheet import Flowsheet
 
 ConfigError = _core.ConfigError
+# the status of a sweep row (the executor protocol below)
+STATUS_OK = "ok"
+STATUS_FAILED = "failed"
 
 
 class SerialExecutor:
@@ -20,6 +23,9 @@ class SerialExecutor:
     def map_unordered(self, evaluate: Callable[[Flowsheet, Any], dict], flowsheet: Flowsheet,
                       items: Sequence[Any]) -> Iterator[dict]:
         fs = flowsheet.clone()
+        if hasattr(evaluate, "batch"):  # the points solved in the core, one call
+            yield from evaluate.batch([fs], list(items))
+            return
         for item in items:
             yield evaluate(fs, item)
 
@@ -31,7 +37,8 @@ class ThreadExecutor:
     The executor protocol: ``map_unordered(evaluate, flowsheet, items)`` yields ``evaluate(fs, item)`` for every
     item, in any order, where ``fs`` is a flowsheet equal to ``flowsheet`` that no other running task uses.
     ``evaluate`` never raises for a failed point (it returns a row with status "failed") unless the caller asked
-    for errors to propagate.
+    for errors to propagate. An ``evaluate`` with a ``batch(flowsheets, items)`` method (granuflow.sweep.batch)
+    solves many items in one call on one thread per flowsheet: executors hand it their items at once.
     """
 
     name = "threads"
@@ -41,6 +48,9 @@ class ThreadExecutor:
 
     def map_unordered(self, evaluate, flowsheet, items):
         workers = max(1, min(self.workers or os.cpu_count() or 1, len(items) or 1))
+        if hasattr(evaluate, "batch"):  # the core's threads, one clone each, solve all points in one call
+            yield from evaluate.batch([flowsheet.clone() for _ in range(workers)], list(items))
+            return
         local = threading.local()
         lock = threading.Lock()
 

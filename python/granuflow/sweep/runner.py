@@ -8,14 +8,12 @@ from typing import Any, Callable, Mapping, Sequence
 from .. import _core, outputs as roles, progress as progress_bars, structure
 from ..flowsheet import Flowsheet
 from ..quantity import si_or_nan
-from .executors import make_executor
+from .executors import STATUS_FAILED, STATUS_OK, make_executor
 
 ConfigError = _core.ConfigError
 SolverError = _core.SolverError
 
 DEFAULT_OUTPUTS = roles.DEFAULT_SWEEP_OUTPUTS
-STATUS_OK = "ok"
-STATUS_FAILED = "failed"
 
 # ------------------------------------------------------------------------------------------------
 # the generic runner
@@ -78,15 +76,20 @@ def collect(exe, evaluate: Callable[[Flowsheet, Any], dict], flowsheet: Flowshee
     bar = progress_bars.bar(progress, len(items), desc)
     rows = []
     n_failed = 0
+    if bar is not None and hasattr(evaluate, "batch"):  # a batch counts its points while it runs
+        evaluate.on_progress = lambda k: bar.update(k - bar.n) if k > bar.n else None
     try:
         for row in exe.map_unordered(evaluate, flowsheet, items):
             rows.append(row)
             n_failed += row["status"] != STATUS_OK
             if bar is not None:
-                bar.update(1)
+                if len(rows) > bar.n:
+                    bar.update(len(rows) - bar.n)
                 if n_failed:
                     bar.set_postfix(failed=n_failed)
     finally:
+        if hasattr(evaluate, "batch"):
+            evaluate.on_progress = None
         if bar is not None:
             bar.refresh()  # tqdm throttles redraws: show the final count before the bar goes
             bar.close()
@@ -98,7 +101,7 @@ def run_sweep(flowsheet: Flowsheet, points: Sequence[Mapping[str, float | str]],
               outputs: Sequence[str] = DEFAULT_OUTPUTS, *, names: Sequence[str] | None = None,
               workers: int | None = None, progress: bool | None = None, executor: str | Any = "threads",
               t_end: float | None = None, raise_errors: bool = False, simulate: Mapping[str, Any] | None = None,
-              desc: str = "sweep", error_estimate: bool = False, steady: bool = False):
+              desc: str = "sweep", error_estimate: bool = False, steady: bool = False, batch: bool = True):
     """Simulate ``flowsheet`` once per point and collect ``outputs``.
 
     ``points``: one mapping per run, ``{"unit.param": value}`` with SI floats or strings with a unit; parameters
@@ -115,7 +118,10 @@ def run_sweep(flowsheet: Flowsheet, points: Sequence[Mapping[str, float | str]],
     ``simulate(error_estimate=True)`` (four solves instead of one), and a column ``<output>_err`` per output with its
     estimated numerical error (signed: value minus the converged answer; granuflow.accuracy). ``steady``: solve each
     point's steady state (:func:`granuflow.steady.steady_values`, inputs at t = 0) instead of simulating; a point
-    without one fails (error estimates are not made for steady states).
+    without one fails (error estimates are not made for steady states). ``batch`` (default): plain runs are solved
+    and reduced to their rows in the C++ core, many points per call, without the interpreter per point
+    (:mod:`granuflow.sweep.batch`; the same rows as ``batch=False``, which takes every point through
+    ``Flowsheet.simulate`` and ``Result``).
     """
     import numpy as np
     import pandas as pd
@@ -131,7 +137,8 @@ def run_sweep(flowsheet: Flowsheet, points: Sequence[Mapping[str, float | str]],
     if structural:  # settings shape the flowsheet: one build per structure, its points on it
         return _run_by_structure(flowsheet, points, outputs, structural, names, raise_errors=raise_errors,
                                  workers=workers, progress=progress, executor=executor, t_end=t_end,
-                                 simulate=simulate, desc=desc, error_estimate=error_estimate, steady=steady)
+                                 simulate=simulate, desc=desc, error_estimate=error_estimate, steady=steady,
+                                 batch=batch)
     known = set(flowsheet.params)
     for k in params:
         if k not in known:
@@ -174,6 +181,10 @@ def run_sweep(flowsheet: Flowsheet, points: Sequence[Mapping[str, float | str]],
         row["wall_time_s"] = time.perf_counter() - t0
         return row
 
+    if batch and not (steady or error_estimate or raise_errors):
+        from .batch import batch_evaluator
+
+        evaluate = batch_evaluator(flowsheet, points, params, base, outputs, sim_kwargs) or evaluate
     rows = collect(make_executor(executor, workers), evaluate, flowsheet, list(enumerate(points)), progress, desc)
     errs = [error_column(o) for o in outputs] if error_estimate else []
     cols = ["point"] + params + outputs + errs + ["wall_time_s", "solve_time_s", "status", "message"]
