@@ -5,9 +5,10 @@ The function that makes the core libraries' copies is applied to a two-library p
 the wheel is laid out (<prefix>/lib and <prefix>/lib/glibc-hwcaps/x86-64-v3): on a CPU the loader deems x86-64-v3
 capable both libraries are the v3 copies, compiled with AVX2 and FMA, the lower one found through the upper copy's run
 path; with the loader limited to the baseline (ld.so --glibc-hwcaps-mask x86-64, as docs/install_and_plugins.md
-forces it) both are the baseline copies; either way Eigen lays fixed-size objects out as the baseline does (16-byte
-alignment), the condition for one extension and one plugin to work with either copy. A few seconds of compiling
-(ccache)."""
+forces it) both are the baseline copies. A module built once for the baseline against the upper library (as a plugin
+against an installed granuflow) reaches the copy the process runs, and either way Eigen lays fixed-size objects out
+as the baseline does (16-byte alignment), the condition for one extension and one plugin to work with either copy.
+A few seconds of compiling (ccache)."""
 import os
 import re
 import subprocess
@@ -49,7 +50,7 @@ def probe(tmp_path_factory):
 
 
 def probe_says(prefix, *loader):
-    out = run([*loader, prefix / "bin" / "isa_probe"]).stdout
+    out = run([*loader, prefix / "bin" / "isa_probe", prefix / "lib" / "libisa_plugin.so"]).stdout
     said = dict(line.split(" ", 1) for line in out.splitlines() if not line.startswith("file "))
     files = [os.path.realpath(line[5:]) for line in out.splitlines() if line.startswith("file ")]
     return said, files
@@ -59,14 +60,15 @@ def test_the_loader_picks_the_v3_copies_on_a_v3_cpu(probe):
     if "x86-64-v3" not in loader_levels():
         pytest.skip("this CPU lacks x86-64-v3 (AVX2, FMA, BMI2, ...): the loader takes the baseline copies")
     said, files = probe_says(probe)
-    assert said == {"top": "x86-64-v3 avx2+fma", "base": "x86-64-v3 avx2+fma", "align": "16"}
+    assert said == {"top": "x86-64-v3 avx2+fma", "base": "x86-64-v3 avx2+fma", "align": "16",
+                    "plugin": "x86-64-v3 avx2+fma"}
     v3 = os.path.realpath(probe / "lib" / "glibc-hwcaps" / "x86-64-v3")
     assert [os.path.dirname(f) for f in files] == [v3, v3]
 
 
 def test_the_baseline_copies_under_the_loaders_mask(probe):
     said, files = probe_says(probe, LD_SO, "--glibc-hwcaps-mask", "x86-64")
-    assert said == {"top": "x86-64 baseline", "base": "x86-64 baseline", "align": "16"}
+    assert said == {"top": "x86-64 baseline", "base": "x86-64 baseline", "align": "16", "plugin": "x86-64 baseline"}
     lib = os.path.realpath(probe / "lib")
     assert [os.path.dirname(f) for f in files] == [lib, lib]
 
