@@ -10,9 +10,15 @@ Environment:
                               compiled; its libraries, headers and CMake package are installed into the wheel
                               (cmake --install --prefix) and its Python package (build/python/granuflow) copied
                               beside them. The wheel then has that folder's options (GRANUFLOW_NATIVE ...).
+  GRANUFLOW_ISA_VARIANTS      the x86-64 levels the core libraries are built for besides the baseline, separated by
+                              ';' (default x86-64-v3; empty: the baseline only); not with -DGRANUFLOW_NATIVE=ON
   CMAKE_CXX_COMPILER_LAUNCHER passed to CMake (e.g. ccache)
   CMAKE_BUILD_PARALLEL_LEVEL  build jobs (default: the number of CPUs)
-A pip build is portable (GRANUFLOW_NATIVE=OFF): the wheel runs on any x86-64 machine.
+A pip build is portable (GRANUFLOW_NATIVE=OFF): the wheel runs on any x86-64 machine. Its three core libraries
+(framework, kernels, units) are in it twice: for the x86-64 baseline in granuflow/sdk/lib and for x86-64-v3 (AVX2,
+FMA) in granuflow/sdk/lib/glibc-hwcaps/x86-64-v3, which glibc's loader takes instead on a CPU that has it (the
+second build of the core takes about as long as the first). granuflow.build_info() and `granuflow --version` say
+which copy a process runs.
 """
 import os
 import pathlib
@@ -73,7 +79,10 @@ class CMakeBuild(build_ext):
                 f"-DGRANUFLOW_PYTHON_INSTALL_DIR={pkg_root}"]
         if os.environ.get("CMAKE_CXX_COMPILER_LAUNCHER"):
             args.append(f"-DCMAKE_CXX_COMPILER_LAUNCHER={os.environ['CMAKE_CXX_COMPILER_LAUNCHER']}")
-        args += shlex.split(os.environ.get("GRANUFLOW_CMAKE_ARGS", ""))
+        extra = shlex.split(os.environ.get("GRANUFLOW_CMAKE_ARGS", ""))
+        if not any(re.fullmatch(r"-DGRANUFLOW_NATIVE(:BOOL)?=(ON|1|TRUE|YES|Y)", a, re.I) for a in extra):
+            args.append(f"-DGRANUFLOW_ISA_VARIANTS={os.environ.get('GRANUFLOW_ISA_VARIANTS', 'x86-64-v3')}")
+        args += extra
         jobs = str(os.environ.get("CMAKE_BUILD_PARALLEL_LEVEL") or self.parallel or os.cpu_count() or 1)
         subprocess.run(["cmake", "-S", str(ROOT), "-B", str(build_dir), *args], check=True)
         subprocess.run(["cmake", "--build", str(build_dir), "-j", jobs], check=True)

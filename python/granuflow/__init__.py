@@ -20,10 +20,10 @@ from .kernels import aggregation_kernels, register_kernel
 from .reference import kernel_reference, unit_reference, unit_types
 from .result import BalanceError, BalanceWarning, GridWarning, Result
 from ._version import __version__  # generated from the project version in CMakeLists.txt
-from .plugins import PluginWarning, load_plugin, load_search_path, load_search_path_at_import
+from .plugins import PluginWarning, build_info, load_plugin, load_search_path, load_search_path_at_import
 
 load_search_path_at_import()  # GRANUFLOW_PLUGIN_PATH: a user's units and kernels, before anything lists or builds them
 
 __all__ = ["load", "load_text", "Flowsheet", "Result", "GridWarning", "BalanceWarning", "ConfigError", "SolverError",
            "BalanceError", "CalibrationError", "unit_types", "unit_reference", "kernel_reference", "register_kernel",
-           "aggregation_kernels", "load_plugin", "load_search_path", "PluginWarning", "__version__"]
+           "aggregation_kernels", "load_plugin", "load_search_path", "PluginWarning", "build_info", "__version__"]

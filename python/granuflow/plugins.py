@@ -24,6 +24,15 @@ class PluginWarning(UserWarning):
     """A plugin named by GRANUFLOW_PLUGIN_PATH could not be loaded when granuflow was imported."""
 
 
+def build_info() -> dict:
+    """What this process runs: the version, the instruction set its core libraries were compiled for (``x86-64``,
+    ``x86-64-v3``: an installed package carries both and the dynamic loader picks one by the CPU; ``native`` for a
+    source build) and the paths of the core libraries loaded."""
+    from ._version import __version__
+
+    return {"version": __version__, "isa": _core.build_isa(), "core_libraries": _core.loaded_core_libraries()}
+
+
 def load_plugin(path: str | os.PathLike) -> str:
     """Load one plugin library; returns its real path. A library is loaded once however often it is named.
     Raises ConfigError (a ValueError) naming the file when it is no granuflow plugin or was built against another

@@ -3,6 +3,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include "granuflow/build_info.hpp"
 #include "granuflow/plugin.hpp"
 #include "kernels/registry.hpp"
 #include "units/registry.hpp"
@@ -37,6 +38,8 @@ void register_plugins(py::module_& m) {
         "Load every plugin of a ':'-separated list of folders (their *.so files) and files.");
   m.def("loaded_plugins", &loaded_plugins, "Real paths of the plugins loaded, in order.");
   m.def("plugin_abi_tag", &plugin_abi_tag, "The version and ABI tag a plugin must carry to be loaded.");
+  m.def("build_isa", &build_isa, "Instruction set of the loaded core (x86-64, x86-64-v3, ... or native).");
+  m.def("loaded_core_libraries", &loaded_core_libraries, "Paths of the libgranuflow_* libraries this process loaded.");
   m.def("plugin_origins", &plugin_origins, "Per family, the names plugins registered and the file of each.");
 }
 

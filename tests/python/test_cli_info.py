@@ -20,7 +20,7 @@ def run(*args, env=None):
 
 def test_version():
     r = run("--version")
-    assert r.returncode == 0 and r.stdout.strip() == f"granuflow {gf.__version__}"
+    assert r.returncode == 0 and r.stdout.strip() == f"granuflow {gf.__version__} ({gf.build_info()['isa']})"
 
 
 def test_describe_csv_and_json_hold_every_parameter_and_column():

@@ -32,7 +32,7 @@ def cmake_version():
 def test_one_version_everywhere():
     v = cmake_version()
     assert gf.__version__ == v
-    assert cli("--version").stdout.strip() == f"granuflow {v}"
+    assert cli("--version").stdout.strip() == f"granuflow {v} ({gf.build_info()['isa']})"
     assert gf.plugins.abi_tag().startswith(f"granuflow {v} ")
     header = open(os.path.join(BUILD, "generated", "include", "granuflow", "version.hpp")).read()
     assert f'#define GRANUFLOW_VERSION "{v}"' in header
@@ -69,10 +69,14 @@ def test_pip_install_into_a_fresh_venv_and_run_from_another_folder(tmp_path):
     away = tmp_path / "elsewhere"
     away.mkdir()
     exe = os.path.join(venv, "bin", "granuflow")
-    assert run([exe, "--version"], env=env, cwd=away).stdout.strip() == f"granuflow {gf.__version__}"
+    isa = gf.build_info()["isa"]
+    assert run([exe, "--version"], env=env, cwd=away).stdout.strip() == f"granuflow {gf.__version__} ({isa})"
     where = run([py, "-c", "import granuflow, granuflow.plugins as p; print(granuflow.__file__); "
-                 "print(p.cmake_prefix())"], env=env, cwd=away).stdout.split()
+                 "print(p.cmake_prefix()); print(*granuflow.build_info()['core_libraries'])"], env=env,
+                cwd=away).stdout.split()
     assert where[0].startswith(venv) and where[1].startswith(venv)
+    # the installed extension runs the installed core libraries, not the build folder's
+    assert len(where) >= 5 and all(os.path.realpath(f).startswith(os.path.realpath(where[1])) for f in where[2:])
     run([exe, "run", SCENE, "--out", away / "out", "--no-plots", "--no-grid-check", "--quiet"], env=env, cwd=away,
         timeout=600)
     mine = cli("run", SCENE, "--out", tmp_path / "ref", "--no-plots", "--no-grid-check", "--quiet", timeout=600)

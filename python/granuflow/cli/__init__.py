@@ -46,9 +46,9 @@ def _add_batch_options(p) -> None:
 
 
 def _version() -> str:
-    from .. import __version__
+    from .. import __version__, build_info
 
-    return f"granuflow {__version__}"
+    return f"granuflow {__version__} ({build_info()['isa']})"
 
 
 def _load_plugins(libs: list[str]) -> None:
