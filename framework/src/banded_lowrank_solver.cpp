@@ -10,6 +10,7 @@
 #include <cmath>
 #include <numeric>
 
+#include "direct_linear_solver.hpp"
 #include "granuflow/dae_system.hpp"
 #include "granuflow/flowsheet.hpp"
 
@@ -64,7 +65,7 @@ struct Content {
   }
 };
 
-Content* content(SUNLinearSolver s) { return static_cast<Content*>(s->content); }
+Content* content(SUNLinearSolver s) { return direct_content<Content>(s); }
 
 void layout(Content& c, int n) {
   c.n = n;
@@ -232,10 +233,6 @@ bool banded_setup(Content& c, const double* a, bool same) {
   return pivots_ok(c.schur) && c.Z.allFinite() && c.W.allFinite();
 }
 
-SUNLinearSolver_Type get_type(SUNLinearSolver) { return SUNLINEARSOLVER_DIRECT; }
-SUNLinearSolver_ID get_id(SUNLinearSolver) { return SUNLINEARSOLVER_CUSTOM; }
-int initialize(SUNLinearSolver) { return 0; }
-
 int setup(SUNLinearSolver s, SUNMatrix a) {
   Content& c = *content(s);
   const int n = static_cast<int>(SUNDenseMatrix_Rows(a));
@@ -284,33 +281,13 @@ int solve(SUNLinearSolver s, SUNMatrix, N_Vector x, N_Vector b, realtype) {
   return static_cast<int>(c.last_flag = finite ? 0 : 1);
 }
 
-sunindextype last_flag(SUNLinearSolver s) { return content(s)->last_flag; }
-
-int free_solver(SUNLinearSolver s) {
-  if (!s) return 0;
-  delete content(s);
-  s->content = nullptr;
-  SUNLinSolFreeEmpty(s);
-  return 0;
-}
-
 }  // namespace
 
 SUNLinearSolver make_banded_lowrank_solver(SUNContext ctx, ClassStructure st) {
-  SUNLinearSolver s = SUNLinSolNewEmpty(ctx);
-  if (!s) return nullptr;
-  auto* c = new Content();
+  auto c = std::make_unique<Content>();
   c->st = std::move(st);
   c->ctx = ctx;
-  s->content = c;
-  s->ops->gettype = get_type;
-  s->ops->getid = get_id;
-  s->ops->initialize = initialize;
-  s->ops->setup = setup;
-  s->ops->solve = solve;
-  s->ops->lastflag = last_flag;
-  s->ops->free = free_solver;
-  return s;
+  return new_direct_solver(ctx, std::move(c), setup, solve);
 }
 
 bool is_banded_lowrank_solver(SUNLinearSolver s) { return s && s->ops->setup == setup; }

@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <vector>
 
+#include "direct_linear_solver.hpp"
+
 namespace granuflow::detail {
 namespace {
 
@@ -112,11 +114,7 @@ bool pivots_ok(const Eigen::PartialPivLU<Eigen::MatrixXd>& lu) {
   return diag.allFinite() && diag.cwiseAbs().minCoeff() > 0.0;
 }
 
-Content* content(SUNLinearSolver s) { return static_cast<Content*>(s->content); }
-
-SUNLinearSolver_Type get_type(SUNLinearSolver) { return SUNLINEARSOLVER_DIRECT; }
-SUNLinearSolver_ID get_id(SUNLinearSolver) { return SUNLINEARSOLVER_CUSTOM; }
-int initialize(SUNLinearSolver) { return 0; }
+Content* content(SUNLinearSolver s) { return direct_content<Content>(s); }
 
 int setup(SUNLinearSolver s, SUNMatrix a) {
   const auto n = SUNDenseMatrix_Rows(a);
@@ -174,16 +172,6 @@ int solve(SUNLinearSolver s, SUNMatrix a, N_Vector x, N_Vector b, realtype) {
   return c.last_flag = 0;
 }
 
-sunindextype last_flag(SUNLinearSolver s) { return content(s)->last_flag; }
-
-int free_solver(SUNLinearSolver s) {
-  if (!s) return 0;
-  delete content(s);
-  s->content = nullptr;
-  SUNLinSolFreeEmpty(s);
-  return 0;
-}
-
 }  // namespace
 
 int eigen_dense_groups(SUNLinearSolver s) {
@@ -202,17 +190,7 @@ int eigen_dense_block_for(const double* a, int n) {
 }
 
 SUNLinearSolver make_eigen_dense_solver(SUNContext ctx) {
-  SUNLinearSolver s = SUNLinSolNewEmpty(ctx);
-  if (!s) return nullptr;
-  s->content = new Content();
-  s->ops->gettype = get_type;
-  s->ops->getid = get_id;
-  s->ops->initialize = initialize;
-  s->ops->setup = setup;
-  s->ops->solve = solve;
-  s->ops->lastflag = last_flag;
-  s->ops->free = free_solver;
-  return s;
+  return new_direct_solver(ctx, std::make_unique<Content>(), setup, solve);
 }
 
 }  // namespace granuflow::detail
