@@ -8,6 +8,12 @@
 # Call it in the folder that made TARGET, after its last target_* command: the copy takes the target's properties
 # as they are then, and the source files' properties (set_source_files_properties) hold per folder.
 set(GRANUFLOW_ISA_VARIANTS "" CACHE STRING "x86-64 levels (e.g. x86-64-v3) of extra copies of the core libraries")
+foreach(isa IN LISTS GRANUFLOW_ISA_VARIANTS)
+  if(NOT isa MATCHES "^x86-64-v[234]$")
+    message(FATAL_ERROR "GRANUFLOW_ISA_VARIANTS: '${isa}' is not a level glibc's loader selects "
+                        "(glibc-hwcaps): x86-64-v2, x86-64-v3 or x86-64-v4")
+  endif()
+endforeach()
 
 # The instruction set a target is compiled for, as build_info() reports it (target property GRANUFLOW_ISA).
 define_property(TARGET PROPERTY GRANUFLOW_ISA BRIEF_DOCS "instruction set the target is compiled for"

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "banded_lowrank_solver.hpp"
 #include "consistent_sensitivities.hpp"
 #include "consistent_start.hpp"
 #include "granuflow/errors.hpp"
@@ -388,6 +389,12 @@ void IdaStepper::finish(SolverStats& stats) {
   add_current_counts(counts_);
   add_counts(stats, counts_);
   stats.linear_solver = linear_solver_name(kind_);
+  if (user_.structured) {  // a setup whose matrix was not band + low rank was factored densely: say how many
+    const BandedLowRankStats b = banded_lowrank_stats(user_.structured);
+    if (b.dense_setups > 0)
+      stats.linear_solver += "; " + std::to_string(b.dense_setups) + " of " + std::to_string(b.setups) +
+                             " setups dense LU (the matrix was not band + low rank)";
+  }
   stats.method = "bdf (IDAS)";
   stats.method_reason = reason_;
 }

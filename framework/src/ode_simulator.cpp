@@ -171,7 +171,9 @@ class OdeStepper : public Stepper {
     stats.method =
         retired_.empty() ? describe(method_, gmres) : describe(first_, gmres) + ", then " + describe(method_, gmres);
     stats.method_reason = reason_;
-    stats.linear_solver = method_ == Method::kBdf ? linear_solver_name(kind_) : "none";
+    stats.linear_solver = method_ != Method::kBdf              ? "none"
+                          : kind_ == LinearSolverKind::kBanded ? "dense (Eigen LU): banded is IDAS's only"
+                                                               : linear_solver_name(kind_);
   }
 
  private:

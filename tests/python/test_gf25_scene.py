@@ -380,6 +380,18 @@ def test_table1_files_differ_only_in_the_upper_temperature_level():
     assert levels == corners | faces | {(700, 60, 90)}
 
 
+def test_banded_solver_says_when_the_matrix_is_not_band_plus_low_rank():
+    """Aggregation couples every class pair: `linear_solver: banded` factors each setup densely, gives the dense
+    answer, and its name in the run's stats says how many setups fell back (never silently another solver)."""
+    fs = gf.load(SCENE)
+    dense, banded = fs.simulate(linear_solver="dense"), fs.simulate(linear_solver="banded")
+    assert banded["bed.d50"][-1] == dense["bed.d50"][-1]
+    n = banded.stats["linear_solver"].split("; ")[1].split()
+    assert n[0] == n[2] and int(n[0]) > 0 and "setups dense LU (the matrix was not band + low rank)" in \
+        banded.stats["linear_solver"]
+    assert "setups dense" not in dense.stats["linear_solver"]
+
+
 def test_linear_solver_choice_follows_the_jacobian_fill():
     """`linear_solver: auto` stays dense (spray zone inlined) past dense_limit while the Jacobian is mostly full
     (200 classes: aggregation couples every class pair), and is sparse for a long chain of tanks."""
