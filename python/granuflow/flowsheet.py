@@ -6,11 +6,9 @@ import os
 import warnings
 from typing import Iterable, Mapping, Sequence
 
-import numpy as np
-
 from . import _core, accuracy, outputs
 from .accuracy import grid_check as _grid_check
-from .quantity import is_number, parse_time
+from .quantity import bool_types, integer_types, is_number, parse_time
 from .result import BalanceWarning, GridWarning, Layout, Result
 from .textfile import check_regular, check_yaml, short
 
@@ -147,7 +145,7 @@ class Flowsheet:
 
     def set(self, name: str, value: float | str) -> "Flowsheet":
         """Set ``name`` (SI float, or string with a unit). Raises ConfigError outside the bounds."""
-        if isinstance(value, (bool, np.bool_)):  # True is an int to Python, but never a parameter value
+        if isinstance(value, bool_types()):  # True is an int to Python, but never a parameter value
             raise ConfigError(f"parameter {name} = {value}: expected a number (SI) or a string with a unit, e.g. "
                               "'60 degC', not a bool")
         self._scene.set(name, value)
@@ -347,9 +345,9 @@ class Flowsheet:
         times, the folder their files are written to, and a checkpoint file to resume from
         (docs/events_and_checkpoints.md).
         """
-        if not isinstance(error_estimate, (bool, np.bool_)):
+        if not isinstance(error_estimate, bool_types()):
             raise ConfigError(f"simulate(): error_estimate = {short(error_estimate)}: expected True or False")
-        if grid_check is not None and not isinstance(grid_check, (bool, np.bool_)):
+        if grid_check is not None and not isinstance(grid_check, bool_types()):
             raise ConfigError(f"simulate(): grid_check = {short(grid_check)}: expected True or False")
         target = self._accuracy_target(accuracy)
         if target is not None:
@@ -371,7 +369,7 @@ class Flowsheet:
                 raise ConfigError("simulate(): t_out = []: expected a non-empty list of times in [0, t_end] "
                                   "(or leave it out, or give n_out)")
         for key, v in (("n_out", n_out), ("max_steps", max_steps)):
-            if v is not None and (isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, np.integer))):
+            if v is not None and (isinstance(v, bool_types()) or not isinstance(v, integer_types())):
                 raise ConfigError(f"simulate(): {key} = {short(v)}: expected a whole number")
         for key, v in (("rtol", rtol), ("atol", atol)):
             if v is not None and not is_number(v):
@@ -413,7 +411,8 @@ class Flowsheet:
         crossing, so a recipe step whose condition already held when it was armed, or never got there, would otherwise
         pass unnoticed. A repeating event is a switching law (a valve's positions): that one of its switches was never
         needed in this run is not a finding."""
-        if "events:" not in self.text or not len(res.t) or res.t[-1] < res.t[0] + (self.t_end - res.t[0]) * (1 - 1e-12):
+        t = res._t_list()
+        if "events:" not in self.text or not t or t[-1] < t[0] + (self.t_end - t[0]) * (1 - 1e-12):
             return []  # no events, or a stop event ended the run early (the later ones had no chance)
         import yaml
 

@@ -39,15 +39,16 @@ from __future__ import annotations
 
 import math
 import re
-from typing import Callable, Sequence
-
-import numpy as np
+from typing import TYPE_CHECKING, Callable, Sequence
 
 from . import _core
 
+if TYPE_CHECKING:  # the package imports NumPy only where a caller needs arrays
+    import numpy as np
+
 __all__ = ["register_kernel", "aggregation_kernels", "python_kernels"]
 
-KernelFunction = Callable[[np.ndarray, np.ndarray], np.ndarray]
+KernelFunction = Callable[["np.ndarray", "np.ndarray"], "np.ndarray"]
 
 
 _DECLARED: dict[str, list[dict]] = {}  # the parameters each Python kernel was registered with

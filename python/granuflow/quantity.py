@@ -9,9 +9,8 @@ and the edge units that fit an SI unit.
 from __future__ import annotations
 
 import math
+import sys
 from typing import Any
-
-import numpy as np
 
 from . import _core
 from .textfile import short
@@ -24,9 +23,29 @@ EDGE_UNITS = ("-", "%", "K", "degC", "m", "mm", "um", "kg", "g", "s", "min", "h"
               "kg/m3", "1/s", "1/min", "J/kg", "kJ/kg")
 
 
+def real_types() -> tuple:
+    """The types of a real number: int and float, and NumPy's integer and floating types once NumPy is loaded (no
+    NumPy number exists before; the package imports NumPy only where a caller needs arrays)."""
+    np = sys.modules.get("numpy")
+    kinds = (getattr(np, "integer", None), getattr(np, "floating", None))
+    return (int, float) + tuple(k for k in kinds if k is not None)
+
+
+def integer_types() -> tuple:
+    """int, and NumPy's integer types once NumPy is loaded."""
+    k = getattr(sys.modules.get("numpy"), "integer", None)
+    return (int,) if k is None else (int, k)
+
+
+def bool_types() -> tuple:
+    """bool, and NumPy's bool once NumPy is loaded."""
+    k = getattr(sys.modules.get("numpy"), "bool_", None)
+    return (bool,) if k is None else (bool, k)
+
+
 def is_number(x: Any) -> bool:
     """A finite real number (not a bool)."""
-    return isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, bool) and math.isfinite(x)
+    return isinstance(x, real_types()) and not isinstance(x, bool) and math.isfinite(x)
 
 
 def split(text: str, where: str = "") -> tuple[float, str]:
@@ -46,7 +65,7 @@ def number(value: Any, where: str) -> float:
             return float(value)
         except ValueError:
             pass
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+    if isinstance(value, bool) or not isinstance(value, real_types()):
         raise ConfigError(f"{where} = {short(value)}: expected a number, optionally followed by a unit")
     return float(value)
 
@@ -86,10 +105,20 @@ def fits(unit: str, si_unit: str) -> bool:
 
 def from_si(values, unit: str, si_unit: str) -> np.ndarray:
     """SI values in ``unit``."""
+    import numpy as np
+
     if not unit or unit == si_unit:
         return np.asarray(values, dtype=float)
     a, b = affine(unit, si_unit)
     return (np.asarray(values, dtype=float) - a) / b
+
+
+def from_si_value(value: float, unit: str, si_unit: str) -> float:
+    """One SI value in ``unit``: :func:`from_si` of a number, the same operations, without NumPy."""
+    if not unit or unit == si_unit:
+        return float(value)
+    a, b = affine(unit, si_unit)
+    return (float(value) - a) / b
 
 
 def display_units(si_unit: str | None = None) -> list[str]:
@@ -116,6 +145,8 @@ def conversion(unit: str, si_unit: str) -> tuple[float, float]:
 
 def convert(values, unit: str, si_unit: str) -> np.ndarray:
     """SI values in the display ``unit`` (ValueError for a unit of another dimension)."""
+    import numpy as np
+
     f, o = conversion(unit, si_unit)
     return np.asarray(values, dtype=float) * f + o
 
@@ -144,7 +175,7 @@ def si_or_nan(value: Any, si_unit: str, where: str = "value") -> float:
 
 def show(x: Any) -> str:
     """A value as the user wrote it: numbers short (10, 0.5, inf), text quoted."""
-    if isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, bool):
+    if isinstance(x, real_types()) and not isinstance(x, bool):
         return f"{float(x):g}"
     return repr(x)
 

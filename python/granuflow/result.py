@@ -1,14 +1,20 @@
-"""Simulation results: NumPy arrays first; pandas only when asked for (timeseries)."""
+"""Simulation results: NumPy arrays for callers; pandas only when asked for (timeseries).
+
+The core hands a run's arrays over as plain buffers (``_core.ResultArray``). NumPy wraps them without a copy on a
+caller's first use of ``res.t``, ``res.y`` ...; the summary, warnings, balance check and timeseries.csv read them
+through the core's reductions (``_core.end_fractions``, ``column_max``, ``columns_equal``, ``csv_table``, shared with
+the sweep batch), so a plain ``granuflow run`` never imports NumPy (issue 32: its import took longer than the run)."""
 from __future__ import annotations
 
 import math
 import os
 
-import numpy as np
-
 from . import _core, outputs
-from .quantity import affine, from_si, is_number, label
+from .quantity import affine, from_si, from_si_value, is_number, label
 from .textfile import short
+
+# The arrays of a run (see Result): NumPy's from their first use.
+ARRAYS = ("t", "y", "yp", "outputs", "sens", "output_sens")
 
 ConfigError = _core.ConfigError
 
@@ -60,15 +66,10 @@ class Result:
     def __init__(self, raw: dict, scene_name: str = "", summary_map: dict | None = None,
                  units: dict | None = None, layout: Layout | None = None):
         layout = layout or Layout(raw, units)
-        self.t = raw["t"]
-        self.y = raw["y"]
-        self.yp = raw["yp"]
+        self._raw = {k: raw.get(k) for k in ARRAYS}  # res.t, res.y ...: NumPy arrays from a caller's first use
         self.state_names = list(layout.state_names)
-        self.outputs = raw["outputs"]
         self.output_names = list(layout.output_names)
         self.output_roles = list(layout.output_roles)  # (role, quantity, class, unit) per output
-        self.output_sens = raw.get("output_sens")
-        self.sens = raw["sens"]
         self.sens_params = list(raw["sens_params"])
         self.stats = dict(raw["stats"])
         # State events that fired ({name, phase, t}), in time order; the checkpoint files the run wrote.
@@ -82,11 +83,60 @@ class Result:
         self.accuracy = None        # granuflow.accuracy.target.Accuracy with simulate(accuracy=...)
         self.grid_check = None      # granuflow.accuracy.grid_check.GridCheck of a plain run
         self.extra_warnings: list[str] = []
-        self.t_end = raw.get("t_end", float(self.t[-1]))
+        self.t_end = raw["t_end"] if "t_end" in raw else self._t_at(-1)
         self.scene_name = scene_name
         self.summary_map = dict(summary_map or {})
         self.units = dict(layout.units)
         self._index = layout.index  # shared between the results of one flowsheet, never changed
+
+    def __getattr__(self, name: str):
+        # Only for an array not yet asked for: the core's buffer becomes a NumPy array (no copy), kept from then on.
+        raw = self.__dict__.get("_raw")
+        if raw is None or name not in ARRAYS:
+            raise AttributeError(f"'Result' object has no attribute '{name}'")
+        v = raw[name]
+        if v is not None:
+            import numpy as np
+
+            v = np.asarray(v)
+        self.__dict__[name] = v
+        return v
+
+    def __getstate__(self) -> dict:
+        """A pickled result holds NumPy arrays (the core's buffers do not pickle)."""
+        for k in ARRAYS:
+            getattr(self, k)
+        state = dict(self.__dict__)
+        state.pop("_raw", None)
+        return state
+
+    def _buf(self, name: str):
+        """The array ``name`` as a float64 buffer without importing NumPy: the core's own until a caller asks for (or
+        sets) the attribute, then that; anything that is not a float64 buffer goes through NumPy."""
+        v = self.__dict__.get(name)
+        if v is None and self.__dict__.get("_raw") is not None:
+            v = self._raw[name]
+        try:
+            if memoryview(v).format == "d":
+                return v
+        except TypeError:
+            pass
+        import numpy as np
+
+        return np.ascontiguousarray(v, dtype=float)
+
+    def _t_at(self, k: int) -> float:
+        """The output time at index k (s)."""
+        return float(memoryview(self._buf("t"))[k])
+
+    def _t_list(self) -> list[float]:
+        """The output times (s) as floats."""
+        return memoryview(self._buf("t")).tolist()
+
+    def _final(self, name: str) -> float:
+        """The value of a state or output at the last output time."""
+        kind, i = self._index[name]
+        return float(memoryview(self._buf("y" if kind == "y" else "outputs"))[-1, i])
 
     def __getitem__(self, name: str) -> np.ndarray:
         """Time series of a state or reported output by its qualified name."""
@@ -117,6 +167,7 @@ class Result:
     def timeseries(self):
         """All states and outputs as a DataFrame indexed by time in s, in SI; ``df.attrs["units"]`` maps every column
         (and the index ``t_s``) to its unit."""
+        import numpy as np
         import pandas as pd
 
         data = np.hstack([self.y, self.outputs]) if self.outputs.size else self.y
@@ -129,30 +180,31 @@ class Result:
     def repeated_outputs(self) -> list[str]:
         """Outputs that repeat a state of the same unit over the whole run (a balance term that is the unit's own
         accumulator, a class mass reported again for the size distribution): files list such a quantity once."""
-        y, o = np.asarray(self.y, dtype=float), np.asarray(self.outputs, dtype=float)
-        if not y.size or not o.size:
+        y, o = self._buf("y"), self._buf("outputs")
+        if not memoryview(y).nbytes or not memoryview(o).nbytes:
             return []
         # Linear in the size of the result: each output is looked up by its unit and last value among the states,
-        # and compared in full only with the few states it meets there (array_equal: -0.0 and 0.0 are one value, a
-        # column with NaN never repeats).
+        # and compared in full only with the few states it meets there (as numpy.array_equal: -0.0 and 0.0 are one
+        # value, a column with NaN never repeats).
         by_last: dict[tuple[str, float], list[int]] = {}
-        for i, (n, v) in enumerate(zip(self.state_names, y[-1].tolist())):
+        for i, (n, v) in enumerate(zip(self.state_names, _core.row(y, -1))):
             by_last.setdefault((n.rpartition(".")[0], v), []).append(i)
         out = []
-        for j, (n, v) in enumerate(zip(self.output_names, o[-1].tolist())):
+        for j, (n, v) in enumerate(zip(self.output_names, _core.row(o, -1))):
             for i in by_last.get((n.rpartition(".")[0], v), ()):
-                if np.array_equal(y[:, i], o[:, j]):
+                if _core.columns_equal(y, i, o, j):
                     out.append(n)
                     break
         return out
 
-    def _display_columns(self) -> tuple[list[str], np.ndarray]:
-        """(headers, values [time, column]) of every state and output as files show them: sizes in µm, the rest
-        SI; outputs that repeat a state are left out. One conversion of the whole block, not one per column."""
+    def _display_plan(self) -> tuple[list[str], list[tuple[int, int]], list[float], list[float]]:
+        """(headers, columns, shifts, scales) of every state and output as files show them: sizes in µm, the rest
+        SI; outputs that repeat a state are left out. A column is (0, state) or (1, output); its value as shown is
+        (value - shift) / scale (quantity.from_si)."""
         skip = set(self.repeated_outputs())
         headers, a, b, cols = [], [], [], []
         factors: dict[tuple[str, str], tuple[float, float]] = {}
-        for names, offset in ((self.state_names, 0), (self.output_names, len(self.state_names))):
+        for block, names in enumerate((self.state_names, self.output_names)):
             for j, n in enumerate(names):
                 if n in skip:
                     continue
@@ -164,13 +216,24 @@ class Result:
                 shift, scale = factors[shown, si]
                 a.append(shift)
                 b.append(scale)
-                cols.append(offset + j)
+                cols.append((block, j))
+        return headers, cols, a, b
+
+    def _display_columns(self) -> tuple[list[str], np.ndarray]:
+        """(headers, values [time, column]) of :meth:`_display_plan` as one NumPy block: one conversion of the whole
+        block, not one per column."""
+        import numpy as np
+
+        headers, cols, a, b = self._display_plan()
         block = np.hstack([self.y, self.outputs]) if self.outputs.size else np.asarray(self.y, dtype=float)
+        flat = [j if k == 0 else len(self.state_names) + j for k, j in cols]
         # from_si per column: (value - a) / b; a = 0, b = 1 leaves a value as it is (also -0.0 and NaN)
-        return headers, (block[:, cols] - np.array(a)) / np.array(b)
+        return headers, (block[:, flat] - np.array(a)) / np.array(b)
 
     def _file_columns(self) -> tuple[list[str], np.ndarray]:
         """(headers, values) of :meth:`table` and :meth:`to_csv`: time in s and min, then :meth:`_display_columns`."""
+        import numpy as np
+
         headers, values = self._display_columns()
         t = np.asarray(self.t, dtype=float)
         return ["t [s]", "t [min]"] + headers, np.column_stack([t, t / 60.0, values])
@@ -184,12 +247,13 @@ class Result:
         return pd.DataFrame({h: data[:, k] for k, h in enumerate(headers)})
 
     def to_csv(self, path: str) -> str:
-        """Write :meth:`table` as CSV (no pandas needed: the command line writes it on every run). Each value as
-        ``%.10g``, as NumPy's savetxt writes it, formatted by the core (three times as fast as Python's formatting)."""
-        headers, data = self._file_columns()
+        """Write :meth:`table` as CSV (neither pandas nor NumPy needed: the command line writes it on every run). Each
+        value as ``%.10g``, as NumPy's savetxt writes it, converted and formatted by the core."""
+        headers, cols, a, b = self._display_plan()
+        text = _core.csv_table(self._buf("t"), [self._buf("y"), self._buf("outputs")], cols, a, b)
         with open(path, "w") as f:
-            f.write(",".join('"' + h + '"' if "," in h else h for h in headers) + "\n")
-            f.write(_core.csv_rows(data))
+            f.write(",".join('"' + h + '"' if "," in h else h for h in ["t [s]", "t [min]"] + headers) + "\n")
+            f.write(text)
         return path
 
     # -- particle size distribution -------------------------------------------------------------
@@ -211,6 +275,8 @@ class Result:
         span = self.t[-1] - self.t[0]
         if not self.t[0] - 1e-9 * span <= t <= self.t[-1] + 1e-9 * span:
             raise ConfigError(f"psd: t = {t:g} s: outside the run, {self.t[0]:g} to {self.t[-1]:g} s")
+        import numpy as np
+
         k = int(np.argmin(np.abs(self.t - t)))
         dcols, mcols = outputs.psd_columns(self.output_roles, unit)
         w = self.outputs[k, mcols]
@@ -222,6 +288,7 @@ class Result:
 
         Returns a DataFrame with pivot diameter (µm), class mass (kg), mass fraction and cumulative Q3.
         """
+        import numpy as np
         import pandas as pd
 
         t_k, d, w, frac = self.psd_arrays(t, unit)
@@ -240,18 +307,17 @@ class Result:
             return {k: dict(v) for k, v in self._grid_ends.items()}
         out: dict[str, dict] = {}
         units = self.psd_units()
+        o = self._buf("outputs")
+        mv = memoryview(o)
         for unit in units:
             dcols, mcols = outputs.psd_columns(self.output_roles, unit)
-            m = self.outputs[:, mcols]
-            total = m.sum(axis=1)
-            for end, k in (("bottom_class", 0), ("top_class", -1)):
-                f = np.divide(m[:, k], total, out=np.zeros_like(total), where=total > 0)
-                out[f"{unit}.{end}"] = {"initial": float(f[0]), "final": float(f[-1]), "max": float(np.max(f)),
-                                        "d_um": float(from_si(self.outputs[0, dcols[k]], "um", "m"))}
+            fractions = _core.end_fractions(o, mcols, [0, -1])  # of the bottom and the top class at every time
+            for (end, k), (first, last, peak) in zip((("bottom_class", 0), ("top_class", -1)), fractions):
+                out[f"{unit}.{end}"] = {"initial": first, "final": last, "max": peak,
+                                        "d_um": from_si_value(mv[0, dcols[k]], "um", "m")}
         for j, name in outputs.grid_end_columns(self.output_roles, self.output_names):
             if self.output_roles[j][3] not in units:
-                col = self.outputs[:, j]
-                out[name] = {"initial": float(col[0]), "final": float(col[-1]), "max": float(np.max(col)),
+                out[name] = {"initial": float(mv[0, j]), "final": float(mv[-1, j]), "max": _core.column_max(o, j),
                              "d_um": None}
         self._grid_ends = {k: dict(v) for k, v in out.items()}
         return out
@@ -307,7 +373,7 @@ class Result:
         out = {}
         for key, src in self.summary_map.items():
             si = self.unit(src)
-            out[key] = _finite(float(from_si(self[src][-1], outputs.summary_unit(key, si), si)))
+            out[key] = _finite(from_si_value(self._final(src), outputs.summary_unit(key, si), si))
         self._summary_values = out  # a result never changes
         return dict(out)
 
@@ -321,7 +387,7 @@ class Result:
         fails = self.balance_findings()[1]
         if fails:
             name, value = _worst(self.balance_closure())
-            raise BalanceError(f"{self.scene_name}: {fails[0]}", name, value, float(self.t[-1]), result=self)
+            raise BalanceError(f"{self.scene_name}: {fails[0]}", name, value, self._t_at(-1), result=self)
 
     # -- summary --------------------------------------------------------------------------------
     def balance_closure(self) -> dict:
@@ -330,14 +396,14 @@ class Result:
         if getattr(self, "_balance", None) is not None:  # a result never changes
             return dict(self._balance)
         acc: dict = {}
+        mv = memoryview(self._buf("outputs"))
         for j, q, kind in outputs.balance_terms(self.output_roles):
             acc.setdefault(q, {"in": 0.0, "out": 0.0, "hold0": 0.0, "hold": 0.0})
-            col = self.outputs[:, j]
             if kind == "hold":
-                acc[q]["hold0"] += col[0]
-                acc[q]["hold"] += col[-1]
+                acc[q]["hold0"] += mv[0, j]
+                acc[q]["hold"] += mv[-1, j]
             else:
-                acc[q][kind] += col[-1] - col[0]
+                acc[q][kind] += mv[-1, j] - mv[0, j]
         out = {}
         for q in outputs.BALANCE_QUANTITIES:
             if q not in acc:
@@ -357,8 +423,8 @@ class Result:
     def phases(self) -> list[dict]:
         """The recipe's phases: the first (``start``) from the start, then one from each event (its ``phase``) to the
         next event or the end of the run."""
-        starts = [("start", float(self.t[0]))] + [(e["phase"], float(e["t"])) for e in self.events]
-        ends = [t for _, t in starts[1:]] + [float(self.t[-1])]
+        starts = [("start", self._t_at(0))] + [(e["phase"], float(e["t"])) for e in self.events]
+        ends = [t for _, t in starts[1:]] + [self._t_at(-1)]
         # an event that stops the run begins no phase
         return [{"name": n, "t_start_s": a, "t_end_s": b} for k, ((n, a), b) in enumerate(zip(starts, ends))
                 if b > a or k == 0]
@@ -366,7 +432,7 @@ class Result:
     @property
     def summary(self) -> dict:
         """The fields of summary.json (docs/design.md contract); null where the scene has no such quantity."""
-        s = {"scene": self.scene_name, "t_end_s": float(self.t[-1])}
+        s = {"scene": self.scene_name, "t_end_s": self._t_at(-1)}
         for key in outputs.STANDARD_SUMMARY_KEYS:
             s[key] = None
         units, reasons = {}, {}
@@ -387,7 +453,8 @@ class Result:
             s["material"] = self.material
         # Where a model left the paper's literal equations (floors, caps, regularizations): the largest count of
         # classes or instances affected at any output time, per unit (docs/paper001_decisions.md asks for this).
-        s["regularizations"] = {n: _finite(np.max(self.outputs[:, j]))
+        o = self._buf("outputs")
+        s["regularizations"] = {n: _finite(_core.column_max(o, j))
                                 for j, n in outputs.regularization_columns(self.output_roles, self.output_names)}
         if self.error_estimate is not None:
             s["error_estimate"] = self.error_estimate.to_json()
@@ -416,7 +483,7 @@ class Result:
         return s
 
     def __repr__(self) -> str:
-        return (f"<granuflow.Result {self.scene_name!r}: {len(self.t)} times to {self.t[-1]:g} s, "
+        return (f"<granuflow.Result {self.scene_name!r}: {len(self._t_list())} times to {self._t_at(-1):g} s, "
                 f"{len(self.state_names)} states, {self.stats['steps']} steps, {self.wall_time_s * 1e3:.1f} ms>")
 
 

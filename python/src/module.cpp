@@ -15,6 +15,7 @@ void register_montecarlo(py::module_& m);
 void register_plugins(py::module_& m);
 void register_files(py::module_& m);
 void register_sweep_batch(py::module_& m);
+void register_result(py::module_& m);
 }  // namespace granuflow::python
 
 PYBIND11_MODULE(_core, m) {
@@ -47,4 +48,5 @@ PYBIND11_MODULE(_core, m) {
   granuflow::python::register_plugins(m);
   granuflow::python::register_files(m);
   granuflow::python::register_sweep_batch(m);
+  granuflow::python::register_result(m);
 }

@@ -12,6 +12,7 @@
 #include "granuflow/quantity.hpp"
 #include "granuflow/scene.hpp"
 #include "granuflow/simulator.hpp"
+#include "result_arrays.hpp"
 #include "sweep_batch.hpp"
 #include "units/registry.hpp"
 
@@ -20,15 +21,6 @@ using namespace pybind11::literals;
 
 namespace granuflow::python {
 namespace {
-
-// The vector's storage handed to NumPy (owned by the array from then on), not copied: a run's states and outputs
-// at every output time are most of what simulate() returns.
-py::array_t<double> as_array(std::vector<double>&& v, std::vector<py::ssize_t> shape) {
-  if (v.empty()) return py::array_t<double>(shape);
-  auto* owned = new std::vector<double>(std::move(v));
-  py::capsule free_when_done(owned, [](void* p) { delete static_cast<std::vector<double>*>(p); });
-  return py::array_t<double>(shape, owned->data(), free_when_done);
-}
 
 double value_for(const Scene& s, const std::string& name, const py::handle& v) {
   if (py::isinstance<py::str>(v))
@@ -95,11 +87,12 @@ py::dict simulate(Scene& s, std::optional<double> t_end, std::optional<std::vect
       "linear_solver"_a = r.stats.linear_solver, "linear_iterations"_a = r.stats.linear_iterations,
       "preconditioner_setups"_a = r.stats.preconditioner_setups, "linear_failures"_a = r.stats.linear_failures,
       "method"_a = r.stats.method, "method_reason"_a = r.stats.method_reason);
-  py::dict out("t"_a = as_array(std::move(r.t), {nt}), "y"_a = as_array(std::move(r.y), {nt, ns}),
-               "yp"_a = as_array(std::move(r.yp), {nt, ns}), "outputs"_a = as_array(std::move(r.outputs), {nt, no}),
-               "output_sens"_a = as_array(std::move(r.output_sens), {nt, np, no}),
-               "sens"_a = as_array(std::move(r.sens), {nt, np, ns}), "sens_params"_a = r.sens_params, "stats"_a = stats,
-               "wall_time_s"_a = r.wall_time_s, "rtol"_a = o.rtol, "atol"_a = o.atol, "t_end"_a = o.t_end);
+  py::dict out(
+      "t"_a = result_array(std::move(r.t), {nt}), "y"_a = result_array(std::move(r.y), {nt, ns}),
+      "yp"_a = result_array(std::move(r.yp), {nt, ns}), "outputs"_a = result_array(std::move(r.outputs), {nt, no}),
+      "output_sens"_a = result_array(std::move(r.output_sens), {nt, np, no}),
+      "sens"_a = result_array(std::move(r.sens), {nt, np, ns}), "sens_params"_a = r.sens_params, "stats"_a = stats,
+      "wall_time_s"_a = r.wall_time_s, "rtol"_a = o.rtol, "atol"_a = o.atol, "t_end"_a = o.t_end);
   // Recipes: the events that fired (with the phase each began) and the checkpoint files written.
   py::list events;
   for (const auto& e : r.events) events.append(py::dict("name"_a = e.name, "phase"_a = e.phase, "t"_a = e.t));

@@ -19,6 +19,7 @@
 
 #include "granuflow/errors.hpp"
 #include "granuflow/quantity.hpp"
+#include "result_reductions.hpp"
 
 namespace granuflow::python {
 namespace {
@@ -49,39 +50,6 @@ std::optional<double> size_fraction(const std::string& name) {
   for (size_t i = 1; i < local.size(); ++i)
     if (local[i] < '0' || local[i] > '9') return std::nullopt;
   return std::stoi(local.substr(1)) / 100.0;
-}
-
-double max_nan(const double* x, size_t n, size_t stride) {  // np.max: NaN wins
-  double m = x[0];
-  for (size_t k = 1; k < n; ++k) {
-    const double v = x[k * stride];
-    if (std::isnan(v) || std::isnan(m)) return kNaN;
-    m = std::max(m, v);
-  }
-  return m;
-}
-
-// numpy's sum of one row of a (times x classes) array taken out of a wider one: a single row is contiguous and
-// summed pairwise (numpy's pairwise_sum); with several rows the copy is Fortran-ordered and summed in order.
-double pairwise_sum(const double* a, size_t n) {
-  if (n < 8) {
-    double r = 0.0;
-    for (size_t i = 0; i < n; ++i) r += a[i];
-    return r;
-  }
-  if (n <= 128) {
-    double r[8];
-    for (int j = 0; j < 8; ++j) r[j] = a[j];
-    size_t i = 8;
-    for (; i < n - (n % 8); i += 8)
-      for (int j = 0; j < 8; ++j) r[j] += a[i + j];
-    double res = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]));
-    for (; i < n; ++i) res += a[i];
-    return res;
-  }
-  size_t n2 = n / 2;
-  n2 -= n2 % 8;
-  return pairwise_sum(a, n2) + pairwise_sum(a + n2, n - n2);
 }
 
 // What the results of one flowsheet share (granuflow.result.Layout with the roles of granuflow.outputs).
@@ -125,6 +93,9 @@ struct View {
   size_t nt() const { return r.t.size(); }
   size_t no() const { return L.output_names.size(); }
   double out(size_t k, size_t j) const { return r.outputs[k * no() + j]; }
+  BlockView block() const {
+    return BlockView::dense(r.outputs, static_cast<std::ptrdiff_t>(nt()), static_cast<std::ptrdiff_t>(no()));
+  }
   double final_of(const std::string& name) const {
     const auto& [is_out, i] = L.index.at(name);
     const size_t k = nt() - 1;
@@ -163,27 +134,19 @@ std::vector<GridEnd> grid_ends(const View& v) {
     if (d.size() != m.size())  // Result.grid_ends would fail on it as well
       throw std::runtime_error("unit " + unit + ": size distribution with " + std::to_string(m.size()) +
                                " class masses but " + std::to_string(d.size()) + " pivot diameters");
-    std::vector<double> total(nt), row(m.size());
-    for (size_t k = 0; k < nt; ++k) {
-      for (size_t c = 0; c < m.size(); ++c) row[c] = v.out(k, m[c].second);
-      if (nt == 1) {
-        total[k] = pairwise_sum(row.data(), row.size());
-      } else {
-        double s = 0.0;
-        for (double x : row) s += x;
-        total[k] = s;
-      }
-    }
-    for (const auto& [end, c] :
-         {std::make_pair("bottom_class", size_t(0)), std::make_pair("top_class", m.size() - 1)}) {
-      std::vector<double> f(nt);
-      for (size_t k = 0; k < nt; ++k) f[k] = total[k] > 0 ? v.out(k, m[c].second) / total[k] : 0.0;
-      out.push_back({unit + "." + end, f[0], f[nt - 1], max_nan(f.data(), nt, 1), from_si_um(v.out(0, d[c].second))});
-    }
+    std::vector<std::ptrdiff_t> mass_cols;
+    for (const auto& [cls, col] : m) mass_cols.push_back(col);
+    const auto f = end_fractions(v.block(), mass_cols, {0, static_cast<std::ptrdiff_t>(m.size()) - 1});
+    out.push_back({unit + ".bottom_class", f[0][0], f[0][1], f[0][2], from_si_um(v.out(0, d.front().second))});
+    out.push_back({unit + ".top_class", f[1][0], f[1][1], f[1][2], from_si_um(v.out(0, d.back().second))});
   }
   for (size_t j = 0; j < v.L.roles.size(); ++j)
     if (v.L.roles[j].role == OutputRole::kGridEnd && !psd.count(v.L.roles[j].unit))
-      out.push_back({v.L.output_names[j], v.out(0, j), v.out(nt - 1, j), max_nan(&v.r.outputs[j], nt, v.no()), {}});
+      out.push_back({v.L.output_names[j],
+                     v.out(0, j),
+                     v.out(nt - 1, j),
+                     column_max(v.block(), static_cast<std::ptrdiff_t>(j)),
+                     {}});
   return out;
 }
 

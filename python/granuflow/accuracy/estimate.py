@@ -25,8 +25,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-import numpy as np
-
 from ..outputs import per_class_names
 
 REFINEMENTS = (2, 4)          # grid refinement factors of the two extra grids
@@ -56,6 +54,8 @@ def richardson(f1: float, f2: float, f4: float, noise: float = 0.0) -> tuple[flo
 
 def richardson_series(f1: np.ndarray, f2: np.ndarray, f4: np.ndarray, noise: np.ndarray) -> np.ndarray:
     """:func:`richardson` pointwise (the discretization error of the series f1)."""
+    import numpy as np
+
     return np.array([richardson(a, b, c, n)[0] for a, b, c, n in zip(f1, f2, f4, noise)], dtype=float)
 
 
@@ -200,6 +200,6 @@ def estimate(base, tight, refined: list, keys: list[str], grid: str, rtol: tuple
         b, t = base[n], tight[n]
         e = b - t
         if refined:
-            e = e + richardson_series(t, refined[0][n], refined[1][n], np.abs(b - t))
+            e = e + richardson_series(t, refined[0][n], refined[1][n], abs(b - t))
         series[n] = e
     return ErrorEstimate(outs, series, grid, rtol, wall_time_s, list(notes or []))

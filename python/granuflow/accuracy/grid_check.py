@@ -65,7 +65,7 @@ def check(fs, res, **kw) -> GridCheck | None:
     t0 = time.perf_counter()
     try:
         fine_fs = fs.refined(2)
-        fine = fine_fs.simulate(**dict(kw, t_end=float(res.t[-1]), t_out=[float(t) for t in res.t],
+        fine = fine_fs.simulate(**dict(kw, t_end=res._t_at(-1), t_out=res._t_list(),
                                        rtol=res.rtol, atol=res.atol), warn=False, accuracy=False, grid_check=False)
     except (_core.ConfigError, _core.SolverError) as e:
         return GridCheck(fs.grid_label(), "", {}, {}, time.perf_counter() - t0,

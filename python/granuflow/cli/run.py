@@ -1,7 +1,7 @@
 """granuflow run: one simulation; summary.json, timeseries.csv and the scene's plots in --out.
 
-Kept fast as a whole process: NumPy and the core only; matplotlib is imported only when plots are drawn
-(``--no-plots`` skips them) and pandas not at all."""
+Kept fast as a whole process: the core only; matplotlib (and with it NumPy) is imported only when plots are drawn
+(``--no-plots`` skips them), pandas not at all."""
 from __future__ import annotations
 
 import json
@@ -106,7 +106,7 @@ def cmd_run(args) -> int:
     if not args.no_plots:
         written += _draw(res, specs, args.out)
     if not args.quiet:
-        print(f"{fs.name}: {res.t[-1]:g} s simulated in {res.wall_time_s * 1e3:.1f} ms "
+        print(f"{fs.name}: {res._t_at(-1):g} s simulated in {res.wall_time_s * 1e3:.1f} ms "
               f"({res.stats['steps']} steps); wrote {', '.join(written)} to {args.out}")
         print(json.dumps({k: summary[k] for k in summary
                           if k not in ("solver", "units", "grid_end", "warnings", "error_estimate", "accuracy",
