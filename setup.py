@@ -61,8 +61,9 @@ def install_prebuilt(build_dir: pathlib.Path, pkg_root: pathlib.Path) -> None:
     # the build tree's extension looks for the libraries in the build folder; the installed one beside itself
     libdir = cache_value(build_dir, "CMAKE_INSTALL_LIBDIR") or "lib"
     script = build_dir / "granuflow_wheel_rpath.cmake"
-    script.write_text(f'file(RPATH_SET FILE "{pkg_root / "granuflow" / cores[-1].name}" '
-                      f'NEW_RPATH "$ORIGIN/sdk/{libdir}")\n')
+    script.write_text("".join(f'file(RPATH_SET FILE "{pkg_root / "granuflow" / ext.name}" '
+                              f'NEW_RPATH "$ORIGIN/sdk/{libdir}")\n'
+                              for ext in sorted(src.glob("_*.so"))))  # _core and _calibration
     subprocess.run(["cmake", "-P", str(script)], check=True)
 
 

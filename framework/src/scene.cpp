@@ -17,6 +17,7 @@
 #include "granuflow/materials.hpp"
 #include "granuflow/plugin.hpp"
 #include "granuflow/quantity.hpp"
+#include "yaml_json.hpp"
 #include "yaml_text.hpp"
 
 namespace granuflow {
@@ -94,6 +95,8 @@ class Loader {
     YAML::Node extra;
     for (const char* k : {"plots", "sweep", "notes", "accuracy"})  // accuracy: read by granuflow.accuracy
       if (root[k]) extra[k] = root[k];
+    for (const char* k : {"plots", "sweep", "notes", "accuracy", "particles", "inputs", "events"})
+      if (root[k]) s.sections_json[k] = yaml_json(root[k]);
     YAML::Emitter em;
     em << extra;
     s.extra_yaml = em.c_str();

@@ -4,27 +4,19 @@ from __future__ import annotations
 import math
 import os
 import warnings
-from typing import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 
 from . import _core, accuracy, outputs
 from .accuracy import grid_check as _grid_check
 from .quantity import bool_types, integer_types, is_number, parse_time
 from .result import BalanceWarning, GridWarning, Layout, Result
-from .textfile import check_regular, check_yaml, short
+from .textfile import check_regular, short
 
 ConfigError = _core.ConfigError
 # The accuracy target of a scene that leaves its size grid to granuflow (particles: without classes): the threshold
 # of the grid check (granuflow.accuracy.grid_check.THRESHOLD), so that such a scene is converged to what a plain run
 # would accept without a warning.
 DEFAULT_ACCURACY = 0.02
-
-
-def _yaml_loader():
-    """libyaml's safe loader where PyYAML has it (the grid copies of the accuracy target parse the scene text each
-    time: 100 ms in pure Python, 2 ms in C), else PyYAML's own."""
-    import yaml
-
-    return getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 
 
 class Flowsheet:
@@ -92,7 +84,9 @@ class Flowsheet:
 
     def unit_of(self, name: str) -> str:
         """SI unit of a state or reported output; ConfigError listing the valid names otherwise."""
-        return _core.observable_unit(self._scene, name)
+        from . import _calibration  # loads Ceres: only when calibration asks
+
+        return _calibration.observable_unit(self._scene, name)
 
     def value_unit(self, name: str) -> str:
         """The unit of a summary key's value (``d50_um``: um) or of a state/output (SI)."""
@@ -129,14 +123,19 @@ class Flowsheet:
 
     @property
     def extra(self) -> dict:
-        """Scene keys the core does not interpret (plots, sweep, notes)."""
-        import yaml
+        """Scene keys the core does not interpret (plots, sweep, notes, accuracy), typed as PyYAML types YAML."""
+        return {k: self.section(k) for k in ("plots", "sweep", "notes", "accuracy") if k in self._scene.sections_json}
 
-        text = self._scene.extra_yaml
-        # the core keeps these keys as YAML, aliases unexpanded: held to the limits of every YAML file before PyYAML
-        # builds them (an alias bomb under plots: would expand in any message that shows it)
-        check_yaml(text, f"{self.path or self.name} (keys plots, sweep, notes as the core keeps them)", "scene file")
-        return yaml.load(text, Loader=_yaml_loader()) or {}
+    def section(self, key: str):
+        """A section of the scene the Python layer reads (plots, sweep, notes, accuracy, particles, inputs, events)
+        as Python values, or None when the scene has none: the core parsed the file once (held to the limits of every
+        YAML file) and hands the section over as JSON, its scalars typed as PyYAML's safe loader types them."""
+        text = self._scene.sections_json.get(key)
+        if text is None:
+            return None
+        import json
+
+        return json.loads(text)
 
     # -- parameters -----------------------------------------------------------------------------
     def get(self, name: str) -> float:
@@ -251,13 +250,7 @@ class Flowsheet:
     def copy_values_from(self, other: "Flowsheet") -> "Flowsheet":
         """Every constant parameter value of ``other`` (a flowsheet of the same scene), links respected; an input
         set from Python that the scene text does not hold cannot be carried over (ConfigError)."""
-        import yaml
-
-        try:
-            doc = yaml.load(other.text, Loader=_yaml_loader()) or {}
-        except yaml.YAMLError:  # YAML the core reads but PyYAML does not: the inputs cannot be told apart
-            doc = {}
-        declared = (doc.get("inputs") or {}) if isinstance(doc, dict) else {}
+        declared = other.section("inputs") or {}
         pending = []
         for p in other.params:
             spec = other.spec(p)
@@ -414,9 +407,7 @@ class Flowsheet:
         t = res._t_list()
         if "events:" not in self.text or not t or t[-1] < t[0] + (self.t_end - t[0]) * (1 - 1e-12):
             return []  # no events, or a stop event ended the run early (the later ones had no chance)
-        import yaml
-
-        declared = (yaml.load(self.text, Loader=_yaml_loader()) or {}).get("events") or []
+        declared = self.section("events") or []
         fired = {e["name"] for e in res.events}
         return [f"event {e.get('name')} ({e.get('when')}) never fired: its condition did not cross during the run "
                 "(an event fires on a crossing, not where its condition already holds when it is armed; "
@@ -432,14 +423,16 @@ class Flowsheet:
     def _accuracy_target(self, accuracy) -> dict | None:
         """The accuracy target of a run (granuflow.accuracy.target.parse_target) or None: ``accuracy`` given, else
         the scene's ``accuracy:``, else DEFAULT_ACCURACY when the scene's particles: give no classes."""
-        from .accuracy import target as acc_target
-
         if accuracy is False:
             return None
         if accuracy is not None:
+            from .accuracy import target as acc_target
+
             return acc_target.parse_target(accuracy, "simulate(): accuracy")
         scene = self.scene_accuracy
         if scene is not None:
+            from .accuracy import target as acc_target
+
             return None if scene is False else acc_target.parse_target(scene, f"{self.path or self.name}: accuracy")
         return {"*": DEFAULT_ACCURACY} if self._grid_without_classes() else None
 
@@ -452,7 +445,7 @@ class Flowsheet:
     def scene_accuracy(self):
         """The scene's ``accuracy:`` as written (None without one; ``False``: its grid as written, unchecked)."""
         if not hasattr(self, "_scene_accuracy"):  # the scene text never changes: read once
-            self._scene_accuracy = self.extra.get("accuracy") if "accuracy" in self._scene.extra_yaml else None
+            self._scene_accuracy = self.section("accuracy") if "accuracy" in self._scene.sections_json else None
         return self._scene_accuracy
 
     def _grid_without_classes(self) -> bool:
@@ -464,13 +457,7 @@ class Flowsheet:
     def _find_no_classes(self) -> bool:
         if self.grid() is None:
             return False
-        import yaml
-
-        try:
-            doc = yaml.load(self.text, Loader=_yaml_loader()) or {}
-        except yaml.YAMLError:
-            return False
-        part = doc.get("particles") if isinstance(doc, dict) else None
+        part = self.section("particles")
         settings = (part or {}).get("settings") if isinstance(part, dict) else None
         return not (isinstance(settings, dict) and "classes" in settings)
 
@@ -520,7 +507,9 @@ class Flowsheet:
                                   f"{t_end:g} s")
         if isinstance(params, str):
             raise ConfigError(f"output_sensitivities(): params = {short(params)}: expected a list of parameter names")
-        return _core.output_sensitivities(self._scene, t_end, times, list(params))
+        from . import _calibration
+
+        return _calibration.output_sensitivities(self._scene, t_end, times, list(params))
 
     def time_residual(self, repeats: int = 7) -> dict:
         """Median time of one residual and one Jacobian evaluation at the initial state (benchmarks)."""
@@ -528,11 +517,15 @@ class Flowsheet:
 
     def calibrate_raw(self, experiments: list, stages: list, options: dict, start: Mapping[str, float]) -> dict:
         """The core's staged calibration on this flowsheet (use :func:`granuflow.calibration.calibrate`)."""
-        return _core.calibrate(self._scene, experiments, stages, options, dict(start))
+        from . import _calibration
+
+        return _calibration.calibrate(self._scene, experiments, stages, options, dict(start))
 
     def predict_raw(self, experiments: list, params: Mapping[str, float], options: dict) -> list:
         """The core's predictions of the experiments' observables (use :func:`granuflow.calibration.predict`)."""
-        return _core.predict(self._scene, experiments, dict(params), options)
+        from . import _calibration
+
+        return _calibration.predict(self._scene, experiments, dict(params), options)
 
     def diagram(self) -> "diagram.Diagram":  # noqa: F821 - imported when drawn
         """The flowsheet drawn by Graphviz: shown inline in a notebook; ``.save("fs.svg")`` writes it."""
@@ -549,7 +542,7 @@ def _with_grid_settings(text: str, settings: dict, label: str, section: tuple = 
     ``("units", "granulator")``) holding ``settings``, all else as written (:func:`structure.splice_settings`)."""
     from . import structure
 
-    return structure.splice_settings(text, section[-1], settings, label, loader=_yaml_loader())
+    return structure.splice_settings(text, section[-1], settings, label)
 
 
 def _times(values, where: str) -> list[float]:

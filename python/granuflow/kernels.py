@@ -39,16 +39,13 @@ from __future__ import annotations
 
 import math
 import re
-from typing import TYPE_CHECKING, Callable, Sequence
+from collections.abc import Callable, Sequence
 
 from . import _core
 
-if TYPE_CHECKING:  # the package imports NumPy only where a caller needs arrays
-    import numpy as np
-
 __all__ = ["register_kernel", "aggregation_kernels", "python_kernels"]
 
-KernelFunction = Callable[["np.ndarray", "np.ndarray"], "np.ndarray"]
+KernelFunction = Callable[["numpy.ndarray", "numpy.ndarray"], "numpy.ndarray"]  # NumPy only when a kernel runs
 
 
 _DECLARED: dict[str, list[dict]] = {}  # the parameters each Python kernel was registered with

@@ -13,7 +13,7 @@ in the name (``d50_um``, ``T_gas_out_K``).
 from __future__ import annotations
 
 import re
-from typing import Mapping
+from collections.abc import Mapping
 
 _SIZE = re.compile(r"^(?:.*\.)?(d\d+)$")  # characteristic diameters: d10, d50, ...
 

@@ -9,7 +9,6 @@ pip-installed package keeps its CMake files) and loaded by a scene's ``plugins:`
 from __future__ import annotations
 
 import os
-import pathlib
 import sys
 import warnings
 
@@ -79,5 +78,5 @@ def cmake_prefix() -> str | None:
     """The prefix to give CMake (``-DCMAKE_PREFIX_PATH=...``) for ``find_package(granuflow)`` against this package
     when it was installed with pip (its libraries, headers and CMake files under granuflow/sdk); None in a build
     tree, whose installed form comes from ``cmake --install``."""
-    sdk = pathlib.Path(__file__).resolve().parent / "sdk"
-    return str(sdk) if (sdk / "lib" / "cmake" / "granuflow" / "granuflowConfig.cmake").is_file() else None
+    sdk = os.path.join(os.path.dirname(os.path.realpath(__file__)), "sdk")
+    return sdk if os.path.isfile(os.path.join(sdk, "lib", "cmake", "granuflow", "granuflowConfig.cmake")) else None

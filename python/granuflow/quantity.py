@@ -10,10 +10,13 @@ from __future__ import annotations
 
 import math
 import sys
-from typing import Any
 
 from . import _core
 from .textfile import short
+
+TYPE_CHECKING = False  # typing's own flag without importing typing (a plain run imports neither it nor NumPy)
+if TYPE_CHECKING:
+    import numpy as np
 
 ConfigError = _core.ConfigError
 
@@ -43,7 +46,7 @@ def bool_types() -> tuple:
     return (bool,) if k is None else (bool, k)
 
 
-def is_number(x: Any) -> bool:
+def is_number(x: object) -> bool:
     """A finite real number (not a bool)."""
     return isinstance(x, real_types()) and not isinstance(x, bool) and math.isfinite(x)
 
@@ -58,7 +61,7 @@ def split(text: str, where: str = "") -> tuple[float, str]:
                           "unit") from None
 
 
-def number(value: Any, where: str) -> float:
+def number(value: object, where: str) -> float:
     """A plain number (or its text); ConfigError naming ``where`` otherwise."""
     if isinstance(value, str):
         try:
@@ -70,7 +73,7 @@ def number(value: Any, where: str) -> float:
     return float(value)
 
 
-def to_si(value: Any, si_unit: str, where: str = "value", unit: str = "") -> float:
+def to_si(value: object, si_unit: str, where: str = "value", unit: str = "") -> float:
     """A number in ``unit`` (SI when empty), or a string ``"value unit"``, in ``si_unit``."""
     if isinstance(value, str):
         v, u = split(value, where)
@@ -78,7 +81,7 @@ def to_si(value: Any, si_unit: str, where: str = "value", unit: str = "") -> flo
     return _core.to_si(number(value, where), unit, si_unit, where)
 
 
-def difference_to_si(value: Any, si_unit: str, where: str, unit: str = "") -> float:
+def difference_to_si(value: object, si_unit: str, where: str, unit: str = "") -> float:
     """A difference (a standard deviation, a tolerance) in SI: offsets such as degC -> K cancel."""
     if isinstance(value, str):
         v, u = split(value, where)
@@ -151,7 +154,7 @@ def convert(values, unit: str, si_unit: str) -> np.ndarray:
     return np.asarray(values, dtype=float) * f + o
 
 
-def parse_time(value: Any, where: str) -> float:
+def parse_time(value: object, where: str) -> float:
     """Seconds from a number (s) or a string with a time unit (``"60 min"``)."""
     if is_number(value):
         return float(value)
@@ -165,7 +168,7 @@ def parse_time(value: Any, where: str) -> float:
     raise ConfigError(f"{where} = {short(value)}: expected seconds or a number with a time unit (e.g. '60 min')")
 
 
-def si_or_nan(value: Any, si_unit: str, where: str = "value") -> float:
+def si_or_nan(value: object, si_unit: str, where: str = "value") -> float:
     """``to_si`` where it can be read, else NaN (for recording what a failed point asked for)."""
     try:
         return to_si(value, si_unit, where)
@@ -173,7 +176,7 @@ def si_or_nan(value: Any, si_unit: str, where: str = "value") -> float:
         return math.nan
 
 
-def show(x: Any) -> str:
+def show(x: object) -> str:
     """A value as the user wrote it: numbers short (10, 0.5, inf), text quoted."""
     if isinstance(x, real_types()) and not isinstance(x, bool):
         return f"{float(x):g}"

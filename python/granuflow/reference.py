@@ -8,7 +8,7 @@ reference shows the defaults, and ``unit_reference(NAME, settings={...})`` shows
 from __future__ import annotations
 
 import math
-from typing import Mapping
+from collections.abc import Mapping
 
 from . import _core, materials
 

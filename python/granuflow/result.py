@@ -13,6 +13,10 @@ from . import _core, outputs
 from .quantity import affine, from_si, from_si_value, is_number, label
 from .textfile import short
 
+TYPE_CHECKING = False  # typing's own flag without importing typing (a plain run imports neither it nor NumPy)
+if TYPE_CHECKING:
+    import numpy as np
+
 # The arrays of a run (see Result): NumPy's from their first use.
 ARRAYS = ("t", "y", "yp", "outputs", "sens", "output_sens")
 
@@ -101,14 +105,6 @@ class Result:
             v = np.asarray(v)
         self.__dict__[name] = v
         return v
-
-    def __getstate__(self) -> dict:
-        """A pickled result holds NumPy arrays (the core's buffers do not pickle)."""
-        for k in ARRAYS:
-            getattr(self, k)
-        state = dict(self.__dict__)
-        state.pop("_raw", None)
-        return state
 
     def _buf(self, name: str):
         """The array ``name`` as a float64 buffer without importing NumPy: the core's own until a caller asks for (or

@@ -10,7 +10,7 @@ among the setting's choices sets the setting, any other the parameter."""
 from __future__ import annotations
 
 import json
-from typing import Mapping
+from collections.abc import Mapping
 
 from . import _core
 from .quantity import is_number
@@ -202,55 +202,10 @@ def apply(fs, values: Mapping, where: str = "--set"):
     return fs
 
 
-def splice_settings(text: str, unit: str, settings: dict, label: str, loader=None) -> str:
+def splice_settings(text: str, unit: str, settings: dict, label: str) -> str:
     """The scene text with the ``settings:`` of ``unit`` (the ``particles:`` section or ``units.<unit>``) holding
     ``settings`` (keys replaced or added), all else as written: the values are spliced in at the positions of the
-    YAML nodes, so comments, layout and every other value the core reads stay byte for byte. ``loader``: the PyYAML
-    loader that parses the text (the accuracy target's grid copies pass libyaml's, 50 times faster)."""
-    import yaml
-
-    try:
-        root = yaml.compose(text, Loader=loader or yaml.SafeLoader)
-    except yaml.YAMLError as e:
-        raise ConfigError(f"{label}: cannot change the settings of this scene text "
-                          f"({short(' '.join(str(e).split()), 100)})") from None
-
-    def find(node, key):
-        if isinstance(node, yaml.MappingNode):
-            for k, v in node.value:
-                if isinstance(k, yaml.ScalarNode) and k.value == key:
-                    return v
-        return None
-
-    def insertion(node, entries: str):
-        """(start, end, text) adding ``entries`` ("a: 1, b: 2") to the mapping ``node``."""
-        if not node.value:  # {} : replaced as a whole
-            return node.start_mark.index, node.end_mark.index, "{" + entries + "}"
-        first = node.value[0][0].start_mark
-        if node.flow_style:
-            return first.index, first.index, entries + ", "
-        return first.index, first.index, entries.replace(", ", "\n" + " " * first.column) + "\n" + " " * first.column
-
-    section = find(root, "particles") if unit == "particles" else None
-    if section is None:
-        section = find(find(root, "units"), unit)
-    if not isinstance(section, yaml.MappingNode):
-        raise ConfigError(f"{label}: no unit '{unit}' with a mapping in the scene text")
-    quoted = {k: json.dumps(v) for k, v in settings.items()}  # a JSON string is a YAML double-quoted scalar
-    node = find(section, "settings")
-    edits = []
-    if not isinstance(node, yaml.MappingNode):
-        edits.append(insertion(section, "settings: {" + ", ".join(f"{k}: {v}" for k, v in quoted.items()) + "}"))
-    else:
-        missing = []
-        for k, v in quoted.items():
-            value = find(node, k)
-            if isinstance(value, yaml.ScalarNode):
-                edits.append((value.start_mark.index, value.end_mark.index, v))
-            else:
-                missing.append(f"{k}: {v}")
-        if missing:
-            edits.append(insertion(node, ", ".join(missing)))
-    for start, end, new in sorted(edits, reverse=True):
-        text = text[:start] + new + text[end:]
-    return text
+    YAML nodes, so comments, layout and every other value the core reads stay byte for byte (the core does it,
+    without PyYAML: a run's grid check needs it)."""
+    # a JSON string is a YAML double-quoted scalar
+    return _core.splice_settings(text, unit, [(k, json.dumps(v)) for k, v in settings.items()], label)

@@ -12,7 +12,6 @@ from __future__ import annotations
 import os
 import reprlib
 import stat
-from typing import Any
 
 from . import _core
 
@@ -31,7 +30,7 @@ _repr.maxlevel, _repr.maxdict, _repr.maxlist, _repr.maxtuple, _repr.maxset = 2, 
 _repr.maxstring, _repr.maxother, _repr.maxlong = 60, 60, 40
 
 
-def short(value: Any, limit: int = 80) -> str:
+def short(value: object, limit: int = 80) -> str:
     """``repr(value)`` for a message: nested levels, long lists and strings elided, at most ``limit`` characters.
     Never walks a whole structure (an expanded alias bomb shares its nodes, but has 10^9 leaves)."""
     text = " ".join(_repr.repr(value).split())
@@ -180,7 +179,7 @@ def check_yaml(text: str, label: str, kind: str) -> None:
         raise ConfigError(f"{label}: {at}not valid YAML ({short(' '.join(str(problem).split()), 120)})") from None
 
 
-def load_yaml(path: str | os.PathLike, kind: str) -> Any:
+def load_yaml(path: str | os.PathLike, kind: str) -> object:
     """The YAML document of the file at ``path`` (``None`` for an empty file), checked by :func:`read_text` and
     :func:`check_yaml` before PyYAML builds it."""
     import yaml

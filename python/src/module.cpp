@@ -8,7 +8,6 @@ namespace py = pybind11;
 namespace granuflow::python {
 void register_flowsheet(py::module_& m);
 void register_kernels(py::module_& m);
-void register_calibration(py::module_& m);
 void register_reference(py::module_& m);
 void register_measured_psd(py::module_& m);
 void register_montecarlo(py::module_& m);
@@ -41,7 +40,6 @@ PYBIND11_MODULE(_core, m) {
   });
   granuflow::python::register_flowsheet(m);
   granuflow::python::register_kernels(m);
-  granuflow::python::register_calibration(m);
   granuflow::python::register_reference(m);
   granuflow::python::register_measured_psd(m);
   granuflow::python::register_montecarlo(m);

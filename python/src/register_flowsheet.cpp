@@ -164,6 +164,7 @@ void register_flowsheet(py::module_& m) {
       .def_readonly("material_unsupplied", &Scene::material_unsupplied)
       .def_readonly("summary_map", &Scene::summary)
       .def_readonly("extra_yaml", &Scene::extra_yaml)
+      .def_readonly("sections_json", &Scene::sections_json)
       .def_readonly("text", &Scene::text)
       .def_property_readonly("t_end", [](const Scene& s) { return s.options.t_end; })
       .def_property_readonly("rtol", [](const Scene& s) { return s.options.rtol; })
@@ -323,6 +324,16 @@ void register_flowsheet(py::module_& m) {
         return load_scene_text(b.cast<std::string>(), label, reg);
       },
       "text"_a, "label"_a = "<text>");
+  m.def(
+      "splice_settings",
+      [](const std::string& text, const std::string& unit, const std::vector<std::pair<std::string, std::string>>& kv,
+         const std::string& label) {
+        check_yaml_text(text, label, "scene");  // the limits of every YAML file before the parser builds it
+        return splice_settings(text, unit, kv, label);
+      },
+      "text"_a, "unit"_a, "settings"_a, "label"_a,
+      "The scene text with the settings of `unit` (particles, or units.<unit>) set to the given YAML flow values, "
+      "all else byte for byte.");
 }
 
 }  // namespace granuflow::python

@@ -16,7 +16,7 @@ import pytest
 from conftest import DEMO, ROOT, SCENE, cli, sha256
 
 import granuflow as gf
-from granuflow import _core
+from granuflow import _calibration, _core
 from granuflow import cli as gcli
 
 with open(SCENE) as _f:
@@ -353,7 +353,7 @@ def _experiment(**kw):
 
 def _predict(*exps):
     fs = _headline()
-    _core.predict(fs._scene, list(exps), {}, {})
+    _calibration.predict(fs._scene, list(exps), {}, {})
 
 
 def _obs(**kw):

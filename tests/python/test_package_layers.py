@@ -38,7 +38,7 @@ def imports(mods: dict[str, pathlib.Path]) -> dict[str, set[tuple[str, str]]]:
                 for a in node.names:
                     if f"{target}.{a.name}" in mods:
                         deps.add((f"{target}.{a.name}", ""))
-                    elif a.name != "_core" and not target.endswith("._core"):
+                    elif a.name not in ("_core", "_calibration") and not target.endswith(("._core", "._calibration")):
                         deps.add((target, a.name))
             elif isinstance(node, ast.Import):
                 deps.update((a.name, "") for a in node.names if a.name in mods)

@@ -21,6 +21,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "granuflow/flowsheet.hpp"
@@ -41,7 +42,10 @@ struct Scene {
   SimOptions options;
   std::map<std::string, std::string> summary;  // summary key -> "unit.state" or "unit.output"
   std::string extra_yaml;                      // the keys the C++ core does not interpret (plots, sweep), as YAML
-  std::string text;                            // the scene file as read, so a scene can be cloned for threads
+  // The sections the Python layer reads (plots, sweep, notes, accuracy, particles, inputs, events) as JSON, their
+  // values typed as PyYAML would type them (yaml_json.hpp): a run reads its scene without PyYAML.
+  std::map<std::string, std::string> sections_json;
+  std::string text;  // the scene file as read, so a scene can be cloned for threads
 };
 
 // An independent copy (own flowsheet) with the same current parameter values and inputs.
@@ -56,6 +60,15 @@ Scene load_scene_text(const std::string& yaml_text, const std::string& label, co
 // inside the node it names, nesting at most 64 deep, only YAML's standard tags. Throws ConfigError
 // "label: line L, column C: ..." naming the file as a `kind` ("scene", "sweep file" ...).
 void check_yaml_text(const std::string& text, const std::string& label, const std::string& kind = "scene");
+
+// `text` with the `settings:` mapping of `unit` (the `particles:` section, else `units.<unit>`) holding `settings`
+// (key, value as YAML flow text, e.g. a JSON string or number), everything else byte for byte (comments, layout):
+// keys replaced where the mapping has them as scalars, the others added in front of its first key (a missing
+// mapping is added to the section). ConfigError naming `label` when the text does not parse, has no such unit, or
+// holds the value as a block scalar. The grid check and the accuracy target build their grids this way, --set and
+// with_settings their scenes (scene_splice.cpp).
+std::string splice_settings(const std::string& text, const std::string& unit,
+                            const std::vector<std::pair<std::string, std::string>>& settings, const std::string& label);
 
 // Parses "60 degC", "0.5", "700 m3/h" for parameter `qualified` and converts to its SI unit. Throws
 // ConfigError naming `where`.

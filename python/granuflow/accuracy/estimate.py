@@ -25,7 +25,11 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from ..outputs import per_class_names
+from .names import display_name, not_corresponding  # noqa: F401 (part of this module's API)
+
+TYPE_CHECKING = False  # typing's own flag without importing typing (a plain run imports neither it nor NumPy)
+if TYPE_CHECKING:
+    import numpy as np
 
 REFINEMENTS = (2, 4)          # grid refinement factors of the two extra grids
 TOLERANCE_FACTOR = 100.0      # the tighter solve: rtol and atol divided by this
@@ -115,13 +119,6 @@ class OutputError:
                 f"{self.integration:+.3g}{u}); corrected {self.corrected:.6g}{u}")
 
 
-def display_name(key: str, unit: str) -> tuple[str, str]:
-    """A summary key and its unit as a line shows them: ``d50_um``, ``um`` -> ``d50``, ``µm``."""
-    if key.endswith("_um"):
-        return key[:-3], "µm"
-    return key, "" if unit == "-" else unit
-
-
 @dataclass
 class ErrorEstimate:
     """The error estimate of a result: per summary key an :class:`OutputError`, per time series (states and outputs
@@ -150,22 +147,6 @@ class ErrorEstimate:
         """One line per summary output: value, signed estimated error split into grid and tolerance, and the
         corrected value (or why the grid part was not estimated)."""
         return [e.line(k) for k, e in self.outputs.items() if math.isfinite(e.value)]
-
-
-def not_corresponding(base, refined: list) -> dict[str, str]:
-    """The states and outputs of ``base`` that have no counterpart on the refined grids, with the reason: those of
-    one size class (their index means another range of sizes on a finer grid: issue 29, ``tracer_out_N10`` of the
-    tanks-in-series scene) and the fraction in an end class (which narrows as the grid refines). Values at fixed
-    sizes (the 2-D population's reporting classes) keep their names and are compared."""
-    names = list(base.state_names) + list(base.output_names)
-    out = {}
-    for r in refined:
-        for n in per_class_names(names, list(r.state_names) + list(r.output_names)):
-            out[n] = "one size class's value: on a finer grid that class is another range of sizes"
-    for j, role in enumerate(base.output_roles):
-        if role[0] == "grid_end":
-            out.setdefault(base.output_names[j], "the grid end's value: on a finer grid the end class is narrower")
-    return out
 
 
 def estimate(base, tight, refined: list, keys: list[str], grid: str, rtol: tuple[float, float],

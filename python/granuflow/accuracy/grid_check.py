@@ -10,10 +10,9 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
 
 from .. import _core
-from .estimate import display_name, not_corresponding
+from .names import display_name, not_corresponding
 
 THRESHOLD = 0.02   # relative grid error above which a run warns (and the default accuracy target: the same 2 %)
 # Python's simulate() checks by default flowsheets of up to this many unknowns: their grid twice as fine costs a few
@@ -24,15 +23,22 @@ PYTHON_MAX_STATES = 500
 CURE_TARGET = "1%"
 
 
-@dataclass
 class GridCheck:
-    grid: str                   # the run's grid, e.g. "classes 10"
-    fine: str                   # the check's grid
-    errors: dict[str, float]    # summary key -> estimated relative grid error (signed)
-    end_fractions: dict[str, tuple[float, float]]   # "bed.top_class" -> (final on the run's grid, on the fine one)
-    wall_time_s: float
-    suggest: str = ""           # e.g. "classes >= 80"
-    notes: list[str] = field(default_factory=list)
+    """What the grid check found (a plain class, not a dataclass: the dataclasses module imports inspect, several
+    milliseconds of a plain run that has 0.1 s in all)."""
+
+    def __init__(self, grid: str, fine: str, errors: dict[str, float], end_fractions: dict[str, tuple[float, float]],
+                 wall_time_s: float, suggest: str = "", notes: list[str] | None = None):
+        self.grid = grid                      # the run's grid, e.g. "classes 10"
+        self.fine = fine                      # the check's grid
+        self.errors = errors                  # summary key -> estimated relative grid error (signed)
+        self.end_fractions = end_fractions    # "bed.top_class" -> (final on the run's grid, on the fine one)
+        self.wall_time_s = wall_time_s
+        self.suggest = suggest                # e.g. "classes >= 80"
+        self.notes = list(notes or [])
+
+    def __repr__(self) -> str:
+        return f"GridCheck(grid={self.grid!r}, fine={self.fine!r}, errors={self.errors!r}, suggest={self.suggest!r})"
 
     def end_cause(self, name: str) -> str | None:
         """"coarse" (smearing: the fraction vanishes when extrapolated to a fine grid), "range" (it stays), or

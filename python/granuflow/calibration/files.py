@@ -10,7 +10,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from .. import _core
+from .. import _calibration, _core
 from ..flowsheet import Flowsheet, load
 from ..outputs import observable_display, observable_groups
 from ..quantity import difference_to_si, from_si, number, show, to_si
@@ -441,7 +441,7 @@ def load_stages(path: str | os.PathLike, flowsheet: Flowsheet) -> StagePlan:
     if not isinstance(options, dict):
         raise ConfigError(f"{path}: options: expected a mapping of CalibrationOptions fields, got {short(options)}")
     options = dict(options)
-    _in_context(f"{path}: options", _core.check_calibration_options, options)
+    _in_context(f"{path}: options", _calibration.check_calibration_options, options)
     stages: list[Stage] = []
     seen: dict[str, FreeParameter] = {}
     if not isinstance(doc.get("stages") or [], list):

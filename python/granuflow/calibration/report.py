@@ -10,7 +10,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from .. import _core, accuracy
+from .. import _calibration, accuracy
 from ..flowsheet import Flowsheet
 from ..outputs import group_of, observable_groups
 from .files import Experiment
@@ -170,7 +170,7 @@ def model_errors(flowsheet: Flowsheet, experiments: Sequence[Experiment], params
     """The estimated numerical error of each predicted sample (granuflow.accuracy): the predictions again at a 100
     times tighter tolerance and on size grids refined twice and four times; adds ``"model_error"`` (SI, signed:
     model minus the converged model) to every prediction in ``predictions`` (those of ``experiments``)."""
-    rtol, atol = _core.calibration_tolerances(dict(options or {}))
+    rtol, atol = _calibration.calibration_tolerances(dict(options or {}))
     tight = {**dict(options or {}), "rtol": max(rtol / accuracy.TOLERANCE_FACTOR, accuracy.MIN_RTOL),
              "atol": atol / accuracy.TOLERANCE_FACTOR}
     runs = [predict(flowsheet, experiments, params, options=tight)]
