@@ -83,8 +83,13 @@ class Flowsheet:
         return std + [k for k in self._scene.summary_map if k not in std]
 
     def unit_of(self, name: str) -> str:
-        """SI unit of a state or reported output; ConfigError listing the valid names otherwise."""
-        from . import _calibration  # loads Ceres: only when calibration asks
+        """SI unit of a state or reported output (or of an observable of calibration, e.g. a size fraction);
+        ConfigError listing the valid names otherwise."""
+        if not hasattr(self, "_units"):  # the structure never changes: asked once
+            self._units = self.units()
+        if name in self._units:
+            return self._units[name]
+        from . import _calibration  # what only calibration observes (loads Ceres: only then), or the error
 
         return _calibration.observable_unit(self._scene, name)
 
