@@ -84,6 +84,22 @@ def _record(target: str, value: float, unit: str, baseline: float | None, baseli
             **extra}
 
 
+HEAVY = ("numpy", "yaml", "pandas", "matplotlib", "granuflow._calibration")  # what a plain run should not import
+
+
+def _heavy_imports(scene: str) -> list[str]:
+    """The modules of HEAVY a ``granuflow run --no-plots`` of ``scene`` imports (none since issue 32)."""
+    with tempfile.TemporaryDirectory(prefix="granuflow-bench-") as out:
+        code = ("import sys; from granuflow.cli import main; main(['run', sys.argv[1], '--out', sys.argv[2], "
+                f"'--no-plots', '--quiet']); print(' '.join(m for m in {HEAVY!r} if m in sys.modules))")
+        env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [
+            os.path.dirname(os.path.dirname(os.path.abspath(__file__))), os.environ.get("PYTHONPATH")])))
+        p = subprocess.run([sys.executable, "-c", code, scene, out], capture_output=True, text=True, env=env)
+    if p.returncode != 0:
+        raise RuntimeError(f"granuflow run {scene} exited {p.returncode}: {p.stderr.strip()[-300:]}")
+    return p.stdout.split()
+
+
 def target_run(repeats: int, progress: bool) -> dict:
     """``granuflow run`` of the headline scene as a whole process, beside Python alone and Python importing NumPy."""
     scene = os.path.join(bench.repo_root(), "flowsheets", "stoeckl_gf25_batch.yaml")
@@ -95,7 +111,8 @@ def target_run(repeats: int, progress: bool) -> dict:
     python = timed_process([sys.executable, "-c", "pass"], repeats)
     numpy = timed_process([sys.executable, "-c", "import numpy"], repeats)
     return _record("run", run["wall_s"], "s", python["wall_s"], "python3 -c pass", run["wall_s"] / 0.1,
-                   "wall / 0.1 s", cpu_s=run["cpu_s"], numpy_import_wall_s=numpy["wall_s"],
+                   "wall / 0.1 s", cpu_s=run["cpu_s"], heavy_imports=_heavy_imports(scene),
+                   numpy_import_wall_s=numpy["wall_s"],
                    numpy_import_cpu_s=numpy["cpu_s"], python_cpu_s=python["cpu_s"],
                    solve_and_grid_check_s=summary["wall_time_s"] + summary.get("grid_check", {}).get("wall_time_s", 0),
                    d50_um=summary["d50_um"], repeats=repeats,
@@ -402,7 +419,8 @@ def summary(records) -> list[str]:
     return lines
 
 
-DETAILS = {"run": ("cpu_s", "numpy_import_wall_s", "numpy_import_cpu_s", "solve_and_grid_check_s", "d50_um"),
+DETAILS = {"run": ("cpu_s", "heavy_imports", "numpy_import_wall_s", "numpy_import_cpu_s", "solve_and_grid_check_s",
+                   "d50_um"),
            "writing": ("run_wall_s", "run_solve_s", "startup_fixed_s", "run_beyond_startup_over_solve", "startup_s",
                        "run_beyond_version_startup_over_solve", "states", "csv_bytes"),
            "classes": (), "contour": ("solver_only_per_s", "sims_per_s_2_workers", "same_values"),

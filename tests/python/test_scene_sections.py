@@ -185,8 +185,9 @@ def test_a_runs_arrays_become_numpy_on_first_use():
 
 
 def test_a_plain_run_imports_neither_numpy_nor_pyyaml(tmp_path):
+    heavy = ("numpy", "yaml", "pandas", "granuflow._calibration")
     code = ("import sys; from granuflow.cli import main; rc = main(['run', sys.argv[1], '--out', sys.argv[2], "
-            "'--no-plots', '--quiet']); print(sorted(m for m in ('numpy', 'yaml', 'pandas', 'granuflow._calibration') if m in sys.modules))")
+            f"'--no-plots', '--quiet']); print(sorted(m for m in {heavy!r} if m in sys.modules))")
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p))
     p = subprocess.run([sys.executable, "-c", code, SCENE, str(tmp_path / "o")], capture_output=True, text=True,
                        env=env, timeout=300)

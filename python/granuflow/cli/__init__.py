@@ -215,6 +215,28 @@ def _parser_for(argv: list[str]):
     return (p, sub) if named is None or named in sub.choices else _parser(None)
 
 
+def entry() -> None:
+    """The `granuflow` command as a process (``python -m granuflow``, the installed script): :func:`main`, then an exit
+    that skips the interpreter's teardown. Freeing every module and the core's scenes one by one took 8-10 ms, a tenth
+    of a plain run (issue 32); the operating system reclaims the memory at once. Only when the command left no other
+    thread running (a thread pool or a Dask client exits the ordinary way, waiting for its threads); the atexit
+    handlers run and the output streams are flushed first, so nothing a command or a plugin registered is lost."""
+    code = main()
+    import threading
+
+    if threading.active_count() > 1:
+        sys.exit(code)
+    import atexit
+
+    atexit._run_exitfuncs()
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError):  # a reader that went away, a stream already closed: nothing left to say
+            pass
+    os._exit(code if isinstance(code, int) else 1)
+
+
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else [str(a) for a in argv]
     p, sub = _parser_for(argv)
