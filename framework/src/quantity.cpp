@@ -135,6 +135,8 @@ std::string examples_for(const Parsed& si) {
 
 }  // namespace
 
+void load_unit_database() { UnitSystem::get(); }
+
 bool is_known_si_unit(const std::string& si_unit) {
   // A coherent SI unit: understood, and equal to its base-SI product without a scale or an origin.
   const Parsed p = UnitSystem::get().parse(si_unit);

@@ -1,7 +1,10 @@
 // granuflow._core: the private compiled core. The public API is the pure-Python package granuflow.
 #include <pybind11/pybind11.h>
 
+#include <thread>
+
 #include "granuflow/errors.hpp"
+#include "granuflow/quantity.hpp"
 
 namespace py = pybind11;
 
@@ -38,6 +41,15 @@ PYBIND11_MODULE(_core, m) {
       calib_error(e.what());
     }
   });
+  // The unit database is read on a thread of its own while the interpreter goes on importing (issue 32: 5 ms of a
+  // 0.1 s run); the first scene loaded waits for it if it is not done. Detached: it ends by itself within
+  // milliseconds, and an interpreter that exits sooner ends it.
+  std::thread([] {
+    try {
+      granuflow::load_unit_database();
+    } catch (...) {  // the first unit parsed reports a missing database, naming it
+    }
+  }).detach();
   granuflow::python::register_flowsheet(m);
   granuflow::python::register_kernels(m);
   granuflow::python::register_reference(m);
