@@ -46,8 +46,17 @@ void DaeSystem::load_directions(const double* y, const double* yp, const std::ve
     }
   }
   params_as_jets();
-  for (size_t u = 0; u < pj_.size(); ++u)
-    for (size_t d = d0; d < d1; ++d) seed(params[d], static_cast<int>(u), d - d0, pj_[u]);
+  // The same seeds as seed() for every unit, with each parameter's location and links looked up once: this runs at
+  // every sensitivity residual, and per unit the look-ups cost more than the seeding.
+  for (size_t d = d0; d < d1; ++d) {
+    if (params[d] < 0) continue;
+    const auto [pu, pk] = fs_.param_location(params[d]);
+    pj_[pu][pk].v[d - d0] = 1.0;
+    for (int t : fs_.linked_targets(params[d])) {
+      const auto [tu, tk] = fs_.param_location(t);
+      pj_[tu][tk].v[d - d0] = 1.0;
+    }
+  }
 }
 
 Status DaeSystem::sens_residual(double t, const double* y, const double* yp, const std::vector<int>& params,

@@ -1,20 +1,51 @@
 #include "experiment_cost.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <exception>
 
 namespace granuflow::calib {
 
 bool ExperimentCost::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
+  double* J = jacobians && jacobians[0] ? jacobians[0] : nullptr;
+  const double* theta = parameters[0];
+  if (ready_ && (ready_jacobian_ || !J) && std::equal(ready_theta_.begin(), ready_theta_.end(), theta)) {
+    ready_ = false;
+    if (!ready_error_.empty()) {
+      std::lock_guard<std::mutex> lock(error_mutex_);
+      last_error_ = ready_error_;
+      return false;
+    }
+    std::copy(ready_r_.begin(), ready_r_.end(), residuals);
+    if (J) std::copy(ready_J_.begin(), ready_J_.end(), J);
+    return true;
+  }
   try {
-    compute(parameters[0], residuals, jacobians && jacobians[0] ? jacobians[0] : nullptr);
+    compute(theta, residuals, J);
     return true;
   } catch (const std::exception& e) {
     std::lock_guard<std::mutex> lock(error_mutex_);
     last_error_ = model_->name() + ": " + e.what();
     return false;
   }
+}
+
+void ExperimentCost::prepare(const double* theta, bool jacobian) const {
+  const auto t0 = std::chrono::steady_clock::now();
+  ready_ = false;
+  ready_error_.clear();
+  ready_theta_.assign(theta, theta + n_);
+  ready_jacobian_ = jacobian;
+  ready_r_.resize(model_->rows());
+  ready_J_.resize(jacobian ? size_t(model_->rows()) * n_ : 0);
+  try {
+    compute(theta, ready_r_.data(), jacobian ? ready_J_.data() : nullptr);
+  } catch (const std::exception& e) {
+    ready_error_ = model_->name() + ": " + e.what();
+  }
+  ready_ = true;
+  seconds_[jacobian] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 void ExperimentCost::compute(const double* theta, double* r, double* J) const {

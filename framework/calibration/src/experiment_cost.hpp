@@ -29,6 +29,12 @@ class ExperimentCost : public ceres::CostFunction {
   // Residuals and Jacobian at θ, from the last Jacobian evaluation if it was there.
   void at(const double* theta, std::vector<double>& r, std::vector<double>& J) const;
 
+  // Evaluates at θ ahead of Ceres (StageRun's evaluation callback), keeping the result, or the error, for the
+  // Evaluate() at that θ that follows; the same compute() either way, so the numbers do not change.
+  void prepare(const double* theta, bool jacobian) const;
+  // Seconds the last evaluation of this kind took (0 before the first): StageRun starts the slowest first.
+  double last_seconds(bool jacobian) const { return seconds_[jacobian]; }
+
   // SigmaBasis::kModel: σ_rel |m| at the last Jacobian point (which must be `theta`); rescales the cached
   // residuals and Jacobian to the new weights. Returns the largest relative change of a σ.
   double reweight(const double* theta) const;
@@ -53,6 +59,11 @@ class ExperimentCost : public ceres::CostFunction {
   void weigh(const std::vector<double>& m, const std::vector<double>* dm, double* r, double* J) const;
 
   mutable std::vector<double> sigma_, last_theta_, last_m_, last_dm_, last_r_, last_J_;
+  // prepare()'s result: θ, whether with the Jacobian, r, J, or the error it threw.
+  mutable std::vector<double> ready_theta_, ready_r_, ready_J_;
+  mutable bool ready_ = false, ready_jacobian_ = false;
+  mutable std::string ready_error_;
+  mutable double seconds_[2] = {0.0, 0.0};
   mutable std::mutex error_mutex_;
   mutable std::string last_error_;
 };

@@ -50,9 +50,26 @@ void StageRun::evaluate(const std::vector<double>& theta, std::vector<double>& r
   }
 }
 
+void StageRun::prepare(const double* theta, bool jacobian, int threads) {
+  std::vector<int> order(costs.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](int a, int b) { return costs[a]->last_seconds(jacobian) > costs[b]->last_seconds(jacobian); });
+  parallel_for(static_cast<int>(order.size()), threads, [&](int i) { costs[order[i]]->prepare(theta, jacobian); });
+}
+
 ceres::Solver::Summary StageRun::solve(std::vector<double>& theta, const CalibrationOptions& opt, int max_iterations) {
+  // Ceres writes each evaluation point into θ before it calls back, and the experiments are then solved here.
+  struct Ahead : ceres::EvaluationCallback {
+    StageRun& run;
+    const double* theta;
+    int threads;
+    Ahead(StageRun& r, const double* t, int n) : run(r), theta(t), threads(n) {}
+    void PrepareForEvaluation(bool jacobians, bool) override { run.prepare(theta, jacobians, threads); }
+  } ahead(*this, theta.data(), opt.num_threads);
   ceres::Problem::Options po;
   po.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  po.evaluation_callback = &ahead;
   ceres::Problem problem(po);
   const int n = space.size();
   problem.AddParameterBlock(theta.data(), n);

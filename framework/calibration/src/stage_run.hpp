@@ -29,6 +29,10 @@ struct StageRun {
   long sensitivity_solves() const { return total(&ExperimentModel::sensitivity_solves); }
   long sensitivity_retries() const { return total(&ExperimentModel::retries); }
 
+  // Every experiment's cost at θ evaluated ahead of Ceres on `threads` threads, the slowest (by its last
+  // evaluation of this kind) first: Ceres hands out the experiments in their order, and a slow one taken last
+  // leaves the other threads idle at the end of each evaluation.
+  void prepare(const double* theta, bool jacobian, int threads);
   // All residuals and the Jacobian (rows stacked by experiment) at θ.
   void evaluate(const std::vector<double>& theta, std::vector<double>& r, std::vector<double>* J, int threads);
   ceres::Solver::Summary solve(std::vector<double>& theta, const CalibrationOptions& opt, int max_iterations);
