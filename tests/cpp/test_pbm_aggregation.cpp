@@ -351,6 +351,79 @@ TEST(PbmAggregation, FusedFixedPivotRowsGiveThePairLoopsRates) {
   }
 }
 
+// The engine's analytic Jacobian of fixed-pivot aggregation carrying two properties (the general property count of
+// FixedPivotAggregation::jacobian_row) against central differences of its rates, in the columns of the numbers and
+// the properties, with the glass-transition kernel's fields as further inputs.
+TEST(PbmAggregation, FixedPivotJacobianWithTwoPropertiesEqualsFiniteDifferences) {
+  using kernels::Field;
+  using kernels::Population;
+  struct DenseSink : JacobianSink {
+    DenseSink(double* d, size_t ld) : JacobianSink(d, ld) {}
+  };
+  const int n = 9, P = 2, nf = 3;
+  const auto g = std::make_shared<const kernels::Grid>(kernels::Grid::geometric(1e-12, 1.6, n));
+  UnitSpec spec;
+  Settings st("test",
+              {{"aggregation", "glass_transition"}, {"aggregation_scheme", "fixed_pivot"}, {"outside", "fold"}});
+  kernels::PopulationOptions o;
+  o.properties = {"water", "binder"};
+  Population pop;
+  pop.declare(spec, st, g, o);
+  std::vector<double> p;
+  for (const auto& ps : spec.params()) p.push_back(ps.value);
+  p[0] = 5.0;  // ln beta0: rates of order one
+  auto w = pop.make_work();
+  pop.configure(*w, p.data(), "test");
+  // inputs: N, q_0, q_1, then wetted fraction, spot moisture, temperature per class; rows: N, q_0, q_1
+  const Field fields[nf] = {Field::kWettedFraction, Field::kSpotMoisture, Field::kTemperature};
+  const int R = n * (1 + P), C = R + nf * n;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<double> x(C), floor(n, 1e-9);
+  for (int i = 0; i < n; ++i) {
+    x[i] = 0.2 + u(rng);
+    for (int k = 0; k < P; ++k) x[n * (1 + k) + i] = x[i] * (0.01 + 0.2 * u(rng));
+    x[R + i] = u(rng), x[R + n + i] = 0.3 * u(rng), x[R + 2 * n + i] = 300.0 + 40.0 * u(rng);
+  }
+  auto state = [&](const std::vector<double>& v) {
+    Population::State<double> s;
+    s.N = v.data(), s.floor = floor.data(), s.p = p.data();
+    for (int k = 0; k < P; ++k) s.q[k] = v.data() + n * (1 + k);
+    for (int f = 0; f < nf; ++f) s.fields[static_cast<int>(fields[f])] = v.data() + R + f * n;
+    return s;
+  };
+  auto rates = [&](const std::vector<double>& v) {
+    std::vector<double> out(R, 0.0);
+    Population::Rates<double> r;
+    r.dN = out.data();
+    for (int k = 0; k < P; ++k) r.dq[k] = out.data() + n * (1 + k);
+    pop.rates(*w, state(v), r);
+    return out;
+  };
+  Population::Map m;
+  m.q_factor = 1.0;
+  m.q_col.assign(P, {}), m.q_row.assign(P, {});
+  for (int i = 0; i < n; ++i) {
+    m.N_col.push_back(i), m.N_row.push_back(i), m.N_scale.push_back(1.0), m.N_factor.push_back(1.0);
+    for (int k = 0; k < P; ++k) m.q_col[k].push_back(n * (1 + k) + i), m.q_row[k].push_back(n * (1 + k) + i);
+    for (int f = 0; f < nf; ++f) m.field_col[static_cast<int>(fields[f])].push_back(R + f * n + i);
+  }
+  std::vector<double> J(size_t(R) * C, 0.0);
+  DenseSink sink(J.data(), R);
+  pop.jacobian(*w, state(x), m, sink);
+  double scale = 0.0;
+  for (double v : J) scale = std::max(scale, std::abs(v));
+  ASSERT_GT(scale, 0.0);
+  for (int c = 0; c < R; ++c) {
+    std::vector<double> hi = x, lo = x;
+    const double h = 1e-6 * std::max(1.0, std::abs(x[c]));
+    hi[c] += h, lo[c] -= h;
+    const std::vector<double> rh = rates(hi), rl = rates(lo);
+    for (int r = 0; r < R; ++r)
+      EXPECT_NEAR(J[size_t(c) * R + r], (rh[r] - rl[r]) / (2 * h), 1e-7 * scale) << "row " << r << " column " << c;
+  }
+}
+
 // Kernels without a separable factor, or populations carrying properties, keep the pair matrices.
 TEST(PbmAggregation, KernelsWithoutSeparableFactorKeepThePairMatrices) {
   const auto g = std::make_shared<const kernels::Grid>(kernels::Grid::geometric(std::exp2(-12.0), 2, 28));
