@@ -1,5 +1,7 @@
 #include "aggregation/glass_transition.hpp"
 
+#include <vector>
+
 #include "granuflow/flowsheet.hpp"
 
 namespace granuflow::kernels {
@@ -28,6 +30,18 @@ void GlassTransitionKernel::declare(Settings& s, const std::string& prefix) {
   per_volume_ = s.get_choice(prefix + "beta0_basis", "absolute", {"absolute", "per_m3"},
                              "beta0 for absolute particle numbers (default, docs/paper001_decisions.md) or per m3 of "
                              "vessel") == "per_m3";
+}
+
+void GlassTransitionKernel::efficiencies(const double* phi, int n, const double*, double* E) const {
+  std::vector<double> u(2 * size_t(n));  // by feature: 1 - f_wet of each class, then 1 - P_sticky
+  for (int i = 0; i < n; ++i) u[i] = 1.0 - phi[2 * size_t(i)], u[size_t(n) + i] = 1.0 - phi[2 * size_t(i) + 1];
+  const double *u0 = u.data(), *u1 = u.data() + n;
+  size_t q = 0;
+  for (int i = 0; i < n; q += n - i, ++i) {
+    const double a0 = u0[i], a1 = u1[i];
+    double* Ei = E + (q - i);                                                     // Ei[j]: pair (i, j)
+    for (int j = i; j < n; ++j) Ei[j] = (1.0 - a0 * u0[j]) * (1.0 - a1 * u1[j]);  // Eqs. (40) x (52), paper 001
+  }
 }
 
 void register_glass_transition(Registry<AggregationKernel>& r) {

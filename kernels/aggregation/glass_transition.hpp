@@ -37,6 +37,10 @@ class GlassTransitionKernel : public PairKernel<GlassTransitionKernel> {
     const T tg = paper001::gordon_taylor(s.spot_moisture()[i], p[kGtK], p[kTgL], p[kTgS]);  // Eq. (54)
     phi[1] = paper001::sticky_probability(s.temperature()[i], tg, p[kSlope], p[kOffset]);   // Eq. (53)
   }
+  // E of every pair in doubles as one vector loop per class (1 - f_wet and 1 - P_sticky of each class formed once):
+  // the operations of efficiency() pair by pair, to the bit.
+  using PairKernel<GlassTransitionKernel>::efficiencies;
+  void efficiencies(const double* phi, int n, const double* p, double* E) const override;
   template <class T>
   T efficiency(const T* a, const T* b, const T*) const {
     return paper001::geometric_success_factor(a[0], b[0]) *

@@ -1,6 +1,8 @@
 #include "discretization/fixed_pivot.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 namespace granuflow::kernels {
 
@@ -64,47 +66,94 @@ void FixedPivotAggregation::setup(const Grid& g) {
 
 // The aggregate's share on each target (Kumar & Ramkrishna 1996, Eq. (9)): number w times the event rate, property
 // f times what the partners carry, both linear in the rate and in the partners' per-particle properties.
+namespace {
 
-void FixedPivotAggregation::jacobian_row(Tables&, const PopulationJacobian& J, const PairEvent* events,
-                                         int count) const {
-  // J and its fields as locals: invariant across the pairs and the stores into D.
-  const PopulationJacobian L = J;
-  const int n = L.n, P = L.P;
+// One row of the pair triangle with P properties (a compile-time P unrolls the property loops). Every value read is
+// first copied to a local: the stores into D could alias the inputs, pi and the tables in the compiler's eyes, which
+// otherwise reloads them after each store. The terms and their order per entry of D are those of
+// PopulationJacobian::deaths() and the births, unchanged.
+template <int kP>
+void fixed_pivot_jacobian_row(const FixedPivotAggregation& s, const PopulationJacobian& L, const PairEvent* events,
+                              int count) {
+  using Target = FixedPivotAggregation::Target;
+  const int n = L.n, P = kP >= 0 ? kP : L.P;
   double* const D = L.D;
   const size_t R = L.R;
   const double *pi = L.pi, *dpi_dN = L.dpi_dN, *dpi_dq = L.dpi_dq;
-  auto add = [D, R](size_t r, int c, double v) { D[size_t(c) * R + r] += v; };
-  struct Dest {
-    int cls;  // -1: above
-    double w, f;
-  };
+  double local[3 * (kP > 0 ? kP : 1)];
+  std::vector<double> heap;
+  double* buf = local;
+  if (kP < 0) heap.resize(3 * size_t(std::max(P, 1))), buf = heap.data();
+  double *pij = buf, *pik = buf + std::max(P, 1), *carried = buf + 2 * std::max(P, 1);
   for (const PairEvent* e = events; e != events + count; ++e) {
-    L.deaths(*e);
     const int j = e->j, k = e->k;
-    const Target& t = target(e->pr);
-    const Dest dests[2] = {{t.lo, t.w_lo, t.f_lo}, {t.hi, t.w_hi, t.f_hi}};
-    for (const Dest& d : dests) {
-      if (d.w == 0.0 && d.f == 0.0) continue;
+    const double rate = e->rate;
+    const Target t = s.target(e->pr);
+    const double vol = s.volume(e->pr);
+    for (int p = 0; p < P; ++p) {
+      pij[p] = pi[size_t(p) * n + j], pik[p] = pi[size_t(p) * n + k];
+      carried[p] = pij[p] + pik[p];
+    }
+    // the partners' deaths (PopulationJacobian::deaths)
+    {
       e->for_inputs([&](const PairEvent::Input& in) {
-        if (d.cls >= 0) {
-          add(L.rowN(d.cls), in.col, d.w * in.d);
-        } else {
-          add(L.rowO(kOutNumberAbove), in.col, d.w * in.d);
-          add(L.rowO(kOutVolumeAbove), in.col, d.f * volume(e->pr) * in.d);
-        }
+        const double d = in.d;
+        double* col = D + size_t(in.col) * R;
+        col[L.rowN(j)] += -d;
+        col[L.rowN(k)] += -d;
         for (int p = 0; p < P; ++p) {
-          const double carried = pi[size_t(p) * n + j] + pi[size_t(p) * n + k];
-          add(d.cls >= 0 ? L.rowQ(p, d.cls) : L.rowO(out_property_above(p)), in.col, d.f * carried * in.d);
+          col[L.rowQ(p, j)] += -d * pij[p];
+          col[L.rowQ(p, k)] += -d * pik[p];
         }
       });
-      for (int p = 0; p < P; ++p) {
-        const size_t row = d.cls >= 0 ? L.rowQ(p, d.cls) : L.rowO(out_property_above(p));
+      for (int p = 0; p < P; ++p)
         for (int i : {j, k}) {
-          add(row, i, d.f * e->rate * dpi_dN[size_t(p) * n + i]);
-          add(row, L.colQ(p, i), d.f * e->rate * dpi_dq[size_t(p) * n + i]);
+          const double dN = dpi_dN[size_t(p) * n + i], dq = dpi_dq[size_t(p) * n + i];
+          D[size_t(i) * R + L.rowQ(p, i)] += -rate * dN;
+          D[size_t(L.colQ(p, i)) * R + L.rowQ(p, i)] += -rate * dq;
+        }
+    }
+    struct Dest {
+      int cls;  // -1: above
+      double w, f;
+    };
+    const Dest dests[2] = {{t.lo, t.w_lo, t.f_lo}, {t.hi, t.w_hi, t.f_hi}};
+    for (const Dest& dst : dests) {
+      if (dst.w == 0.0 && dst.f == 0.0) continue;
+      const double w = dst.w, f = dst.f, fv = f * vol;
+      const bool inside = dst.cls >= 0;
+      const size_t rowN = inside ? L.rowN(dst.cls) : L.rowO(kOutNumberAbove);
+      e->for_inputs([&](const PairEvent::Input& in) {
+        const double d = in.d;
+        double* col = D + size_t(in.col) * R;
+        col[rowN] += w * d;
+        if (!inside) col[L.rowO(kOutVolumeAbove)] += fv * d;
+        for (int p = 0; p < P; ++p)
+          col[inside ? L.rowQ(p, dst.cls) : L.rowO(out_property_above(p))] += f * carried[p] * d;
+      });
+      for (int p = 0; p < P; ++p) {
+        const size_t row = inside ? L.rowQ(p, dst.cls) : L.rowO(out_property_above(p));
+        for (int i : {j, k}) {
+          const double dN = dpi_dN[size_t(p) * n + i], dq = dpi_dq[size_t(p) * n + i];
+          D[size_t(i) * R + row] += f * rate * dN;
+          D[size_t(L.colQ(p, i)) * R + row] += f * rate * dq;
         }
       }
     }
+  }
+}
+
+}  // namespace
+
+void FixedPivotAggregation::jacobian_row(Tables&, const PopulationJacobian& J, const PairEvent* events,
+                                         int count) const {
+  switch (J.P) {
+    case 0:
+      return fixed_pivot_jacobian_row<0>(*this, J, events, count);
+    case 1:
+      return fixed_pivot_jacobian_row<1>(*this, J, events, count);
+    default:
+      return fixed_pivot_jacobian_row<-1>(*this, J, events, count);
   }
 }
 

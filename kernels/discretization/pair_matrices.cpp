@@ -21,6 +21,7 @@ void aggregate_diagonals(const S& s, RunTables& t, const AggregationArgs<double>
   double* formed = stored ? nullptr : sc.mv.data() + 4 * n;
   const int nd = static_cast<int>(s.diagonals().size());
   const auto& x = a.grid->pivots();
+  std::vector<double> carried(kFixedPivot<S> && P > 0 ? size_t(n) : 0);  // rt (pi_j + pi_k) along a diagonal
   for (int d = 0; d < nd; ++d) {
     const auto& diag = s.diagonals()[d];
     const int last = diag.last, sh = diag.shift;
@@ -39,13 +40,19 @@ void aggregate_diagonals(const S& s, RunTables& t, const AggregationArgs<double>
       double* hi = dN + sh + 1;
 #pragma omp simd
       for (int k = d; k <= last; ++k) hi[k] += diag.w_hi * rt[k];
+      // Entry k + sh + 1 receives pair k's upper share before pair k + 1's lower one: all upper shares, then all
+      // lower ones, is that order per entry (the same sums to the bit) as two vector loops.
       for (int p = 0; p < P; ++p) {
         const double* pp = pi + size_t(p) * n;
         double* dqp = dq + size_t(p) * n;
-        for (int k = d; k <= last; ++k) {
-          const double c = rt[k] * (pp[k - d] + pp[k]);
-          dqp[k + sh] += diag.f_lo * c, dqp[k + sh + 1] += diag.f_hi * c;
-        }
+#pragma omp simd
+        for (int k = d; k <= last; ++k) carried[k] = rt[k] * (pp[k - d] + pp[k]);
+        double* qhi = dqp + sh + 1;
+#pragma omp simd
+        for (int k = d; k <= last; ++k) qhi[k] += diag.f_hi * carried[k];
+        double* qlo = dqp + sh;
+#pragma omp simd
+        for (int k = d; k <= last; ++k) qlo[k] += diag.f_lo * carried[k];
       }
     } else {
       double *B = sc.B.data() + sh, *V = sc.V.data() + sh;

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <functional>
 #include <random>
+#include <type_traits>
 
 #include "granuflow/dae_system.hpp"
 #include "kernels/population/population.hpp"
@@ -348,6 +349,73 @@ TEST(PbmAggregation, FusedFixedPivotRowsGiveThePairLoopsRates) {
           EXPECT_NEAR(fast[i], loop[i], 1e-14 * events * (i < size_t(n) || i >= size_t(n) * (1 + P) ? 1.0 : 2.0))
               << "n=" << n << " P=" << P << " " << outside << " row " << i;
       }
+  }
+}
+
+// The engine's analytic Jacobian of fixed-pivot aggregation carrying two properties (the general property count of
+// FixedPivotAggregation::jacobian_row) against forward AD of its rates, column by column: numbers, properties and
+// the glass-transition kernel's three fields of every class.
+TEST(PbmAggregation, FixedPivotJacobianWithTwoPropertiesEqualsForwardAd) {
+  using kernels::Field;
+  using kernels::Population;
+  struct DenseSink : JacobianSink {
+    DenseSink(double* d, size_t ld) : JacobianSink(d, ld) {}
+  };
+  const int n = 9, P = 2, nf = 3;
+  const auto g = std::make_shared<const kernels::Grid>(kernels::Grid::geometric(1e-12, 1.6, n));
+  UnitSpec spec;
+  Settings st("test",
+              {{"aggregation", "glass_transition"}, {"aggregation_scheme", "fixed_pivot"}, {"outside", "fold"}});
+  kernels::PopulationOptions o;
+  o.properties = {"water", "binder"};
+  Population pop;
+  pop.declare(spec, st, g, o);
+  std::vector<double> p;
+  for (const auto& ps : spec.params()) p.push_back(ps.value);
+  p[0] = 5.0;  // ln beta0: rates of order one
+  auto w = pop.make_work();
+  pop.configure(*w, p.data(), "test");
+  // inputs: N, q_0, q_1, then wetted fraction, spot moisture, temperature per class; rows: N, q_0, q_1
+  const Field fields[nf] = {Field::kWettedFraction, Field::kSpotMoisture, Field::kTemperature};
+  const int R = n * (1 + P), C = R + nf * n;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<double> x(C), floor(n, 1e-9);
+  for (int i = 0; i < n; ++i) {
+    x[i] = 0.2 + u(rng);
+    for (int k = 0; k < P; ++k) x[n * (1 + k) + i] = x[i] * (0.01 + 0.2 * u(rng));
+    x[R + i] = u(rng), x[R + n + i] = 0.3 * u(rng), x[R + 2 * n + i] = 300.0 + 40.0 * u(rng);
+  }
+  auto state = [&](auto* v, auto* fl, auto* pv) {
+    Population::State<std::remove_pointer_t<decltype(v)>> s;
+    s.N = v, s.floor = fl, s.p = pv;
+    for (int k = 0; k < P; ++k) s.q[k] = v + n * (1 + k);
+    for (int f = 0; f < nf; ++f) s.fields[static_cast<int>(fields[f])] = v + R + f * n;
+    return s;
+  };
+  Population::Map m;
+  m.q_factor = 1.0;
+  m.q_col.assign(P, {}), m.q_row.assign(P, {});
+  for (int i = 0; i < n; ++i) {
+    m.N_col.push_back(i), m.N_row.push_back(i), m.N_scale.push_back(1.0), m.N_factor.push_back(1.0);
+    for (int k = 0; k < P; ++k) m.q_col[k].push_back(n * (1 + k) + i), m.q_row[k].push_back(n * (1 + k) + i);
+    for (int f = 0; f < nf; ++f) m.field_col[static_cast<int>(fields[f])].push_back(R + f * n + i);
+  }
+  std::vector<double> J(size_t(R) * C, 0.0);
+  DenseSink sink(J.data(), R);
+  pop.jacobian(*w, state(x.data(), floor.data(), p.data()), m, sink);
+  for (int c = 0; c < C; ++c) {
+    std::vector<Jet> xj(x.begin(), x.end()), fj(floor.begin(), floor.end()), pj(p.begin(), p.end()), out(R, Jet(0.0));
+    xj[c].v[0] = 1.0;
+    Population::Rates<Jet> r;
+    r.dN = out.data();
+    for (int k = 0; k < P; ++k) r.dq[k] = out.data() + n * (1 + k);
+    pop.rates(*w, state(xj.data(), fj.data(), pj.data()), r);
+    double colmax = 0.0;
+    for (int row = 0; row < R; ++row) colmax = std::max(colmax, std::abs(out[row].v[0]));
+    for (int row = 0; row < R; ++row)
+      EXPECT_NEAR(J[size_t(c) * R + row], out[row].v[0], 1e-13 * colmax + 1e-14)  // floor: a folded column cancels
+          << "row " << row << " column " << c;
   }
 }
 
