@@ -200,18 +200,19 @@ class Result:
         skip = set(self.repeated_outputs())
         headers, a, b, cols = [], [], [], []
         factors: dict[tuple[str, str], tuple[float, float]] = {}
+        units, display_unit = self.units, outputs.display_unit  # once per column of a 2-D scene's 6600: kept local
         for block, names in enumerate((self.state_names, self.output_names)):
             for j, n in enumerate(names):
                 if n in skip:
                     continue
-                si = self.unit(n)
-                shown = outputs.display_unit(n, si)
+                si = units.get(n, "")
+                shown = display_unit(n, si)
                 headers.append(label(n, shown))
-                if (shown, si) not in factors:
-                    factors[shown, si] = affine(shown, si) if shown and shown != si else (0.0, 1.0)
-                shift, scale = factors[shown, si]
-                a.append(shift)
-                b.append(scale)
+                f = factors.get((shown, si))
+                if f is None:
+                    f = factors[shown, si] = affine(shown, si) if shown and shown != si else (0.0, 1.0)
+                a.append(f[0])
+                b.append(f[1])
                 cols.append((block, j))
         return headers, cols, a, b
 
