@@ -33,20 +33,19 @@ BlockView view_of(const py::buffer& b, const char* what) {
   return v;
 }
 
-std::ptrdiff_t column_index(const BlockView& v, std::ptrdiff_t j, const char* what) {
-  if (j < 0) j += v.cols;
-  if (j < 0 || j >= v.cols)
-    throw py::index_error(std::string(what) + ": column " + std::to_string(j) + " outside 0.." +
-                          std::to_string(v.cols - 1));
-  return j;
-}
-
-std::ptrdiff_t row_index(const BlockView& v, std::ptrdiff_t k, const char* what) {
-  if (k < 0) k += v.rows;
-  if (k < 0 || k >= v.rows)
-    throw py::index_error(std::string(what) + ": row " + std::to_string(k) + " outside 0.." +
-                          std::to_string(v.rows - 1));
+// Python's index rules (k < 0 counts from the end), an IndexError naming the call outside them.
+std::ptrdiff_t checked(std::ptrdiff_t k, std::ptrdiff_t n, const char* what, const char* kind) {
+  if (k < 0) k += n;
+  if (k < 0 || k >= n)
+    throw py::index_error(std::string(what) + ": " + kind + " " + std::to_string(k) + " outside 0.." +
+                          std::to_string(n - 1));
   return k;
+}
+std::ptrdiff_t column_index(const BlockView& v, std::ptrdiff_t j, const char* what) {
+  return checked(j, v.cols, what, "column");
+}
+std::ptrdiff_t row_index(const BlockView& v, std::ptrdiff_t k, const char* what) {
+  return checked(k, v.rows, what, "row");
 }
 
 py::list row(const py::buffer& b, std::ptrdiff_t k) {
