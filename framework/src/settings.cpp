@@ -39,7 +39,7 @@ const std::string* Settings::given(const std::string& name) {
 }
 
 long Settings::get_int(const std::string& name, long def, long lower, long upper, const std::string& description) {
-  declared_.push_back({name, SettingType::Int, def, {}, double(lower), double(upper), description});
+  declared_.push_back({name, SettingType::Int, def, {}, double(lower), double(upper), description, ""});
   const std::string* s = given(name);
   if (!s) return def;
   char* end = nullptr;
@@ -56,7 +56,7 @@ long Settings::get_int(const std::string& name, long def, long lower, long upper
 
 double Settings::get_real(const std::string& name, double def, double lower, double upper,
                           const std::string& description) {
-  declared_.push_back({name, SettingType::Real, def, {}, lower, upper, description});
+  declared_.push_back({name, SettingType::Real, def, {}, lower, upper, description, ""});
   const std::string* s = given(name);
   if (!s) return def;
   char* end = nullptr;
@@ -70,7 +70,7 @@ double Settings::get_real(const std::string& name, double def, double lower, dou
 }
 
 bool Settings::get_bool(const std::string& name, bool def, const std::string& description) {
-  declared_.push_back({name, SettingType::Bool, def, {}, 0, 1, description});
+  declared_.push_back({name, SettingType::Bool, def, {}, 0, 1, description, ""});
   const std::string* s = given(name);
   if (!s) return def;
   if (*s == "true" || *s == "on" || *s == "yes") return std::get<bool>(declared_.back().value = true);
@@ -80,7 +80,7 @@ bool Settings::get_bool(const std::string& name, bool def, const std::string& de
 
 std::string Settings::get_choice(const std::string& name, const std::string& def,
                                  const std::vector<std::string>& choices, const std::string& description) {
-  declared_.push_back({name, SettingType::String, def, choices, 0, 0, description});
+  declared_.push_back({name, SettingType::String, def, choices, 0, 0, description, ""});
   const std::string* s = given(name);
   if (!s) return def;
   if (!choices.empty() && std::find(choices.begin(), choices.end(), *s) == choices.end()) {
