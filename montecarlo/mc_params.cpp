@@ -98,10 +98,10 @@ const std::vector<Entry>& entries() {
 }
 
 SettingSpec choice(const std::string& name, const std::vector<std::string>& choices, const std::string& what) {
-  return {name, SettingType::String, choices.front(), choices, -1e300, 1e300, what};
+  return {name, SettingType::String, choices.front(), choices, -1e300, 1e300, what, ""};
 }
 SettingSpec count(const std::string& name, long value, double lo, double hi, const std::string& what) {
-  return {name, SettingType::Int, value, {}, lo, hi, what};
+  return {name, SettingType::Int, value, {}, lo, hi, what, ""};
 }
 
 std::string setting_text(const std::map<std::string, std::string>& s, const SettingSpec& spec) {

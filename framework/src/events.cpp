@@ -106,7 +106,7 @@ void parse_do(const Flowsheet& fs, const Registry<Unit>& units, const YAML::Node
         if (!(v >= lo && v <= hi))
           throw ConfigError(violation(at, v, fs.param_spec(id).unit,
                                       fmt_num(lo) + " <= value <= " + fmt_num(hi) + " " + fs.param_spec(id).unit));
-        e.set.push_back({target, v, text});
+        e.set.push_back({target, v, text, {}});  // a parameter: nothing to make
       }
     } else {
       throw ConfigError(where + "." + k + ": unknown key (allowed: set, stop)");

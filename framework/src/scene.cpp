@@ -96,7 +96,11 @@ class Loader {
     for (const char* k : {"plots", "sweep", "notes", "accuracy"})  // accuracy: read by granuflow.accuracy
       if (root[k]) extra[k] = root[k];
     for (const char* k : {"plots", "sweep", "notes", "accuracy", "particles", "inputs", "events"})
-      if (root[k]) s.sections_json[k] = yaml_json(root[k]);
+      if (root[k]) try {
+          s.sections_json[k] = yaml_json(root[k]);
+        } catch (const ConfigError& e) {
+          rethrow(ConfigError(std::string("section '") + k + "', " + e.what()));
+        }
     YAML::Emitter em;
     em << extra;
     s.extra_yaml = em.c_str();

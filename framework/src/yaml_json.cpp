@@ -72,6 +72,9 @@ std::string number(double x) {
   return s;
 }
 
+// Decimal digits pass through as they are; the other forms are converted here, in 64 bits.
+constexpr const char* kIntLimit = " (binary, octal, hexadecimal and base-60 integers must be below 2^64)";
+
 // SafeConstructor.construct_yaml_int: sign, underscores, 0b / 0x / leading-0 octal, base 60. Python's int has no
 // limit; JSON carries the digits, so a huge one stays exact.
 std::string int_json(std::string v) {
@@ -82,7 +85,7 @@ std::string int_json(std::string v) {
   auto from_base = [&](const std::string& digits, int base) -> std::string {
     unsigned long long x = 0;
     const auto r = std::from_chars(digits.data(), digits.data() + digits.size(), x, base);
-    if (r.ec != std::errc()) throw ConfigError("integer " + sign + v + " is too large");
+    if (r.ec != std::errc()) throw ConfigError("integer " + sign + v + " is too large" + kIntLimit);
     return sign + std::to_string(x);
   };
   if (v.rfind("0b", 0) == 0) return from_base(v.substr(2), 2);
@@ -93,7 +96,12 @@ std::string int_json(std::string v) {
     size_t start = 0;
     while (true) {
       const size_t colon = v.find(':', start);
-      x = x * 60 + std::stoull(v.substr(start, colon - start));
+      unsigned long long part = 0;
+      const std::string digits = v.substr(start, colon - start);
+      const auto r = std::from_chars(digits.data(), digits.data() + digits.size(), part);
+      if (r.ec != std::errc() || x > (std::numeric_limits<unsigned long long>::max() - part) / 60)
+        throw ConfigError("integer " + sign + v + " is too large" + kIntLimit);
+      x = x * 60 + part;
       if (colon == std::string::npos) break;
       start = colon + 1;
     }
@@ -125,7 +133,11 @@ std::string float_json(std::string v) {
   }
   double x = 0.0;
   const auto r = std::from_chars(v.data(), v.data() + v.size(), x);  // "1." and ".5" are read whole
-  if (r.ec != std::errc() || r.ptr != v.data() + v.size()) x = std::stod(v);
+  // Beyond double's range Python's float() gives inf, or 0 below it: so does PyYAML, so does this.
+  if (r.ec == std::errc::result_out_of_range)
+    x = v.find("e-") == std::string::npos ? std::numeric_limits<double>::infinity() : 0.0;
+  else if (r.ec != std::errc() || r.ptr != v.data() + v.size())
+    x = std::stod(v);
   return number(sign * x);
 }
 
@@ -164,7 +176,11 @@ void write(const YAML::Node& n, std::string& out) {
       out += "null";
       return;
     case YAML::NodeType::Scalar:
-      out += scalar_json(n);
+      try {
+        out += scalar_json(n);
+      } catch (const ConfigError& e) {  // where in the file: the caller names the file and the section
+        throw ConfigError("line " + std::to_string(n.Mark().line + 1) + ": " + e.what());
+      }
       return;
     case YAML::NodeType::Sequence: {
       out += '[';

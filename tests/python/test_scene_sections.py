@@ -24,7 +24,8 @@ SCALARS = [
     "0x1F", "0b101", "1_000", "1:30", "-1:30", "1:30.5", "1e3", "1.0e3", "1.0e+3", "50e-6", "2.5E-3", "1.", ".5",
     "+.inf", "-.Inf", ".NaN", ".nan", "3.14159265358979323846", "0.1", "-0.0", "12abc", "1 min", "60 degC", "1%",
     "'on'", '"017"', "'1e3'", '"a \\"quoted\\" \\\\ word"', "it's", "µm and °C", "!!str 12", "!!int '42'",
-    "!!float '2'", "!!bool 'yes'", "x # a comment", "123456789012345678901234567890",
+    "!!float '2'", "!!bool 'yes'", "x # a comment", "123456789012345678901234567890", "1.0e999", "-1.0e999",
+    "1.0e-999", "1.0e-310", "0xFFFFFFFFFFFFFFFF", "4294967295:59:59",
 ]
 
 
@@ -57,6 +58,18 @@ def test_a_scene_section_is_typed_as_pyyaml_types_it():
     assert by["1e3"] == "1e3" and by["1.0e+3"] == 1000.0 and isinstance(by["1.0e+3"], float) and by["y"] == "y"
     big = "123456789012345678901234567890"
     assert math.copysign(1.0, by["-0.0"]) == -1.0 and by[big] == int(big)
+
+
+@pytest.mark.parametrize("value", ["0x10000000000000000", "0b" + "1" * 65, "0" + "7" * 23, "5124095576030432:0:0"])
+def test_an_integer_beyond_64_bits_names_the_file_the_section_and_the_line(value):
+    # PyYAML reads any integer; the core converts binary, octal, hex and base 60 in 64 bits and says so
+    text = _notes_text(["1", value])
+    line = text.splitlines().index(f"  k1: {value}") + 1
+    with pytest.raises(ValueError) as e:
+        gf.load_text(text, "sections.yaml")
+    msg = str(e.value)
+    assert msg.startswith("sections.yaml: ") and "section 'notes'" in msg and f"line {line}:" in msg, msg
+    assert f"integer {value} is too large" in msg and "below 2^64" in msg, msg
 
 
 def test_a_timestamp_stays_its_text_and_a_missing_section_is_none():
