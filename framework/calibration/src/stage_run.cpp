@@ -87,7 +87,10 @@ ceres::Solver::Summary StageRun::solve(std::vector<double>& theta, const Calibra
   so.function_tolerance = opt.function_tolerance;
   so.gradient_tolerance = opt.gradient_tolerance;
   so.parameter_tolerance = opt.parameter_tolerance;
-  so.num_threads = opt.num_threads;
+  // Ceres itself on one thread: with more it sums the experiments' costs and gradients in per-thread parts, whose
+  // grouping follows the thread count, and an accept/reject or stopping decision can then go the other way; the
+  // experiments are solved in parallel before it evaluates (Ahead), which is where the time goes.
+  so.num_threads = 1;
   so.logging_type = ceres::SILENT;
   so.minimizer_progress_to_stdout = false;
   // No line search on bounded problems: each of its trials costs a Jacobian (a sensitivity solve per
