@@ -375,10 +375,37 @@ class Flowsheet:
         if isinstance(sensitivities, str):
             raise ConfigError(f"simulate(): sensitivities = {short(sensitivities)}: expected a list of parameter "
                               "names, e.g. ['inlet.T']")
+        t_end = None if t_end is None else _end_time(t_end, "simulate()")
+        ahead = self._grid_check_ahead(grid_check, warn, checkpoints, restart, t_end=t_end, t_out=t_out,
+                                       n_out=n_out, rtol=rtol, atol=atol, linear_solver=linear_solver,
+                                       max_steps=max_steps, method=method)
+        try:
+            return self._simulate(t_end, t_out, n_out, rtol, atol, sensitivities, linear_solver, max_steps, method,
+                                  warn, error_estimate, grid_check, checkpoints, checkpoint_dir, restart, ahead)
+        finally:
+            if ahead is not None:  # also when the run failed: no solve left running behind an exception
+                ahead.join()
+
+    def _grid_check_ahead(self, grid_check, warn, checkpoints, restart, **kw):
+        """The grid check's solve started before the run (grid_check.Ahead), where the run is sure to be checked
+        (the default check's limit counts the integrator's unknowns, which a result tells; every state of the scene
+        is an upper bound) and writes no checkpoints; None otherwise, or when the finer grid cannot be made (the check
+        then says why, as before)."""
+        if grid_check is False or restart or checkpoints is not None or self.scene_checkpoints or self.grid() is None:
+            return None
+        if grid_check is None and not (warn and self.scene_accuracy is not False
+                                       and self._scene.n_states() <= _grid_check.PYTHON_MAX_STATES):
+            return None
+        try:
+            return _grid_check.Ahead(self, **kw)
+        except ConfigError:
+            return None
+
+    def _simulate(self, t_end, t_out, n_out, rtol, atol, sensitivities, linear_solver, max_steps, method, warn,
+                  error_estimate, grid_check, checkpoints, checkpoint_dir, restart, ahead) -> Result:
         layout = self._layout  # names, roles and units: the first run brings them
         raw = self._scene.simulate(
-            t_end=None if t_end is None else _end_time(t_end, "simulate()"),
-            t_out=t_out, n_out=None if n_out is None else int(n_out), rtol=rtol, atol=atol,
+            t_end=t_end, t_out=t_out, n_out=None if n_out is None else int(n_out), rtol=rtol, atol=atol,
             sensitivities=list(sensitivities), linear_solver=linear_solver,
             max_steps=None if max_steps is None else int(max_steps), method=method, names=layout is None,
             checkpoints=None if checkpoints is None else _times(checkpoints, "simulate(): checkpoints"),
@@ -400,7 +427,8 @@ class Flowsheet:
         if grid_check:
             from .accuracy import grid_check as gc
 
-            res.grid_check = gc.check(self, res, linear_solver=linear_solver, max_steps=max_steps, method=method)
+            res.grid_check = gc.check(self, res, ahead, linear_solver=linear_solver, max_steps=max_steps,
+                                      method=method)
         self._warn(res, warn)
         return res
 

@@ -123,6 +123,38 @@ def test_a_plain_run_checks_its_grid():
     assert gf.load(SCENE).simulate(warn=False).grid_check is None  # warn=False: callers that silence warnings
 
 
+def _without_time(g):
+    return {k: v for k, v in g.to_json().items() if k != "wall_time_s"}
+
+
+def test_the_check_solved_beside_the_run_is_the_check_solved_after_it():
+    fs = gf.load(SCENE)
+    ahead = grid_check.Ahead(fs)  # what simulate() starts before its run: the check's solve on its own thread
+    res = fs.simulate(warn=False, grid_check=False)
+    assert ahead.result_for(res) is not None  # the run's output times and tolerances: used as it is
+    beside, after = grid_check.check(fs, res, ahead), grid_check.check(fs, res)
+    assert _without_time(beside) == _without_time(after) and beside.errors["d50_um"] > 0.1
+    assert _without_time(fs.simulate(grid_check=True, warn=False).grid_check) == _without_time(after)
+    # a solve on other output times (a run that a stop event ended early) is not used: the check solves again
+    short = grid_check.Ahead(fs, t_end=1800.0)
+    assert short.result_for(res) is None
+    assert _without_time(grid_check.check(fs, res, short)) == _without_time(after)
+
+
+def test_a_failed_run_leaves_no_check_running():
+    import threading
+
+    fs = gf.load(SCENE)
+
+    def fails_at_once(*args):  # the run fails while the check's solve (about 10 ms) still runs
+        raise gf.SolverError("the run failed")
+
+    fs._simulate = fails_at_once
+    with pytest.raises(gf.SolverError, match="the run failed"):
+        fs.simulate(grid_check=True)
+    assert not [t for t in threading.enumerate() if t.name == "granuflow grid check"]
+
+
 def test_the_two_causes_of_mass_in_the_top_class():
     # the headline: smearing of a coarse grid (2.6 % at 1000 um on 160 classes): more classes, not d_max
     r = gf.load(SCENE).simulate(warn=False, grid_check=True)

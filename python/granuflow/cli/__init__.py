@@ -222,9 +222,8 @@ def entry() -> None:
     thread running (a thread pool or a Dask client exits the ordinary way, waiting for its threads); the atexit
     handlers run and the output streams are flushed first, so nothing a command or a plugin registered is lost."""
     code = main()
-    import threading
-
-    if threading.active_count() > 1:
+    threading = sys.modules.get("threading")  # not imported: no thread started from Python
+    if threading is not None and threading.active_count() > 1:
         sys.exit(code)
     import atexit
 

@@ -3,10 +3,10 @@
 page (`granuflow report OUT`) shows it, so a result can be reproduced from its folder alone."""
 from __future__ import annotations
 
-import datetime
 import json
 import os
 import shlex
+import time
 
 # Positional and option arguments that name input files, per command (argparse's dest names).
 _INPUTS = ("scene", "sweepfile", "experiments", "stages")
@@ -24,6 +24,12 @@ def _input(path: str) -> dict:
     return entry
 
 
+def _utc_now() -> str:
+    """The time now in UTC as ISO 8601 to the second, "2026-11-29T09:30:00+00:00" (datetime's isoformat, without
+    importing datetime: 2 ms of a 0.1 s run)."""
+    return time.strftime("%Y-%m-%dT%H:%M:%S+00:00", time.gmtime())
+
+
 def write_provenance(args, argv: list[str]) -> str | None:
     """Write OUT/provenance.json for a finished command; None when the command has no output folder."""
     from .. import __version__
@@ -34,8 +40,7 @@ def write_provenance(args, argv: list[str]) -> str | None:
     inputs = {k: _input(getattr(args, k)) for k in _INPUTS if isinstance(getattr(args, k, None), str)
               and os.path.isfile(getattr(args, k))}
     doc = {"command": shlex.join(["granuflow", *argv]), "kind": args.cmd, "cwd": os.getcwd(),
-           "version": __version__, "finished": datetime.datetime.now(datetime.timezone.utc).isoformat(
-               timespec="seconds"), "inputs": inputs}
+           "version": __version__, "finished": _utc_now(), "inputs": inputs}
     path = os.path.join(out, "provenance.json")
     with open(path, "w", encoding="utf-8") as f:
         json.dump(doc, f, indent=1)
