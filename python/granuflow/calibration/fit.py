@@ -141,7 +141,9 @@ def _core_list(exps: Iterable[Experiment]) -> list[dict]:
 
 
 def _options(options: Mapping[str, Any] | None) -> dict:
-    return {"num_threads": min(2, os.cpu_count() or 1), **dict(options or {})}
+    # Every core: the experiments are solved in parallel, and the estimates do not depend on how many threads solve
+    # them (Ceres itself runs on one); the core uses no more threads than there are experiments.
+    return {"num_threads": os.cpu_count() or 1, **dict(options or {})}
 
 
 def calibrate(flowsheet: Flowsheet, experiments: Sequence[Experiment], stages: Sequence[Stage] | StagePlan, *,
@@ -149,8 +151,8 @@ def calibrate(flowsheet: Flowsheet, experiments: Sequence[Experiment], stages: S
               label: str = "") -> CalibrationResult:
     """Run the stages in order (each from the previous estimates) on the C++ core; the GIL is released.
 
-    ``options``: CalibrationOptions fields (``num_threads`` default 2, ``sigma_basis``, ``jacobian``, ``rtol``,
-    ``profile``, ...). Unknown keys raise ConfigError; a failed stage raises CalibrationError.
+    ``options``: CalibrationOptions fields (``num_threads`` default: the number of cores, ``sigma_basis``,
+    ``jacobian``, ``rtol``, ``profile``, ...). Unknown keys raise ConfigError; a failed stage raises CalibrationError.
     """
     if isinstance(stages, StagePlan):
         start = {**stages.start, **dict(start or {})}

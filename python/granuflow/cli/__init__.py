@@ -192,7 +192,8 @@ def _parser(named: str | None):
     c.add_argument("experiments", help="experiment file (YAML, see granuflow.calibration)")
     c.add_argument("--stages", required=True, help="stage file (YAML): free parameters, bounds, observables")
     c.add_argument("--out", required=True, help="output folder (created)")
-    c.add_argument("--workers", type=int, help="threads: experiments in parallel, or starts with --starts")
+    c.add_argument("--workers", type=int, help="threads: experiments in parallel, or starts with --starts (default: "
+                   "number of cores; the estimates are the same for any number)")
     c.add_argument("--starts", type=int, default=1, help="multi-start: number of starts (the first is the file's)")
     c.add_argument("--spread", type=float, default=1.0, help="multi-start: ± spread in ln units around the start")
     c.add_argument("--seed", type=int, default=0, help="multi-start: random seed")
