@@ -256,7 +256,9 @@ TEST(UnitConformance, EveryRegisteredUnitTypeIsExercised) {
     for (const auto& u : s.flowsheet->units()) covered.insert(u.unit->type());
   const bool plugins = kUserScenes != nullptr;  // then the types plugins brought, else the built-in ones
   for (const auto& type : units::builtin().names())
-    if (units::builtin().origin(type).empty() != plugins) EXPECT_TRUE(covered.count(type)) << type << " has no scene";
+    if (units::builtin().origin(type).empty() != plugins) {
+      EXPECT_TRUE(covered.count(type)) << type << " has no scene";
+    }
 }
 
 // The sparse Jacobian (values in the pattern's order, what KLU factors) holds the dense one's entries: units with
