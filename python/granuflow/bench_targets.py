@@ -208,13 +208,27 @@ def target_classes(repeats: int, progress: bool) -> dict:
             cpus[n].append(time.process_time() - c0)
     ratios = [b / a for a, b in zip(walls[20], walls[80])]
     med = {n: statistics.median(w) for n, w in walls.items()}
+    parts = {n: _where_time_goes(g, med[n]) for n, g in grids.items()}
     # The CPU times (the whole simulate() call) beside the solver's wall times: on a loaded machine only they compare.
     return _record("classes", med[80], "s", med[20], "solve at 20 classes", statistics.median(ratios),
                    "80 / 20 classes, median of the rounds", cpu_s_20=statistics.median(cpus[20]),
                    cpu_s_80=statistics.median(cpus[80]),
                    cpu_ratio=statistics.median([b / a for a, b in zip(cpus[20], cpus[80])]),
                    ratio_range=[round(min(ratios), 2), round(max(ratios), 2)], rounds=rounds, repeats=repeats,
-                   command="granuflow bench targets --only classes")
+                   where_time_goes=parts, command="granuflow bench targets --only classes")
+
+
+def _where_time_goes(fs, wall: float) -> dict:
+    """Where a solve's time goes, from the solver's counts and one residual's and one Jacobian's time at the initial
+    state (Flowsheet.time_residual, medians of 21): residuals and Jacobians in ms, the rest (factorizations,
+    solves, the integrator) as what the solve's median wall time leaves."""
+    stats = fs.simulate(warn=False, grid_check=False, accuracy=False).stats
+    t = fs.time_residual(21)
+    residual, jacobian = stats["residuals"] * t["residual_s"], stats["jacobians"] * t["jacobian_s"]
+    return {"unknowns": stats["states"], "steps": stats["steps"], "residuals": stats["residuals"],
+            "jacobians": stats["jacobians"], "factorizations": stats["linear_setups"],
+            "residual_ms": round(1e3 * residual, 2), "jacobian_ms": round(1e3 * jacobian, 2),
+            "rest_ms": round(1e3 * (wall - residual - jacobian), 2)}
 
 
 def target_contour(n: int, repeats: int, progress: bool) -> dict:
@@ -400,7 +414,13 @@ def _num(v, unit: str = "") -> str:
 
 
 def _detail(v) -> str:
-    """A detail of the table: numbers to 4 digits; a study by class count as 'N: error E in W s' per grid."""
+    """A detail of the table: numbers to 4 digits; a study by class count as 'N: error E in W s' per grid; where a
+    solve's time goes as 'N classes: residuals R ms, Jacobians J ms, rest ms (counts)'."""
+    if isinstance(v, dict) and all("residual_ms" in r for r in v.values()):
+        return "{" + "; ".join(f"{n} classes: {r['residuals']} residuals {_num(r['residual_ms'])} ms, "
+                               f"{r['jacobians']} Jacobians {_num(r['jacobian_ms'])} ms, rest {_num(r['rest_ms'])} ms "
+                               f"({r['unknowns']} unknowns, {r['steps']} steps, {r['factorizations']} factorizations)"
+                               for n, r in v.items()) + "}"
     if isinstance(v, dict):
         return "{" + "; ".join(f"{n}: sigma error {_num(r['sigma_rel_error'])} in {_num(r['wall_s'])} s"
                                for n, r in v.items()) + "}"
@@ -434,7 +454,7 @@ DETAILS = {"run": ("cpu_s", "heavy_imports", "numpy_import_wall_s", "numpy_impor
                    "d50_um"),
            "writing": ("run_wall_s", "run_solve_s", "startup_fixed_s", "run_beyond_startup_over_solve", "startup_s",
                        "run_beyond_version_startup_over_solve", "states", "csv_bytes"),
-           "classes": ("cpu_ratio", "ratio_range", "rounds"),
+           "classes": ("cpu_ratio", "ratio_range", "rounds", "where_time_goes"),
            "contour": ("solver_only_per_s", "sims_per_s_2_workers", "same_values"),
            "calibration": ("cpu_s", "cpu_over_wall", "cpu_over_wall_1_worker", "estimates_max_rel_diff"),
            "two_zone": ("classes_at_target", "by_classes", "sigma_reference_um", "koren_classes_at_target",

@@ -32,3 +32,19 @@ def test_quick_targets_report_value_baseline_ratio_and_answer(tmp_path):
     assert any(line.startswith("writing ") for line in lines) and any(line.startswith("run ") for line in lines)
     bad = cli("bench", "targets", "--only", "speed")
     assert bad.returncode == 2 and "--only speed: not a target" in bad.stderr
+
+
+def test_the_classes_target_says_where_the_time_goes(tmp_path):
+    out = tmp_path / "targets.json"
+    p = cli("bench", "targets", "--quick", "--only", "classes", "--quiet", "--write-json", out, timeout=120)
+    assert p.returncode == 0, p.stderr
+    (r,) = json.loads(out.read_text())
+    parts = {int(n): v for n, v in r["where_time_goes"].items()}
+    assert sorted(parts) == [20, 80]
+    # two states per class (solid and water mass) and the same others: the 80-class solve has 120 unknowns more
+    assert parts[80]["unknowns"] - parts[20]["unknowns"] == 2 * (80 - 20)
+    for n, wall in ((20, r["baseline"]), (80, r["value"])):
+        w = parts[n]
+        assert w["residuals"] >= w["steps"] > 0 and 0 < w["jacobians"] <= w["factorizations"]
+        assert w["residual_ms"] > 0 and w["jacobian_ms"] > 0  # rest_ms: what the wall time leaves, may be < 0
+        assert math.isclose(w["residual_ms"] + w["jacobian_ms"] + w["rest_ms"], 1e3 * wall, abs_tol=0.02)
