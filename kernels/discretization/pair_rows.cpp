@@ -89,10 +89,12 @@ double fixed_pivot_partners(const FixedPivotAggregation& fp, size_t p0, int j, i
   return ((d[0] + d[4]) + (d[2] + d[6])) + ((d[1] + d[5]) + (d[3] + d[7]));
 #else
   auto rate = [kh, e, Nj, N](int k) {  // by value: loads through captured references would not vectorize
-    if constexpr (HasE)
+    if constexpr (HasE) {
       return kh[k] * e[k] * Nj * N[k];
-    else
+    } else {
+      (void)e;  // captured for the other instantiation
       return kh[k] * Nj * N[k];
+    }
   };
   double death = 0.0;
 #pragma omp simd reduction(+ : death)

@@ -315,12 +315,12 @@ TEST(Pbm2D, SolidMarginalIsTheOneDimensionalConstantKernelSolution) {
     const SimResult r = simulate(*sq.flowsheet, sq.options);
     const size_t n = r.state_names.size();
     const size_t last = r.t.size() - 1;
-    double M0 = 0, M1 = 0, M2 = 0, M2_end = 0;
+    double M1 = 0, M2 = 0, M2_end = 0;
     for (int i = 0; i < 12 * q; ++i) {
       const double xi = output(r, 0, "g.solid_pivot_" + std::to_string(i));
       double m = 0, m_end = 0;
       for (int j = 0; j < 20; ++j) m += r.y[i * 20 + j], m_end += r.y[last * n + i * 20 + j];
-      M0 += m, M1 += m * xi, M2 += m * xi * xi, M2_end += m_end * xi * xi;
+      M1 += m * xi, M2 += m * xi * xi, M2_end += m_end * xi * xi;
     }
     const double err = M2_end / (M2 + beta * M1 * M1 * r.t[last]) - 1;
     std::printf("1-D reduction, q = %d: M2 error %.2e\n", q, err);

@@ -362,7 +362,8 @@ TEST(PbmAggregation, FixedPivotJacobianWithTwoPropertiesEqualsForwardAd) {
     DenseSink(double* d, size_t ld) : JacobianSink(d, ld) {}
   };
   const int n = 9, P = 2, nf = 3;
-  const auto g = std::make_shared<const kernels::Grid>(kernels::Grid::geometric(1e-12, 1.6, n));
+  // two classes per doubling of volume: most pairs land between two pivots
+  const auto g = std::make_shared<const kernels::Grid>(kernels::Grid::geometric(1e-12, 2, n));
   UnitSpec spec;
   Settings st("test",
               {{"aggregation", "glass_transition"}, {"aggregation_scheme", "fixed_pivot"}, {"outside", "fold"}});
