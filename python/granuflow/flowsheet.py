@@ -388,13 +388,16 @@ class Flowsheet:
 
     def _grid_check_ahead(self, grid_check, warn, checkpoints, restart, **kw):
         """The grid check's solve started before the run (grid_check.Ahead), where the run is sure to be checked
-        (the default check's limit counts the integrator's unknowns, which a result tells; every state of the scene
-        is an upper bound) and writes no checkpoints; None otherwise, or when the finer grid cannot be made (the check
-        then says why, as before)."""
+        and writes no checkpoints, for flowsheets within the default check's limit (every state of the scene counted:
+        an upper bound of the integrator's unknowns, which a result tells). There the finer solve costs a few times
+        a short run; a larger flowsheet's would keep running for as long after the run stopped (an interrupt, a
+        failure), so it is checked after its run, as before. None otherwise, or when the finer grid cannot be made
+        (the check then says why, as before)."""
         if grid_check is False or restart or checkpoints is not None or self.scene_checkpoints or self.grid() is None:
             return None
-        if grid_check is None and not (warn and self.scene_accuracy is not False
-                                       and self._scene.n_states() <= _grid_check.PYTHON_MAX_STATES):
+        if self._scene.n_states() > _grid_check.PYTHON_MAX_STATES:
+            return None
+        if grid_check is None and not (warn and self.scene_accuracy is not False):
             return None
         try:
             return _grid_check.Ahead(self, **kw)

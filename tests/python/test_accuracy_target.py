@@ -141,6 +141,17 @@ def test_the_check_solved_beside_the_run_is_the_check_solved_after_it():
     assert _without_time(grid_check.check(fs, res, short)) == _without_time(after)
 
 
+def test_only_flowsheets_within_the_default_limit_solve_the_check_beside_the_run(monkeypatch):
+    fs = gf.load(SCENE)  # 83 states, within grid_check.PYTHON_MAX_STATES
+    ahead = fs._grid_check_ahead(True, True, None, "")
+    assert ahead is not None
+    ahead.join()
+    # a larger flowsheet's finer solve would run on long after an interrupted or failed run: checked after it instead
+    monkeypatch.setattr(grid_check, "PYTHON_MAX_STATES", 50)
+    assert fs._grid_check_ahead(True, True, None, "") is None
+    assert fs.simulate(grid_check=True, warn=False).grid_check.errors["d50_um"] > 0.1  # and still checked
+
+
 def test_a_failed_run_leaves_no_check_running():
     import threading
 
