@@ -395,14 +395,19 @@ class Flowsheet:
         (the check then says why, as before)."""
         if grid_check is False or restart or checkpoints is not None or self.scene_checkpoints or self.grid() is None:
             return None
-        if self._scene.n_states() > _grid_check.PYTHON_MAX_STATES:
-            return None
-        if grid_check is None and not (warn and self.scene_accuracy is not False):
+        n = self._scene.n_states()
+        if n > _grid_check.PYTHON_MAX_STATES or (grid_check is None and not self._checks_grid_by_default(warn, n)):
             return None
         try:
             return _grid_check.Ahead(self, **kw)
         except ConfigError:
             return None
+
+    def _checks_grid_by_default(self, warn: bool, unknowns: int) -> bool:
+        """Whether simulate() checks the grid when not told (grid_check=None): when it warns, the scene does not keep
+        its grid as written (`accuracy: false`), and the flowsheet has at most grid_check.PYTHON_MAX_STATES
+        ``unknowns``."""
+        return bool(warn) and self.scene_accuracy is not False and unknowns <= _grid_check.PYTHON_MAX_STATES
 
     def _simulate(self, t_end, t_out, n_out, rtol, atol, sensitivities, linear_solver, max_steps, method, warn,
                   error_estimate, grid_check, checkpoints, checkpoint_dir, restart, ahead) -> Result:
@@ -425,8 +430,7 @@ class Flowsheet:
             res.error_estimate = self._error_estimate(res, linear_solver=linear_solver, max_steps=max_steps,
                                                       method=method)
         if grid_check is None:  # a scene's `accuracy: false` keeps its grid as written, unchecked
-            grid_check = (warn and self.scene_accuracy is not False
-                          and res.stats["states"] <= _grid_check.PYTHON_MAX_STATES)
+            grid_check = self._checks_grid_by_default(warn, res.stats["states"])
         if grid_check:
             from .accuracy import grid_check as gc
 
