@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cstdlib>
 
+#include "granuflow/interrupt.hpp"
 #include "stepper.hpp"
 
 namespace granuflow::detail {
@@ -17,6 +18,7 @@ namespace {
 
 template <class F>
 int guarded(OdeUser* u, F&& f) {
+  if (interrupt_requested(u->interrupt_calls)) return -1;  // the run then ends with Interrupted (simulator.cpp)
   try {
     return static_cast<int>(f());
   } catch (const std::exception& e) {

@@ -23,6 +23,7 @@ struct OdeUser {
   std::vector<const double*> yS, ypS;
   std::vector<double*> rS, qS;
   std::string last_error;
+  unsigned interrupt_calls = 0;  // interrupt_requested(calls)
 
   Status rhs(double t, const double* y, double* ydot) {
     const Status s = sys->residual(t, y, zeros.data(), ydot);

@@ -7,6 +7,7 @@
 #include "checkpoint.hpp"
 #include "events_run.hpp"
 #include "granuflow/errors.hpp"
+#include "granuflow/interrupt.hpp"
 #include "run_common.hpp"
 
 namespace granuflow::detail {
@@ -143,6 +144,7 @@ SimResult drive(Flowsheet& fs, DaeSystem& sys, const SimOptions& opt, const std:
       const bool to_output = iout < t_out.size() && t_out[iout] <= t1;
       const int flag = stepper.advance(to_output ? t_out[iout] : t1, t);
       check_flag(flag);
+      if (interrupt_requested()) throw Interrupted(t);
       if (stepper.root_found(flag)) {
         event = events.fire(t, stepper.roots(), stepper.sample(t), res.events);
         if (event.fired) break;

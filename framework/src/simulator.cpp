@@ -8,6 +8,7 @@
 
 #include "events.hpp"
 #include "granuflow/errors.hpp"
+#include "granuflow/interrupt.hpp"
 #include "granuflow/structure.hpp"
 #include "ida_stepper.hpp"
 #include "ode_simulator.hpp"
@@ -120,6 +121,7 @@ SimResult simulate_ida(Flowsheet& fs, const SimOptions& opt, const std::string& 
     sys.jacobian(0.0, y_init.data(), yp_init.data(), 0.0, j0.data(), nullptr);
   }
   check_algebraic_structure(sys, j0.empty() ? nullptr : j0.data());  // names an unsolvable algebraic part
+  if (interrupt_requested()) throw Interrupted(0.0);                 // the set-up of a large flowsheet can take seconds
   const std::vector<int> sens_ids = sensitivity_ids(fs, opt);
   check_events(fs, opt.events, opt.sensitivities);
   IdaStepper stepper(sys, opt, kind, sens_ids, std::move(j0), reason);
@@ -128,7 +130,21 @@ SimResult simulate_ida(Flowsheet& fs, const SimOptions& opt, const std::string& 
 
 }  // namespace
 
+namespace {
+SimResult simulate_any(Flowsheet& fs, const SimOptions& opt);
+}  // namespace
+
 SimResult simulate(Flowsheet& fs, const SimOptions& opt) {
+  try {
+    return simulate_any(fs, opt);
+  } catch (const SolverError& e) {  // a callback refused to go on because of an interrupt: not a failure
+    if (interrupt_flagged()) throw Interrupted(e.t());
+    throw;
+  }
+}
+
+namespace {
+SimResult simulate_any(Flowsheet& fs, const SimOptions& opt) {
   opt.validate();
   if (!fs.finalized()) fs.finalize();
   fs.check_units();  // every unit at the values of the run, inputs at each of their knots
@@ -156,5 +172,6 @@ SimResult simulate(Flowsheet& fs, const SimOptions& opt) {
     return simulate_ida(fs, opt, std::string("an ODE, but ") + e.what() + ": IDAS", wall0);
   }
 }
+}  // namespace
 
 }  // namespace granuflow

@@ -7,6 +7,7 @@
 
 #include "banded_lowrank_solver.hpp"
 #include "eigen_linear_solver.hpp"
+#include "granuflow/interrupt.hpp"
 
 namespace granuflow::detail {
 
@@ -45,6 +46,7 @@ void check(int flag, const char* call) {
 
 int ida_res(realtype t, N_Vector y, N_Vector yp, N_Vector r, void* ud) {
   auto* u = static_cast<IdaUser*>(ud);
+  if (interrupt_requested(u->interrupt_calls)) return -1;  // the run then ends with Interrupted (simulator.cpp)
   try {
     return static_cast<int>(u->sys->residual(t, N_VGetArrayPointer(y), N_VGetArrayPointer(yp), N_VGetArrayPointer(r)));
   } catch (const std::exception& e) {
@@ -89,6 +91,7 @@ void JacobianCache::keep(const double* a, int n, double cj_at, long step_at, lon
 int ida_jac(realtype t, realtype cj, N_Vector y, N_Vector yp, N_Vector, SUNMatrix J, void* ud, N_Vector, N_Vector,
             N_Vector) {
   auto* u = static_cast<IdaUser*>(ud);
+  if (interrupt_requested(u->interrupt_calls)) return -1;  // a Jacobian of a large flowsheet can take a second
   try {
     if (u->dense) {
       double* a = SUNDenseMatrix_Data(J);

@@ -78,6 +78,7 @@ struct IdaUser {
   bool dense;
   std::vector<int> sens_params;
   std::string last_error;
+  unsigned interrupt_calls = 0;  // interrupt_requested(calls)
   std::vector<const double*> yS, ypS;
   std::vector<double*> rS, qS;
   void* mem = nullptr;  // the IDA integrator, when Jacobians may be reused (simulate, dense)
