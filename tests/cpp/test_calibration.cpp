@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "granuflow/calibration.hpp"
+#include "granuflow/interrupt.hpp"
 #include "granuflow/output_sensitivity.hpp"
 #include "granuflow/simulator.hpp"
 #include "scene_helpers.hpp"
@@ -341,6 +342,28 @@ TEST(Calibrate, TheEstimatesDoNotDependOnTheNumberOfThreads) {
     for (const auto& [name, value] : runs[0].parameters)
       EXPECT_EQ(runs[r].parameters.at(name), value) << name << ", threads " << r + 1;
   }
+}
+
+TEST(Calibrate, AnInterruptEndsItAndLeavesTheNextCalibrationAsBefore) {
+  Scene s = short_headline();
+  auto exps = experiments({"gas.T", "bed.d50"});
+  fill_with_model(s, exps, {});
+  CalibrationOptions o;
+  o.profile = false;
+  o.num_threads = 2;
+  const std::map<std::string, double> start{{"wall.k_wall", 20.0}, {"bed.agg_ln_beta0", -16.8}};
+  const CalibrationResult before = calibrate(s, units::builtin(), exps, {two_parameter_stage()}, o, start);
+  ASSERT_EQ(before.status, "ok") << before.message;
+  int polls = 0;
+  {
+    // the poll on this thread (which solves one experiment of each evaluation) answers true at its fourth call
+    InterruptScope scope([&] { return ++polls == 4; }, std::chrono::steady_clock::duration::zero());
+    EXPECT_THROW(calibrate(s, units::builtin(), exps, {two_parameter_stage()}, o, start), Interrupted);
+  }
+  EXPECT_EQ(polls, 4);
+  const CalibrationResult after = calibrate(s, units::builtin(), exps, {two_parameter_stage()}, o, start);
+  EXPECT_EQ(after.stages[0].iteration_costs, before.stages[0].iteration_costs);
+  EXPECT_EQ(after.parameters, before.parameters);
 }
 
 TEST(Calibrate, DataThatNoStageUsesIsReported) {

@@ -5,11 +5,21 @@
 #include <cmath>
 #include <exception>
 
+#include "granuflow/interrupt.hpp"
+
 namespace granuflow::calib {
 
 bool ExperimentCost::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
   double* J = jacobians && jacobians[0] ? jacobians[0] : nullptr;
   const double* theta = parameters[0];
+  if (interrupt_flagged()) {
+    // Interrupted (Ctrl-C): a value Ceres accepts, so that it reaches its iteration callback, which aborts
+    // (StageRun::solve) without logging a failed evaluation; nothing of it is used, the stage then throws.
+    std::fill(residuals, residuals + model_->rows(), 0.0);
+    if (J) std::fill(J, J + size_t(model_->rows()) * n_, 0.0);
+    ready_ = false;
+    return true;
+  }
   if (ready_ && (ready_jacobian_ || !J) && std::equal(ready_theta_.begin(), ready_theta_.end(), theta)) {
     ready_ = false;
     if (!ready_error_.empty()) {

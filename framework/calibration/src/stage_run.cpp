@@ -9,6 +9,7 @@
 
 #include "calibration_internal.hpp"
 #include "granuflow/errors.hpp"
+#include "granuflow/interrupt.hpp"
 
 namespace granuflow {
 namespace calib {
@@ -107,10 +108,20 @@ ceres::Solver::Summary StageRun::solve(std::vector<double>& theta, const Calibra
     }
   } small_change(opt.cost_change_tolerance);
   if (opt.cost_change_tolerance > 0) so.callbacks.push_back(&small_change);
+  // An interrupt (Ctrl-C) ends the stage after the iteration it arrives in; the experiments' runs stop at once and
+  // report failed evaluations, which Ceres only sees as rejected steps: hence the check after Solve.
+  struct StopOnInterrupt : ceres::IterationCallback {
+    ceres::CallbackReturnType operator()(const ceres::IterationSummary&) override {
+      return interrupt_requested() ? ceres::SOLVER_ABORT : ceres::SOLVER_CONTINUE;
+    }
+  } stop_on_interrupt;
+  so.callbacks.push_back(&stop_on_interrupt);
   std::string why;
   if (!so.IsValid(&why)) throw ConfigError("Ceres options: " + why);
   ceres::Solver::Summary summary;
   ceres::Solve(so, &problem, &summary);
+  if (interrupt_flagged())
+    throw Interrupted("calibration interrupted in Ceres iteration " + std::to_string(summary.iterations.size()));
   return summary;
 }
 
