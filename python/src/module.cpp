@@ -4,6 +4,7 @@
 #include <thread>
 
 #include "granuflow/errors.hpp"
+#include "granuflow/interrupt.hpp"
 #include "granuflow/quantity.hpp"
 
 namespace py = pybind11;
@@ -39,6 +40,10 @@ PYBIND11_MODULE(_core, m) {
       config_error(e.what());
     } catch (const granuflow::CalibrationError& e) {
       calib_error(e.what());
+    } catch (const granuflow::Interrupted& e) {
+      // Python's own KeyboardInterrupt, raised by its handler while the run was polling (interrupt_poll.hpp); a run
+      // stopped by another thread's interrupt gets one naming where it stopped
+      if (!PyErr_Occurred()) PyErr_SetString(PyExc_KeyboardInterrupt, e.what());
     }
   });
   // The unit database is read on a thread of its own while the interpreter goes on importing (issue 32: 5 ms of a
@@ -50,6 +55,9 @@ PYBIND11_MODULE(_core, m) {
     } catch (...) {  // the first unit parsed reports a missing database, naming it
     }
   }).detach();
+  m.def("interrupt", &granuflow::request_interrupt,
+        "Stops the core's runs in progress on every thread, as Ctrl-C does (each ends with KeyboardInterrupt): for "
+        "Python code that waits on threads which run them, where Python raised the interrupt itself.");
   granuflow::python::register_flowsheet(m);
   granuflow::python::register_kernels(m);
   granuflow::python::register_reference(m);

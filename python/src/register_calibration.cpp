@@ -15,6 +15,7 @@
 #include "granuflow/errors.hpp"
 #include "granuflow/output_sensitivity.hpp"
 #include "granuflow/scene.hpp"
+#include "interrupt_poll.hpp"
 #include "units/registry.hpp"
 
 namespace py = pybind11;
@@ -263,6 +264,7 @@ class PyStageProblem {
   py::tuple evaluate(const std::vector<double>& theta, bool jacobian) {
     std::vector<double> r, J;
     {
+      const InterruptScope interrupt = python_signals();
       py::gil_scoped_release release;
       p_.evaluate(theta, r, jacobian ? &J : nullptr);
     }
@@ -303,6 +305,7 @@ void register_calibration(py::module_& m) {
         const CalibrationOptions o = to_options(options);
         CalibrationResult r;
         {
+          const InterruptScope interrupt = python_signals();
           py::gil_scoped_release release;
           r = calibrate(scene, units::builtin(), ex, st, o, start);
         }
@@ -323,6 +326,7 @@ void register_calibration(py::module_& m) {
         const CalibrationOptions o = to_options(options);
         std::vector<Prediction> p;
         {
+          const InterruptScope interrupt = python_signals();
           py::gil_scoped_release release;
           p = predict(scene, units::builtin(), ex, params, o);
         }
@@ -344,6 +348,7 @@ void register_calibration(py::module_& m) {
         std::vector<double> dz;
         size_t no = 0;
         {
+          const InterruptScope interrupt = python_signals();
           py::gil_scoped_release release;
           const SimResult r = simulate(*s.flowsheet, o);
           dz = output_sensitivities(*s.flowsheet, r);

@@ -12,6 +12,7 @@
 #include "granuflow/quantity.hpp"
 #include "granuflow/scene.hpp"
 #include "granuflow/simulator.hpp"
+#include "interrupt_poll.hpp"
 #include "result_arrays.hpp"
 #include "sweep_batch.hpp"
 #include "units/registry.hpp"
@@ -68,6 +69,7 @@ py::dict simulate(Scene& s, std::optional<double> t_end, std::optional<std::vect
   validate_as(o, "SimOptions.", "simulate(): ");
   SimResult r;
   try {
+    const InterruptScope interrupt = python_signals();
     py::gil_scoped_release release;
     r = granuflow::simulate(*s.flowsheet, o);
   } catch (const ConfigError& e) {  // found at run time (unit checks, structure): name the scene file as well

@@ -4,6 +4,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include "interrupt_poll.hpp"
 #include "sweep_batch.hpp"
 
 namespace py = pybind11;
@@ -63,6 +64,7 @@ py::dict sweep_batch(const std::vector<Scene*>& scenes, std::vector<std::string>
   req.rules = rules_of(rules);
   std::vector<PointOutcome> out;
   {
+    const InterruptScope interrupt = python_signals();
     py::gil_scoped_release release;
     std::function<void(size_t)> done;
     if (progress)

@@ -18,6 +18,7 @@
 #include <unordered_map>
 
 #include "granuflow/errors.hpp"
+#include "granuflow/interrupt.hpp"
 #include "granuflow/quantity.hpp"
 #include "result_reductions.hpp"
 
@@ -410,7 +411,8 @@ std::vector<PointOutcome> run_batch(const std::vector<Scene*>& scenes, const Bat
       lock.unlock();
       try {
         done(finished);
-      } catch (...) {  // an interrupt in the callback: stop the workers at their next point, then rethrow it
+      } catch (...) {  // an interrupt in the callback: stop the workers' runs at once, then rethrow it
+        request_interrupt();
         lock.lock();
         if (!error) error = std::current_exception();
         next = n;

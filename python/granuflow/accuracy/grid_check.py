@@ -84,7 +84,8 @@ class Ahead:
     def _solve(self) -> None:
         try:
             self.fine = self.fine_fs.simulate(**self._kw, warn=False, accuracy=False, grid_check=False)
-        except Exception:  # noqa: BLE001 - check() solves again as before and reports what fails there
+        except (Exception, KeyboardInterrupt):  # noqa: BLE001 - check() solves again and reports what fails there
+            # (an interrupt of the run stops this solve too: the caller's thread raises it)
             self.fine = None
 
     def join(self) -> None:

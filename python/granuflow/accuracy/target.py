@@ -248,8 +248,12 @@ def _start(fs, base, run: dict, goals: dict, s0: dict, notes: list):
 
     with ThreadPoolExecutor(max_workers=2) as ex:
         futures = [ex.submit(f.simulate, **run) for _, f in first]
-        loose = fs.simulate(**loose_run).summary_values()
-        solved = [(spacing(f), f, fut.result()) for (_, f), fut in zip(first, futures)]
+        try:
+            loose = fs.simulate(**loose_run).summary_values()
+            solved = [(spacing(f), f, fut.result()) for (_, f), fut in zip(first, futures)]
+        except KeyboardInterrupt:  # the pool's solves stop as well, or leaving the block would wait for them
+            _core.interrupt()
+            raise
     e_int = {k: (loose[k] - s0[k]) / (kl - 1) if loose.get(k) is not None else math.inf for k in goals}
     need = min((TOL_SHARE * goals[k] * abs(s0[k]) / abs(e) for k, e in e_int.items() if e and s0[k]),
                default=math.inf)

@@ -11,7 +11,7 @@ import importlib
 import os
 import sys
 
-from .common import EXIT_BAD_INPUT, EXIT_SOLVER, Parser, one_line
+from .common import EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_SOLVER, Parser, one_line
 
 # What `bench --quick` reduces, per subcommand (cli/bench.py runs it).
 _QUICK = {"core": "tank chains of 100 and 1000 states (not 10000)",
@@ -269,6 +269,9 @@ def main(argv=None) -> int:
         what = "balance failure" if hasattr(e, "balance") else "solver failure"  # result.BalanceError
         print(f"granuflow: {what}: {one_line(e)}", file=sys.stderr)
         return EXIT_SOLVER
+    except KeyboardInterrupt:  # Ctrl-C: the core's runs stop within about 0.1 s (interrupt_poll.hpp)
+        print("granuflow: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
     except BrokenPipeError:
         # the reader went away (`granuflow describe SCENE | head`): stop quietly, and keep Python from
         # reporting the failed flush of stdout at exit

@@ -12,6 +12,7 @@ from ..quantity import parse_time
 ConfigError = _core.ConfigError
 EXIT_BAD_INPUT = 2
 EXIT_SOLVER = 3
+EXIT_INTERRUPTED = 130  # Ctrl-C, as a shell reports a process SIGINT ended (128 + 2)
 
 
 def _columns() -> int:

@@ -66,9 +66,11 @@ class ThreadExecutor:
             try:
                 for fut in cf.as_completed(futures):
                     yield fut.result()
-            except BaseException:
+            except BaseException as e:
                 for f in futures:
                     f.cancel()
+                if isinstance(e, KeyboardInterrupt):  # the points being solved stop as well (else the pool waits)
+                    _core.interrupt()
                 raise
 
 
