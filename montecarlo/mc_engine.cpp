@@ -7,6 +7,7 @@
 #include <string>
 
 #include "granuflow/errors.hpp"
+#include "granuflow/interrupt.hpp"
 #include "mc_rng.hpp"
 #include "mc_storage.hpp"
 
@@ -69,6 +70,7 @@ class Replica {
   double free_area_;  // surface of one primary
   int doublings_ = 0;
   double collisions_ = 0, successes_ = 0, depositions_ = 0;
+  unsigned events_ = 0;                          // for the interrupt check, every 1024 events
   double used_ = 0, blocked_ = 0, expired_ = 0;  // droplet fates (doubled with the sample)
   std::vector<uint32_t> scratch_;
 };
@@ -321,6 +323,7 @@ ReplicaResult Replica::run(const std::vector<double>& times) {
       record(times[k], &r.series[k * kQuantities], &r.psd[k * kPsdBins]);
     if (k == times.size() || t_next == kInf) break;
     t = t_next;
+    if ((++events_ & 1023u) == 0 && interrupt_requested()) throw Interrupted(t);
     if (t_drop <= t_coll) {
       if (st_.droplet_slots() >= static_cast<size_t>(c_.s.max_droplets)) too_many(t);
       st_.deposit(rng_.below(st_.size()), t);  // the wetted particle is chosen at random

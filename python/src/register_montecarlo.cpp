@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "interrupt_poll.hpp"
 #include "mc_params.hpp"
 #include "mc_statistics.hpp"
 
@@ -40,6 +41,7 @@ void register_montecarlo(py::module_& m) {
         const mc::Config c = mc::make_config(params, settings);
         mc::Summary s;
         {
+          const InterruptScope interrupt = python_signals();
           py::gil_scoped_release release;
           s = mc::run(c, times);
         }

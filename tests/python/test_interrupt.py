@@ -1,5 +1,5 @@
 """Ctrl-C (SIGINT) stops work in the core within about 0.1 s (granuflow/interrupt.hpp): a run, the grid check's solve
-beside it, a sweep solved in the core and a calibration. In Python it raises KeyboardInterrupt; the command line exits
+beside it, sweeps (in the core and on Python threads), Monte Carlo replicas and a calibration. In Python it raises KeyboardInterrupt; the command line exits
 130 with one line and writes nothing. The next run is the same as before. Every job here would run for several times
 the wait each test allows if the interrupt did not stop it."""
 import os
@@ -102,6 +102,18 @@ def test_a_sweep_on_python_threads_stops_at_ctrl_c():
     timer.join()
     assert waited < 2.0, f"the sweep went on for {waited:.2f} s (interrupt at 0.8 s)"
     assert not [t for t in threading.enumerate() if t.name.startswith("granuflow-sweep")]
+
+
+def test_a_monte_carlo_run_stops_at_ctrl_c():
+    from granuflow import montecarlo as mc
+
+    timer = sigint_after(0.5)  # 4 replicas of 60 s of the process: about 7 s
+    t0 = time.perf_counter()
+    with pytest.raises(KeyboardInterrupt):
+        mc.run(t_end=60, settings={"replicas": 4})
+    waited = time.perf_counter() - t0
+    timer.join()
+    assert waited < 2.0, f"the replicas went on for {waited:.2f} s (interrupt at 0.5 s)"
 
 
 def interrupted_cli(args, delay):
