@@ -1,7 +1,7 @@
 """Ctrl-C (SIGINT) stops work in the core within about 0.1 s (granuflow/interrupt.hpp): a run, the grid check's solve
-beside it, sweeps (in the core and on Python threads), Monte Carlo replicas and a calibration. In Python it raises KeyboardInterrupt; the command line exits
-130 with one line and writes nothing. The next run is the same as before. Every job here would run for several times
-the wait each test allows if the interrupt did not stop it."""
+beside it, sweeps (in the core and on Python threads), Monte Carlo replicas and a calibration. In Python it raises
+KeyboardInterrupt; the command line exits 130 with one line and writes nothing. The next run is the same as before.
+Every job here would run for several times the wait each test allows if the interrupt did not stop it."""
 import os
 import signal
 import subprocess
