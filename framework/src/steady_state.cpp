@@ -26,6 +26,7 @@
 
 #include "consistent_start.hpp"
 #include "granuflow/errors.hpp"
+#include "granuflow/interrupt.hpp"
 #include "granuflow/signals.hpp"
 #include "granuflow/simulator.hpp"
 #include "solver_setup.hpp"
@@ -98,10 +99,12 @@ struct SteadySystem {
 
 struct KinUser {
   SteadySystem* s;
+  unsigned interrupt_calls = 0;  // interrupt_requested(calls)
 };
 
 int kin_res(N_Vector u, N_Vector f, void* ud) {
   auto* k = static_cast<KinUser*>(ud);
+  if (interrupt_requested(k->interrupt_calls)) return -1;  // the solve then ends with Interrupted
   try {
     return static_cast<int>(k->s->residual(N_VGetArrayPointer(u), k->s->zeros.data(), N_VGetArrayPointer(f)));
   } catch (const std::exception& e) {
@@ -520,9 +523,22 @@ void steady_outputs(const Flowsheet& fs, DaeSystem& sys, double t, const std::ve
   }
 }
 
+SteadyResult solve_any(Flowsheet& fs, const SteadyOptions& opt, const std::vector<double>* guess);
+
 }  // namespace
 
 SteadyResult solve_steady_state(Flowsheet& fs, const SteadyOptions& opt, const std::vector<double>* guess) {
+  try {
+    return solve_any(fs, opt, guess);
+  } catch (const SolverError&) {  // a callback refused to go on because of an interrupt: not a failure
+    if (interrupt_flagged()) throw Interrupted(opt.t);
+    throw;
+  }
+}
+
+namespace {
+
+SteadyResult solve_any(Flowsheet& fs, const SteadyOptions& opt, const std::vector<double>* guess) {
   opt.validate();
   const auto wall0 = std::chrono::steady_clock::now();
   if (!fs.finalized()) fs.finalize();
@@ -589,5 +605,7 @@ SteadyResult solve_steady_state(Flowsheet& fs, const SteadyOptions& opt, const s
   sys.end_run();
   return r;
 }
+
+}  // namespace
 
 }  // namespace granuflow

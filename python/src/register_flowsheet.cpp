@@ -271,6 +271,7 @@ void register_flowsheet(py::module_& m) {
             validate_as(o, "SteadyOptions.", "steady_state(): ");
             SteadyResult r;
             {
+              const InterruptScope interrupt = python_signals();
               py::gil_scoped_release release;
               r = solve_steady_state(*s.flowsheet, o);
             }

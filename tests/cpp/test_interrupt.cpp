@@ -1,6 +1,7 @@
 // Stopping runs from outside (granuflow/interrupt.hpp): a poll that asks for a stop ends the run on its thread and the
-// runs on other threads with Interrupted at the time each reached, on the DAE and the ODE integrators; once the scope
-// is gone, the next run is the uninterrupted one to the bit. The polls are counted, not timed (interval zero).
+// runs on other threads with Interrupted at the time each reached, on the DAE and the ODE integrators and in
+// steady-state solves; once the scope is gone, the next run is the uninterrupted one to the bit. The polls are counted,
+// not timed (interval zero).
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -74,6 +75,17 @@ TEST(Interrupt, StopsTheOdeIntegrators) {
     const double t = interrupted_at(s, 1, polls);
     EXPECT_TRUE(std::isfinite(t) && t < s.options.t_end) << to_string(m) << ": t = " << t;
   }
+}
+
+TEST(Interrupt, StopsASteadyStateSolve) {
+  Scene s = scene_from_file("flowsheets/continuous_drying_bed.yaml");  // pseudo-transient steps, then Newton
+  const SteadyResult whole = solve_steady_state(*s.flowsheet, SteadyOptions{});
+  {
+    InterruptScope scope([] { return false; });
+    request_interrupt();
+    EXPECT_THROW(solve_steady_state(*s.flowsheet, SteadyOptions{}), Interrupted);
+  }
+  EXPECT_EQ(solve_steady_state(*s.flowsheet, SteadyOptions{}).y, whole.y);
 }
 
 TEST(Interrupt, IsNotASolverFailure) {
