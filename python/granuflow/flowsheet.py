@@ -555,11 +555,12 @@ class Flowsheet:
         """Median time of one residual and one Jacobian evaluation at the initial state (benchmarks)."""
         return self._scene.time_residual(repeats)
 
-    def calibrate_raw(self, experiments: list, stages: list, options: dict, start: Mapping[str, float]) -> dict:
+    def calibrate_raw(self, experiments: list, stages: list, options: dict, start: Mapping[str, float],
+                      progress=None) -> dict:
         """The core's staged calibration on this flowsheet (use :func:`granuflow.calibration.calibrate`)."""
         from . import _calibration
 
-        return _calibration.calibrate(self._scene, experiments, stages, options, dict(start))
+        return _calibration.calibrate(self._scene, experiments, stages, options, dict(start), progress)
 
     def predict_raw(self, experiments: list, params: Mapping[str, float], options: dict) -> list:
         """The core's predictions of the experiments' observables (use :func:`granuflow.calibration.predict`)."""

@@ -299,10 +299,21 @@ void register_calibration(py::module_& m) {
   m.def(
       "calibrate",
       [](const Scene& scene, const py::list& exps, const py::list& stages, const py::dict& options,
-         const std::map<std::string, double>& start) {
+         const std::map<std::string, double>& start, const std::optional<py::function>& progress) {
         const auto ex = to_experiments(exps);
         const auto st = to_stages(stages);
-        const CalibrationOptions o = to_options(options);
+        CalibrationOptions o = to_options(options);
+        if (progress)
+          o.progress = [&progress](const CalibrationProgress& p) {
+            py::gil_scoped_acquire gil;
+            try {
+              (*progress)(p.stage, p.iteration, p.cost, p.simulations, p.sensitivity_solves);
+            } catch (py::error_already_set& e) {  // an interrupt raised in the callback (Ctrl-C while it ran)
+              if (!e.matches(PyExc_KeyboardInterrupt)) throw;
+              e.restore();  // Python's KeyboardInterrupt stands; the stage ends at this iteration
+              request_interrupt();
+            }
+          };
         CalibrationResult r;
         {
           const InterruptScope interrupt = python_signals();
@@ -316,7 +327,10 @@ void register_calibration(py::module_& m) {
                         "simulations"_a = r.simulations, "sensitivity_solves"_a = r.sensitivity_solves,
                         "wall_time_s"_a = r.wall_time_s, "stages"_a = sd, "warnings"_a = r.warnings);
       },
-      "scene"_a, "experiments"_a, "stages"_a, "options"_a = py::dict(), "start"_a = std::map<std::string, double>{});
+      "scene"_a, "experiments"_a, "stages"_a, "options"_a = py::dict(), "start"_a = std::map<std::string, double>{},
+      "progress"_a = py::none(),
+      "progress(stage, iteration, cost, simulations, sensitivity_solves): called after every Ceres iteration, on the "
+      "calling thread with the GIL.");
 
   m.def(
       "predict",

@@ -366,6 +366,31 @@ TEST(Calibrate, AnInterruptEndsItAndLeavesTheNextCalibrationAsBefore) {
   EXPECT_EQ(after.parameters, before.parameters);
 }
 
+TEST(Calibrate, ProgressReportsEveryIterationAndChangesNothing) {
+  Scene s = short_headline();
+  auto exps = experiments({"gas.T", "bed.d50"});
+  fill_with_model(s, exps, {});
+  CalibrationOptions o;
+  o.profile = false;
+  o.max_reweighting_passes = 1;
+  const std::map<std::string, double> start{{"wall.k_wall", 20.0}, {"bed.agg_ln_beta0", -16.8}};
+  const CalibrationResult quiet = calibrate(s, units::builtin(), exps, {two_parameter_stage()}, o, start);
+  std::vector<CalibrationProgress> seen;
+  o.progress = [&](const CalibrationProgress& p) { seen.push_back(p); };
+  const CalibrationResult watched = calibrate(s, units::builtin(), exps, {two_parameter_stage()}, o, start);
+  EXPECT_EQ(watched.parameters, quiet.parameters);
+  ASSERT_EQ(seen.size(), quiet.stages[0].iteration_costs.size());  // one report per Ceres iteration, its start too
+  long solves = 0;
+  for (size_t k = 0; k < seen.size(); ++k) {
+    EXPECT_EQ(seen[k].stage, "wall_and_agglomeration");
+    EXPECT_EQ(seen[k].iteration, static_cast<int>(k));
+    EXPECT_EQ(seen[k].cost, quiet.stages[0].iteration_costs[k]);
+    EXPECT_GE(seen[k].simulations + seen[k].sensitivity_solves, solves);  // counts only grow within a solve
+    solves = seen[k].simulations + seen[k].sensitivity_solves;
+  }
+  EXPECT_GT(solves, 0);
+}
+
 TEST(Calibrate, DataThatNoStageUsesIsReported) {
   Scene s = short_headline();
   auto exps = experiments({"gas.T", "bed.moisture_wet"});

@@ -211,3 +211,34 @@ def test_tables_are_the_csv_pandas_writes(tmp_path):
     write_table(str(tmp_path / "ours.csv"), ("set", "output"), rows)
     pd.DataFrame(rows).set_index(["set", "output"]).to_csv(tmp_path / "pandas.csv")
     assert (tmp_path / "ours.csv").read_text() == (tmp_path / "pandas.csv").read_text()
+
+
+def test_progress_names_the_stage_and_iteration_and_changes_nothing(fs, synthetic, capsys):
+    stages = cal.paper001_stages().stages[:2]
+    kw = dict(options={"profile": False, "max_iterations": 3, "max_restarts": 0}, start=cal.paper001_stages().start)
+    quiet = cal.calibrate(fs, synthetic.calibration[:2], stages, progress=False, **kw)
+    assert capsys.readouterr().err == ""
+    shown = cal.calibrate(fs, synthetic.calibration[:2], stages, progress=True, **kw)
+    err = capsys.readouterr().err
+    assert shown.parameters == quiet.parameters
+    for s in stages:  # the bar names each stage with its iterations
+        assert f"{s.name}: iteration 1, ½χ² " in err, err[-400:]
+
+
+def test_an_interrupt_in_the_progress_callback_ends_the_calibration(fs, synthetic):
+    # Ctrl-C arriving while the callback runs raises KeyboardInterrupt there: it must end the calibration at once
+    # (not be taken for a failed evaluation) and stay a KeyboardInterrupt
+    from granuflow.calibration.fit import _core_list, _options
+
+    calls = []
+
+    def progress(stage, iteration, cost, simulations, sensitivity_solves):
+        calls.append(iteration)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+
+    stages = cal.paper001_stages().stages[:1]
+    with pytest.raises(KeyboardInterrupt):
+        fs.calibrate_raw(_core_list(synthetic.calibration[:2]), [s.to_core() for s in stages],
+                         _options({"profile": False}), cal.paper001_stages().start, progress)
+    assert calls == [0, 1]  # no iteration after the interrupted one

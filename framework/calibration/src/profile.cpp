@@ -27,6 +27,7 @@ Profile profile_parameter(const Scene& scene, const Registry<Unit>& reg, const s
   const double two_se = std::isfinite(e.se_theta) ? 2 * e.se_theta : std::numeric_limits<double>::infinity();
   Stage sub = stage;
   sub.free.erase(sub.free.begin() + which);
+  sub.name = "profile of " + e.name;
   CalibrationOptions o = opt;
   o.profile = false;
   std::vector<std::pair<double, double>> pts{{e.theta, 0.0}};  // (θ, Δχ²)

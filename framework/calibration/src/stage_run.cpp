@@ -16,7 +16,7 @@ namespace calib {
 
 StageRun::StageRun(const Scene& scene, const Registry<Unit>& reg, const std::vector<Experiment>& exps,
                    const Stage& stage, const CalibrationOptions& opt, const std::map<std::string, double>& fixed)
-    : space(make_space(*scene.flowsheet, stage)), observables(stage.observables) {
+    : space(make_space(*scene.flowsheet, stage)), observables(stage.observables), name(stage.name) {
   for (const auto& o : stage.observables) observable_unit(*scene.flowsheet, o);  // names checked once
   std::vector<std::unique_ptr<ExperimentModel>> all(exps.size());
   parallel_for(static_cast<int>(exps.size()), opt.num_threads, [&](int i) {
@@ -116,6 +116,16 @@ ceres::Solver::Summary StageRun::solve(std::vector<double>& theta, const Calibra
     }
   } stop_on_interrupt;
   so.callbacks.push_back(&stop_on_interrupt);
+  struct Report : ceres::IterationCallback {
+    const StageRun& run;
+    const CalibrationOptions& opt;
+    Report(const StageRun& r, const CalibrationOptions& o) : run(r), opt(o) {}
+    ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
+      opt.progress({run.name, s.iteration, s.cost, run.simulations(), run.sensitivity_solves()});
+      return ceres::SOLVER_CONTINUE;
+    }
+  } report(*this, opt);
+  if (opt.progress) so.callbacks.insert(so.callbacks.begin(), &report);  // first: it sees the iteration that ends
   std::string why;
   if (!so.IsValid(&why)) throw ConfigError("Ceres options: " + why);
   ceres::Solver::Summary summary;

@@ -20,6 +20,7 @@ struct StageRun {
   std::vector<std::unique_ptr<ExperimentModel>> models;
   std::vector<std::unique_ptr<ExperimentCost>> costs;
   std::vector<std::string> observables;
+  std::string name;  // the stage's, for progress reports
 
   StageRun(const Scene& scene, const Registry<Unit>& reg, const std::vector<Experiment>& exps, const Stage& stage,
            const CalibrationOptions& opt, const std::map<std::string, double>& fixed);

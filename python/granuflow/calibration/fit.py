@@ -148,19 +148,44 @@ def _options(options: Mapping[str, Any] | None) -> dict:
 
 def calibrate(flowsheet: Flowsheet, experiments: Sequence[Experiment], stages: Sequence[Stage] | StagePlan, *,
               start: Mapping[str, float] | None = None, options: Mapping[str, Any] | None = None,
-              label: str = "") -> CalibrationResult:
+              label: str = "", progress: bool | None = None) -> CalibrationResult:
     """Run the stages in order (each from the previous estimates) on the C++ core; the GIL is released.
 
     ``options``: CalibrationOptions fields (``num_threads`` default: the number of cores, ``sigma_basis``,
     ``jacobian``, ``rtol``, ``profile``, ...). Unknown keys raise ConfigError; a failed stage raises CalibrationError.
+    ``progress``: a bar on stderr that names the stage, its Levenberg-Marquardt iteration, ½χ² and the simulations
+    so far (None: only on a terminal). Ctrl-C ends the calibration with KeyboardInterrupt.
     """
     if isinstance(stages, StagePlan):
         start = {**stages.start, **dict(start or {})}
         options = {**stages.options, **dict(options or {})}
         stages = stages.stages
-    raw = flowsheet.calibrate_raw(_core_list(experiments), [s.to_core() for s in stages], _options(options),
-                                  {k: float(v) for k, v in dict(start or {}).items()})
+    bar = progress_bars.bar(progress, len(stages), "calibration", unit="stage")
+    try:
+        raw = flowsheet.calibrate_raw(_core_list(experiments), [s.to_core() for s in stages], _options(options),
+                                      {k: float(v) for k, v in dict(start or {}).items()},
+                                      _StageBar(bar, [s.name for s in stages]) if bar is not None else None)
+    finally:
+        if bar is not None:
+            bar.close()
     return CalibrationResult(raw, label=label)
+
+
+class _StageBar:
+    """The core's progress reports (after every Ceres iteration) on a bar of the stages: the stage being solved, its
+    iteration, ½χ² and the simulations of that least-squares solve; a profile or restart shows under its own name."""
+
+    def __init__(self, bar, names: Sequence[str]):
+        self.bar, self.names, self.done = bar, list(names), 0
+
+    def __call__(self, stage: str, iteration: int, cost: float, simulations: int, sensitivity_solves: int) -> None:
+        if stage in self.names:
+            k = self.names.index(stage)
+            if k > self.done:
+                self.bar.update(k - self.done)
+                self.done = k
+        self.bar.set_postfix_str(f"{stage}: iteration {iteration}, ½χ² {cost:.6g}, "
+                                 f"{simulations + sensitivity_solves} solves", refresh=True)
 
 
 def predict(flowsheet: Flowsheet, experiments: Sequence[Experiment], params: Mapping[str, float] | None = None, *,
@@ -230,7 +255,7 @@ def multi_start(flowsheet: Flowsheet, experiments: Sequence[Experiment], stages:
 
     def one(i: int):
         return calibrate(flowsheet, experiments, stages, start={**plan_start, **dict(starts[i])}, options=opts,
-                         label=f"start {i}")
+                         label=f"start {i}", progress=False)  # the starts have a bar of their own
 
     with cf.ThreadPoolExecutor(max_workers=workers, thread_name_prefix="granuflow-calib") as pool:
         futs = {pool.submit(one, i): i for i in range(len(starts))}

@@ -37,11 +37,12 @@ def cmd_calibrate(args) -> int:
         if not args.quiet:
             print(f"{len(starts)} starts ({failed} failed); best cost {res.cost:.6g} from {res.label}")
     else:
-        res = cal.calibrate(fs, exps.calibration, plan, options=options, label="staged")
+        res = cal.calibrate(fs, exps.calibration, plan, options=options, label="staged",
+                            progress=progress_option(args))
     comparison = None
     if args.compare:
         comparison = cal.calibrate(fs, exps.calibration, plan.simultaneous(), start=plan.start, options=options,
-                                   label="all parameters at once")
+                                   label="all parameters at once", progress=progress_option(args))
     for w in res.warnings:  # also in report.json and report.txt; exit 0: the calibration is what was asked for
         print(f"granuflow: warning: {w}", file=sys.stderr)
     rep = cal.report(fs, res, exps.calibration, exps.validation, comparison=comparison, options=options,

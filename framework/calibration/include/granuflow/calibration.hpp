@@ -87,6 +87,14 @@ struct Stage {
   std::vector<std::string> observables;  // observation names in the loss; empty: all
 };
 
+// Where a calibration is, for a progress display: reported on the calling thread after every Ceres iteration.
+struct CalibrationProgress {
+  std::string stage;  // the stage's name ("profile of NAME" while a parameter is profiled)
+  int iteration = 0;  // Ceres' iteration within the current least-squares solve (0: its start)
+  double cost = 0.0;  // ½χ² there
+  long simulations = 0, sensitivity_solves = 0;  // of this least-squares solve so far
+};
+
 struct CalibrationOptions {
   // Ceres Levenberg-Marquardt, per stage.
   int max_iterations = 50;            // >= 1
@@ -137,6 +145,8 @@ struct CalibrationOptions {
   // A sensitivity solve that fails is retried once with a tenth of the tolerance and at most 1/200 of the run per
   // step, then replaced by central differences of plain simulations; only when those fail too does the evaluation
   // fail (Ceres then shortens its step). The report counts the retries.
+  // Called after every Ceres iteration (may be empty). It only watches: the estimates do not depend on it.
+  std::function<void(const CalibrationProgress&)> progress;
   // Throws ConfigError naming the field, the value and the rule.
   void validate() const;
 };
