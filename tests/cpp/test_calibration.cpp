@@ -344,40 +344,45 @@ TEST(Calibrate, TheEstimatesDoNotDependOnTheNumberOfThreads) {
   }
 }
 
-TEST(Calibrate, AnInterruptEndsItAndLeavesTheNextCalibrationAsBefore) {
+// Two experiments of noise-free gas.T and d50 data, fitted in two parameters from a start off the truth.
+struct TwoParameterFit {
   Scene s = short_headline();
-  auto exps = experiments({"gas.T", "bed.d50"});
-  fill_with_model(s, exps, {});
-  CalibrationOptions o;
-  o.profile = false;
-  o.num_threads = 2;
-  const std::map<std::string, double> start{{"wall.k_wall", 20.0}, {"bed.agg_ln_beta0", -16.8}};
-  const CalibrationResult before = calibrate(s, units::builtin(), exps, {two_parameter_stage()}, o, start);
+  std::vector<Experiment> exps = experiments({"gas.T", "bed.d50"});
+  CalibrationOptions o;  // without the profile
+  TwoParameterFit() {
+    fill_with_model(s, exps, {});
+    o.profile = false;
+  }
+  CalibrationResult run() const {
+    return calibrate(s, units::builtin(), exps, {two_parameter_stage()}, o,
+                     {{"wall.k_wall", 20.0}, {"bed.agg_ln_beta0", -16.8}});
+  }
+};
+
+TEST(Calibrate, AnInterruptEndsItAndLeavesTheNextCalibrationAsBefore) {
+  TwoParameterFit fit;
+  fit.o.num_threads = 2;
+  const CalibrationResult before = fit.run();
   ASSERT_EQ(before.status, "ok") << before.message;
   int polls = 0;
   {
     // the poll on this thread (which solves one experiment of each evaluation) answers true at its fourth call
     InterruptScope scope([&] { return ++polls == 4; }, std::chrono::steady_clock::duration::zero());
-    EXPECT_THROW(calibrate(s, units::builtin(), exps, {two_parameter_stage()}, o, start), Interrupted);
+    EXPECT_THROW(fit.run(), Interrupted);
   }
   EXPECT_EQ(polls, 4);
-  const CalibrationResult after = calibrate(s, units::builtin(), exps, {two_parameter_stage()}, o, start);
+  const CalibrationResult after = fit.run();
   EXPECT_EQ(after.stages[0].iteration_costs, before.stages[0].iteration_costs);
   EXPECT_EQ(after.parameters, before.parameters);
 }
 
 TEST(Calibrate, ProgressReportsEveryIterationAndChangesNothing) {
-  Scene s = short_headline();
-  auto exps = experiments({"gas.T", "bed.d50"});
-  fill_with_model(s, exps, {});
-  CalibrationOptions o;
-  o.profile = false;
-  o.max_reweighting_passes = 1;
-  const std::map<std::string, double> start{{"wall.k_wall", 20.0}, {"bed.agg_ln_beta0", -16.8}};
-  const CalibrationResult quiet = calibrate(s, units::builtin(), exps, {two_parameter_stage()}, o, start);
+  TwoParameterFit fit;
+  fit.o.max_reweighting_passes = 1;
+  const CalibrationResult quiet = fit.run();
   std::vector<CalibrationProgress> seen;
-  o.progress = [&](const CalibrationProgress& p) { seen.push_back(p); };
-  const CalibrationResult watched = calibrate(s, units::builtin(), exps, {two_parameter_stage()}, o, start);
+  fit.o.progress = [&](const CalibrationProgress& p) { seen.push_back(p); };
+  const CalibrationResult watched = fit.run();
   EXPECT_EQ(watched.parameters, quiet.parameters);
   ASSERT_EQ(seen.size(), quiet.stages[0].iteration_costs.size());  // one report per Ceres iteration, its start too
   long solves = 0;
