@@ -55,18 +55,20 @@ def test_a_run_stops_at_ctrl_c_and_the_next_run_is_unchanged():
 
 def test_the_grid_check_beside_the_run_stops_with_it(monkeypatch, capfd):
     fs = gf.load_text(headline_text(70, "1e-13"))  # within the limit for the check's solve beside the run
-    started = []
+    started, timers = [], []
 
     class Recorded(grid_check.Ahead):
         def __init__(self, *a, **kw):
             super().__init__(*a, **kw)
             started.append(self)
+            # 0.1 s after the check's solve started: in the run's own (0.2 s; the finer one takes 0.4 s more),
+            # which the caller starts at once
+            timers.append(sigint_after(0.1))
 
     monkeypatch.setattr(grid_check, "Ahead", Recorded)
-    timer = sigint_after(0.08)  # in the run's solve (0.2 s; the check's finer one takes 0.4 s more)
     with pytest.raises(KeyboardInterrupt):
         fs.simulate()
-    timer.join()
+    timers[0].join()
     assert len(started) == 1
     assert not started[0]._thread.is_alive()
     assert started[0].fine is None  # its solve was stopped, not finished
