@@ -382,6 +382,10 @@ class Flowsheet:
         try:
             return self._simulate(t_end, t_out, n_out, rtol, atol, sensitivities, linear_solver, max_steps, method,
                                   warn, error_estimate, grid_check, checkpoints, checkpoint_dir, restart, ahead)
+        except KeyboardInterrupt:  # raised in Python, before or after the run's solve: the check's solve stops too
+            if ahead is not None:
+                ahead.cancel()
+            raise
         finally:
             if ahead is not None:  # also when the run failed: no solve left running behind an exception
                 ahead.join()

@@ -31,6 +31,15 @@ def headline_text(classes: int, tol: str) -> str:
 LONG = headline_text(300, "1e-13")
 
 
+@pytest.fixture(autouse=True)
+def sigint_raises():
+    """SIGINT raises KeyboardInterrupt in this process, as in a terminal: a process started in the background by a
+    shell without job control (a CI script's `cmd &`) inherits SIGINT ignored, and Python then keeps it ignored."""
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, before)
+
+
 def sigint_after(delay: float) -> threading.Timer:
     timer = threading.Timer(delay, lambda: os.kill(os.getpid(), signal.SIGINT))
     timer.start()
@@ -109,10 +118,10 @@ def test_a_sweep_on_python_threads_stops_at_ctrl_c():
 def test_a_monte_carlo_run_stops_at_ctrl_c():
     from granuflow import montecarlo as mc
 
-    timer = sigint_after(0.5)  # 4 replicas of 60 s of the process: about 7 s
+    timer = sigint_after(0.5)  # 4 replicas of 240 s of the process: about 9 s
     t0 = time.perf_counter()
     with pytest.raises(KeyboardInterrupt):
-        mc.run(t_end=60, settings={"replicas": 4})
+        mc.run(t_end=240, settings={"replicas": 4})
     waited = time.perf_counter() - t0
     timer.join()
     assert waited < 2.0, f"the replicas went on for {waited:.2f} s (interrupt at 0.5 s)"
@@ -123,8 +132,9 @@ def interrupted_cli(args, delay):
     exit)."""
     launcher = os.path.join(os.path.dirname(PKG_PATH), "granuflow")
     cmd = [launcher] if os.access(launcher, os.X_OK) else ["/usr/bin/python3", "-m", "granuflow"]
+    # the child starts with SIGINT's default action, whatever this process inherited (sigint_raises)
     p = subprocess.Popen(cmd + [str(a) for a in args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                         env=package_env())
+                         env=package_env(), preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     time.sleep(delay)
     p.send_signal(signal.SIGINT)
     t0 = time.perf_counter()

@@ -76,17 +76,25 @@ class Ahead:
 
         self.fine_fs = fs.refined(2)
         self.fine = None
+        self.cancelled = False
         self.t0 = time.perf_counter()
         self._kw = kw
         self._thread = threading.Thread(target=self._solve, name="granuflow grid check", daemon=True)
         self._thread.start()
 
     def _solve(self) -> None:
+        if self.cancelled:
+            return
         try:
             self.fine = self.fine_fs.simulate(**self._kw, warn=False, accuracy=False, grid_check=False)
         except (Exception, KeyboardInterrupt):  # noqa: BLE001 - check() solves again and reports what fails there
             # (an interrupt of the run stops this solve too: the caller's thread raises it)
             self.fine = None
+
+    def cancel(self) -> None:
+        """Stops the solve (an interrupt the caller's thread raised in Python, where the core's runs do not see it)."""
+        self.cancelled = True
+        _core.interrupt()
 
     def join(self) -> None:
         self._thread.join()
