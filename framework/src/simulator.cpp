@@ -128,22 +128,6 @@ SimResult simulate_ida(Flowsheet& fs, const SimOptions& opt, const std::string& 
   return drive(fs, sys, opt, sens_ids, stepper, wall0);
 }
 
-}  // namespace
-
-namespace {
-SimResult simulate_any(Flowsheet& fs, const SimOptions& opt);
-}  // namespace
-
-SimResult simulate(Flowsheet& fs, const SimOptions& opt) {
-  try {
-    return simulate_any(fs, opt);
-  } catch (const SolverError& e) {  // a callback refused to go on because of an interrupt: not a failure
-    if (interrupt_flagged()) throw Interrupted(e.t());
-    throw;
-  }
-}
-
-namespace {
 SimResult simulate_any(Flowsheet& fs, const SimOptions& opt) {
   opt.validate();
   if (!fs.finalized()) fs.finalize();
@@ -172,6 +156,11 @@ SimResult simulate_any(Flowsheet& fs, const SimOptions& opt) {
     return simulate_ida(fs, opt, std::string("an ODE, but ") + e.what() + ": IDAS", wall0);
   }
 }
+
 }  // namespace
+
+SimResult simulate(Flowsheet& fs, const SimOptions& opt) {
+  return interruptible([&] { return simulate_any(fs, opt); });
+}
 
 }  // namespace granuflow

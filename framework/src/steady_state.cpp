@@ -523,21 +523,6 @@ void steady_outputs(const Flowsheet& fs, DaeSystem& sys, double t, const std::ve
   }
 }
 
-SteadyResult solve_any(Flowsheet& fs, const SteadyOptions& opt, const std::vector<double>* guess);
-
-}  // namespace
-
-SteadyResult solve_steady_state(Flowsheet& fs, const SteadyOptions& opt, const std::vector<double>* guess) {
-  try {
-    return solve_any(fs, opt, guess);
-  } catch (const SolverError&) {  // a callback refused to go on because of an interrupt: not a failure
-    if (interrupt_flagged()) throw Interrupted(opt.t);
-    throw;
-  }
-}
-
-namespace {
-
 SteadyResult solve_any(Flowsheet& fs, const SteadyOptions& opt, const std::vector<double>* guess) {
   opt.validate();
   const auto wall0 = std::chrono::steady_clock::now();
@@ -607,5 +592,9 @@ SteadyResult solve_any(Flowsheet& fs, const SteadyOptions& opt, const std::vecto
 }
 
 }  // namespace
+
+SteadyResult solve_steady_state(Flowsheet& fs, const SteadyOptions& opt, const std::vector<double>* guess) {
+  return interruptible([&] { return solve_any(fs, opt, guess); });
+}
 
 }  // namespace granuflow

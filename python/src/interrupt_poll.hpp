@@ -17,4 +17,11 @@ inline InterruptScope python_signals() {
   });
 }
 
+// A call into the core from Python: Python's signal handlers polled (python_signals), the GIL released. Members in
+// this order: the scope is installed while the GIL is still held, and outlives the release.
+struct CoreCall {
+  InterruptScope interrupt = python_signals();
+  pybind11::gil_scoped_release release;
+};
+
 }  // namespace granuflow::python

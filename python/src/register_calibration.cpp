@@ -264,8 +264,7 @@ class PyStageProblem {
   py::tuple evaluate(const std::vector<double>& theta, bool jacobian) {
     std::vector<double> r, J;
     {
-      const InterruptScope interrupt = python_signals();
-      py::gil_scoped_release release;
+      const CoreCall call;
       p_.evaluate(theta, r, jacobian ? &J : nullptr);
     }
     py::array_t<double> ra(static_cast<py::ssize_t>(r.size()));
@@ -316,8 +315,7 @@ void register_calibration(py::module_& m) {
           };
         CalibrationResult r;
         {
-          const InterruptScope interrupt = python_signals();
-          py::gil_scoped_release release;
+          const CoreCall call;
           r = calibrate(scene, units::builtin(), ex, st, o, start);
         }
         py::list sd;
@@ -340,8 +338,7 @@ void register_calibration(py::module_& m) {
         const CalibrationOptions o = to_options(options);
         std::vector<Prediction> p;
         {
-          const InterruptScope interrupt = python_signals();
-          py::gil_scoped_release release;
+          const CoreCall call;
           p = predict(scene, units::builtin(), ex, params, o);
         }
         py::list out;
@@ -362,8 +359,7 @@ void register_calibration(py::module_& m) {
         std::vector<double> dz;
         size_t no = 0;
         {
-          const InterruptScope interrupt = python_signals();
-          py::gil_scoped_release release;
+          const CoreCall call;
           const SimResult r = simulate(*s.flowsheet, o);
           dz = output_sensitivities(*s.flowsheet, r);
           no = r.output_names.size();

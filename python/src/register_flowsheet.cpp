@@ -69,8 +69,7 @@ py::dict simulate(Scene& s, std::optional<double> t_end, std::optional<std::vect
   validate_as(o, "SimOptions.", "simulate(): ");
   SimResult r;
   try {
-    const InterruptScope interrupt = python_signals();
-    py::gil_scoped_release release;
+    const CoreCall call;
     r = granuflow::simulate(*s.flowsheet, o);
   } catch (const ConfigError& e) {  // found at run time (unit checks, structure): name the scene file as well
     throw ConfigError(runtime_config_message(s, e.what()));
@@ -271,8 +270,7 @@ void register_flowsheet(py::module_& m) {
             validate_as(o, "SteadyOptions.", "steady_state(): ");
             SteadyResult r;
             {
-              const InterruptScope interrupt = python_signals();
-              py::gil_scoped_release release;
+              const CoreCall call;
               r = solve_steady_state(*s.flowsheet, o);
             }
             const auto names = s.flowsheet->state_names();

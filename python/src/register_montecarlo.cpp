@@ -41,8 +41,7 @@ void register_montecarlo(py::module_& m) {
         const mc::Config c = mc::make_config(params, settings);
         mc::Summary s;
         {
-          const InterruptScope interrupt = python_signals();
-          py::gil_scoped_release release;
+          const CoreCall call;
           s = mc::run(c, times);
         }
         py::dict derived("f_coll"_a = c.d.f_coll, "gamma"_a = c.d.gamma, "h0"_a = c.d.h0, "k_dry"_a = c.d.k_dry,

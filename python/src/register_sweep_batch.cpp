@@ -64,8 +64,7 @@ py::dict sweep_batch(const std::vector<Scene*>& scenes, std::vector<std::string>
   req.rules = rules_of(rules);
   std::vector<PointOutcome> out;
   {
-    const InterruptScope interrupt = python_signals();
-    py::gil_scoped_release release;
+    const CoreCall call;
     std::function<void(size_t)> done;
     if (progress)
       done = [&progress](size_t k) {

@@ -40,6 +40,18 @@ inline bool interrupt_requested(unsigned& calls) {
   return (++calls & 15u) == 0 ? interrupt_requested() : interrupt_flagged();
 }
 
+// Runs `solve` (a simulation, a steady-state solve) and turns the SolverError it ends with when a callback refused to
+// go on because of the interrupt into Interrupted: nothing failed.
+template <class F>
+auto interruptible(F&& solve) {
+  try {
+    return solve();
+  } catch (const SolverError& e) {
+    if (interrupt_flagged()) throw Interrupted(e.t());
+    throw;
+  }
+}
+
 // Sets the flag: for a caller that learned of the interrupt itself (a progress callback that raised it). Only while
 // a scope lives (none would clear it).
 void request_interrupt();
