@@ -242,3 +242,23 @@ def test_an_interrupt_in_the_progress_callback_ends_the_calibration(fs, syntheti
         fs.calibrate_raw(_core_list(synthetic.calibration[:2]), [s.to_core() for s in stages],
                          _options({"profile": False}), cal.paper001_stages().start, progress)
     assert calls == [0, 1]  # no iteration after the interrupted one
+
+
+def test_an_interrupted_multi_start_closes_its_bar(fs, synthetic, plan, monkeypatch):
+    """Ctrl-C in one start ends the multi-start with KeyboardInterrupt and leaves no tqdm bar open: an open bar keeps
+    its line, and tqdm draws the next bar (say, of the user's next calibration) one line further down."""
+    from tqdm import tqdm
+
+    from granuflow.calibration import fit
+
+    stage = [cal.Stage("hmt", plan.stages[0].free[:2], ["gas.T", "bed.moisture"])]
+    starts = cal.random_starts(stage, 2, center=plan.start, spread=0.5, seed=1)
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(fit, "calibrate", interrupted)
+    before = len(tqdm._instances)
+    with pytest.raises(KeyboardInterrupt):
+        cal.multi_start(fs, synthetic.calibration[:2], stage, starts, workers=2, progress=True)
+    assert len(tqdm._instances) == before

@@ -257,24 +257,26 @@ def multi_start(flowsheet: Flowsheet, experiments: Sequence[Experiment], stages:
         return calibrate(flowsheet, experiments, stages, start={**plan_start, **dict(starts[i])}, options=opts,
                          label=f"start {i}", progress=False)  # the starts have a bar of their own
 
-    with cf.ThreadPoolExecutor(max_workers=workers, thread_name_prefix="granuflow-calib") as pool:
-        futs = {pool.submit(one, i): i for i in range(len(starts))}
-        try:
-            for fut in cf.as_completed(futs):
-                i = futs[fut]
-                try:
-                    results[i] = fut.result()
-                except (CalibrationError, _core.SolverError, ConfigError) as e:
-                    results[i] = e
-                if bar is not None:
-                    bar.update(1)
-        except KeyboardInterrupt:  # the other starts stop as well (else the pool waits for them)
-            for f in futs:
-                f.cancel()
-            _core.interrupt()
-            raise
-    if bar is not None:
-        bar.close()
+    try:
+        with cf.ThreadPoolExecutor(max_workers=workers, thread_name_prefix="granuflow-calib") as pool:
+            futs = {pool.submit(one, i): i for i in range(len(starts))}
+            try:
+                for fut in cf.as_completed(futs):
+                    i = futs[fut]
+                    try:
+                        results[i] = fut.result()
+                    except (CalibrationError, _core.SolverError, ConfigError) as e:
+                        results[i] = e
+                    if bar is not None:
+                        bar.update(1)
+            except KeyboardInterrupt:  # the other starts stop as well (else the pool waits for them)
+                for f in futs:
+                    f.cancel()
+                _core.interrupt()
+                raise
+    finally:  # an interrupted or failed multi-start leaves no bar behind (tqdm would draw the next one below it)
+        if bar is not None:
+            bar.close()
     return results  # type: ignore[return-value]
 
 
