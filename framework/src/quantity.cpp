@@ -1,5 +1,6 @@
 #include "granuflow/quantity.hpp"
 
+#include <pthread.h>
 #include <udunits2.h>
 
 #include <algorithm>
@@ -45,17 +46,27 @@ struct Parsed {
   std::string base;  // "m-3.kg", "K", "1"
 };
 
-// UDUNITS-2 keeps parser state in globals and is not thread-safe: every call goes through this one lock, and each
-// unit text is parsed once per process (scenes are loaded from many threads at once in sweeps).
+// UDUNITS-2 keeps parser state in globals and is not thread-safe: reading the database and every parse go through
+// one process-wide lock, and each unit text is parsed once per process (scenes are loaded from many threads at once
+// in sweeps). The lock is a namespace-scope mutex, not a function-local static, so that fork() can hold it (below).
+std::mutex g_units_mutex;
+
 class UnitSystem {
  public:
+  // The system, read on first use (the caller holds g_units_mutex); a missing database throws, and the next call
+  // tries again.
+  static UnitSystem& locked() {
+    static UnitSystem* s = nullptr;
+    if (!s) s = new UnitSystem();  // never freed: parses may run until the process exits
+    return *s;
+  }
   static UnitSystem& get() {
-    static UnitSystem s;
-    return s;
+    std::lock_guard<std::mutex> lock(g_units_mutex);
+    return locked();
   }
   // The affine map of a unit text onto its base-SI product ({ok = false} when the text is not a plain unit).
   Parsed parse(const std::string& text) {
-    std::lock_guard<std::mutex> lock(mu_);
+    std::lock_guard<std::mutex> lock(g_units_mutex);
     auto it = cache_.find(text);
     if (it != cache_.end()) return it->second;
     Parsed p = parse_locked(text);
@@ -110,7 +121,6 @@ class UnitSystem {
     p.base = def;
     return p;
   }
-  std::mutex mu_;
   ut_system* sys_ = nullptr;
   std::map<std::string, Parsed> cache_;
 };
@@ -136,6 +146,15 @@ std::string examples_for(const Parsed& si) {
 }  // namespace
 
 void load_unit_database() { UnitSystem::get(); }
+
+namespace {
+// fork() copies only the thread that calls it. A child forked while another thread reads the database (the Python
+// module does that on a thread of its own at import) or parses a unit would find the lock held by a thread it does
+// not have, and wait on it forever at its first unit. So fork waits until no thread is inside, and both processes
+// release the lock after it.
+[[maybe_unused]] const int kForkHandlers =
+    pthread_atfork([] { g_units_mutex.lock(); }, [] { g_units_mutex.unlock(); }, [] { g_units_mutex.unlock(); });
+}  // namespace
 
 bool is_known_si_unit(const std::string& si_unit) {
   // A coherent SI unit: understood, and equal to its base-SI product without a scale or an origin.

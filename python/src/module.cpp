@@ -47,7 +47,8 @@ PYBIND11_MODULE(_core, m) {
     }
   });
   // The unit database is read on a thread of its own while the interpreter goes on importing (issue 32: 5 ms of a
-  // 0.1 s run); the first scene loaded waits for it if it is not done. Detached: it ends by itself within
+  // 0.1 s run); the first scene loaded waits for it if it is not done, and so does a fork() (quantity.cpp: a child
+  // would otherwise find its lock held by a thread it does not have). Detached: it ends by itself within
   // milliseconds, and an interpreter that exits sooner ends it.
   std::thread([] {
     try {

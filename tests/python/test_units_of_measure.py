@@ -1,9 +1,14 @@
 """Units of measure parsed by UDUNITS-2 (issue 33 §3): prefixes, products, quotients and powers compose, offsets
 (degC) and dimensionless spellings work, a unit that is not understood or of the wrong dimension is refused with
 one line naming it, and the parser (not thread-safe itself) gives the same answers from many threads."""
+import os
+import subprocess
+import sys
+import textwrap
 from concurrent.futures import ThreadPoolExecutor
 
 import pytest
+from conftest import SCENE
 
 import granuflow as gf
 from granuflow import _core
@@ -68,3 +73,27 @@ def test_many_threads_get_the_same_conversions():
     with ThreadPoolExecutor(8) as pool:
         parallel = list(pool.map(lambda a: to_si(a[0], a[1], "x"), texts))
     assert parallel == serial
+
+
+def test_a_process_forked_while_the_unit_database_loads_reads_units():
+    """Importing the extension starts reading the unit database on a thread of its own; a process forked then (a
+    ProcessPoolExecutor or multiprocessing pool started at once) copies only the forking thread. Without the fork
+    handlers the child waited forever at its first unit, on a lock its parent's loading thread held. The extension is
+    imported on its own here (not through the package, whose further imports usually outlast the loading), so that
+    the fork comes while the database is being read: every child of the old code hung."""
+    code = textwrap.dedent(f"""
+        import os, signal, sys
+        sys.path.insert(0, {os.path.dirname(_core.__file__)!r})
+        import _core  # the extension alone: its import starts the database thread, and nothing else delays the fork
+        for _ in range(3):
+            pid = os.fork()
+            if pid == 0:
+                signal.alarm(10)  # a hung child ends (SIGALRM) instead of outliving the test
+                _core.load_scene({SCENE!r})
+                os._exit(0)
+            _, status = os.waitpid(pid, 0)
+            assert status == 0, f"the forked child ended with status {{status}} (SIGALRM: it hung)"
+        print("ok")
+    """)
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0 and r.stdout.strip() == "ok", r.stderr[-2000:]
