@@ -103,10 +103,13 @@ TEST(BandedLowRankSolver, GivesTheDenseRun) {
   Scene banded = two_zone(40, 20, "banded"), dense = two_zone(40, 20, "dense");
   const SimResult rb = simulate(*banded.flowsheet, banded.options), rd = simulate(*dense.flowsheet, dense.options);
   EXPECT_EQ(rb.stats.linear_solver.rfind("banded", 0), 0u) << rb.stats.linear_solver;
+  // Every setup factored as band + outer products + border: a setup that fell back to the dense LU is named there.
+  // (Whether an output also differs from the dense run in its last bits depends on the CPU: on one with AVX-512,
+  // two of these four come out equal to the bit.)
+  EXPECT_EQ(rb.stats.linear_solver.find("dense LU"), std::string::npos) << rb.stats.linear_solver;
   for (const char* key : {"drying.sigma", "drying.d_mean", "onezone.sigma", "spray.sigma"}) {
     const double b = testing::output(rb, rb.t.size() - 1, key), d = testing::output(rd, rd.t.size() - 1, key);
     EXPECT_NEAR(b, d, 1e-6 * std::abs(d)) << key;
-    EXPECT_NE(b, d) << key << ": the same numbers to the bit, as if the dense solver had run";
   }
 }
 
