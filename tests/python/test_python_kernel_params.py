@@ -53,18 +53,24 @@ def test_parameters_are_declared_with_units_bounds_and_source_and_set_with_units
     assert [p["name"] for p in entry["params"]] == ["beta0", "v_ref"]
 
 
+# The two kernels take different paths through the integrator (the Python kernel's Jacobian is not the compiled one's),
+# so their runs agree to the integration error of the scene's rtol 1e-8, not to the bit: below 1e-8 relative on the
+# machine this test was written on, 1.2e-8 on one with AVX-512. A parameter not passed, or the wrong one, moves the states by tens of per cent.
+AGREE = 1e-7
+
+
 def test_a_python_kernel_with_parameters_runs_as_the_compiled_one_at_any_value():
     name = registered()
     for beta0 in (1.0, 3.0):
         py = scene(name, agg_beta0=beta0).simulate()
         c = scene("sum", agg_beta0=beta0).simulate()
-        assert np.max(np.abs(py.y - c.y)) / np.max(np.abs(c.y)) < 1e-8
+        assert np.max(np.abs(py.y - c.y)) / np.max(np.abs(c.y)) < AGREE
     # a set value (as sweeps and calibrations set them) moves the run the same way
     fs, fc = scene(name), scene("sum")
     fs.set("pbm.agg_beta0", 3.0)
     fc.set("pbm.agg_beta0", 3.0)
     a, b = fs.simulate(), fc.simulate()
-    assert np.max(np.abs(a.y - b.y)) / np.max(np.abs(b.y)) < 1e-8
+    assert np.max(np.abs(a.y - b.y)) / np.max(np.abs(b.y)) < AGREE
 
 
 def test_sensitivities_by_finite_differences_agree_with_the_compiled_kernels_ad():
