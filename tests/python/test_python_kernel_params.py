@@ -55,7 +55,8 @@ def test_parameters_are_declared_with_units_bounds_and_source_and_set_with_units
 
 # The two kernels take different paths through the integrator (the Python kernel's Jacobian is not the compiled one's),
 # so their runs agree to the integration error of the scene's rtol 1e-8, not to the bit: below 1e-8 relative on the
-# machine this test was written on, 1.2e-8 on one with AVX-512. A parameter not passed, or the wrong one, moves the states by tens of per cent.
+# machine this test was written on, 1.2e-8 on one with AVX-512. A parameter not passed, or the wrong one, moves the
+# states by tens of per cent.
 AGREE = 1e-7
 
 
