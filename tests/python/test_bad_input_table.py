@@ -306,6 +306,18 @@ def test_not_a_scene_file_exits_2(tmp_path, capsys, case):
     assert_one_line_exit_2(code, err, *needles, path=path)
 
 
+def test_a_file_larger_than_its_stat_size_is_read_whole():
+    """The scene is read into a buffer sized by stat(), grown while the file goes on: a file that grew since, or one of
+    /proc (size 0), is read to its end (up to the limit). /proc/cpuinfo's second "processor" line lies past the first
+    buffers, so naming it given twice shows the read went on; a reader that stopped at the stat size read nothing."""
+    with open("/proc/cpuinfo") as f:
+        if f.read().count("processor") < 2:
+            pytest.skip("one CPU: /proc/cpuinfo has a single block")
+    assert os.stat("/proc/cpuinfo").st_size == 0
+    with pytest.raises(gf.ConfigError, match=r"^/proc/cpuinfo: processor: given twice$"):
+        gf.load("/proc/cpuinfo")
+
+
 # --set on the command line: (scene, arguments, words).
 BAD_SETS = {
     "set_input_driven": (DEMO, ["--set", "feed.T=310 K"], ["feed.T = 310 K", "driven by the time-dependent input",
