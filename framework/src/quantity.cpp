@@ -60,17 +60,18 @@ class UnitSystem {
     if (!s) s = new UnitSystem();  // never freed: parses may run until the process exits
     return *s;
   }
-  static UnitSystem& get() {
+  static void load() {
     std::lock_guard<std::mutex> lock(g_units_mutex);
-    return locked();
+    locked();
   }
   // The affine map of a unit text onto its base-SI product ({ok = false} when the text is not a plain unit).
-  Parsed parse(const std::string& text) {
+  static Parsed parse(const std::string& text) {
     std::lock_guard<std::mutex> lock(g_units_mutex);
-    auto it = cache_.find(text);
-    if (it != cache_.end()) return it->second;
-    Parsed p = parse_locked(text);
-    cache_.emplace(text, p);
+    UnitSystem& u = locked();
+    auto it = u.cache_.find(text);
+    if (it != u.cache_.end()) return it->second;
+    Parsed p = u.parse_locked(text);
+    u.cache_.emplace(text, p);
     return p;
   }
 
@@ -128,7 +129,7 @@ class UnitSystem {
 // The dimension of a parsed unit in the project's SI spelling where it has one ("W/K"), else the base product.
 std::string si_spelling(const Parsed& p) {
   for (const char* e : kExamples) {
-    const Parsed q = UnitSystem::get().parse(e);
+    const Parsed q = UnitSystem::parse(e);
     if (q.ok && q.base == p.base && q.factor == 1 && q.offset == 0) return e;
   }
   return p.base;
@@ -137,7 +138,7 @@ std::string si_spelling(const Parsed& p) {
 std::string examples_for(const Parsed& si) {
   std::string out;
   for (const char* e : kExamples) {
-    const Parsed p = UnitSystem::get().parse(e);
+    const Parsed p = UnitSystem::parse(e);
     if (p.ok && p.base == si.base) out += (out.empty() ? "" : ", ") + std::string(e);
   }
   return out;
@@ -145,7 +146,7 @@ std::string examples_for(const Parsed& si) {
 
 }  // namespace
 
-void load_unit_database() { UnitSystem::get(); }
+void load_unit_database() { UnitSystem::load(); }
 
 namespace {
 // fork() copies only the thread that calls it. A child forked while another thread reads the database (the Python
@@ -158,7 +159,7 @@ namespace {
 
 bool is_known_si_unit(const std::string& si_unit) {
   // A coherent SI unit: understood, and equal to its base-SI product without a scale or an origin.
-  const Parsed p = UnitSystem::get().parse(si_unit);
+  const Parsed p = UnitSystem::parse(si_unit);
   return p.ok && p.factor == 1 && p.offset == 0;
 }
 
@@ -174,9 +175,9 @@ const std::vector<std::string>& known_si_units() {
 
 double to_si(double value, const std::string& from_unit, const std::string& si_unit, const std::string& where) {
   if (from_unit.empty() || from_unit == si_unit) return value;
-  const Parsed si = UnitSystem::get().parse(si_unit);
+  const Parsed si = UnitSystem::parse(si_unit);
   if (!si.ok) throw std::logic_error(where + ": declared SI unit '" + si_unit + "' is not understood");
-  const Parsed from = UnitSystem::get().parse(from_unit);
+  const Parsed from = UnitSystem::parse(from_unit);
   if (!from.ok) {
     const std::string ex = examples_for(si);
     throw ConfigError(where + ": unknown unit '" + from_unit + "' (allowed: any unit of " + si_unit +
