@@ -260,6 +260,48 @@ TEST(Calibrate, AStartInAFlatRegionIsFoundAndLeft) {
   EXPECT_GT(r.simulations, stuck.simulations);  // the scan and the restart cost simulations, and are counted
 }
 
+// Droplet evaporation does not show in the gas temperature or the bed moisture from its lower bound up to about
+// 0.02 kg/m2 (the droplets dry on the way at any such rate); above, it does: a plateau of the loss with edges but no
+// lower point.
+Stage evaporation_stage(const std::string& name) {
+  Stage st;
+  st.name = name;
+  st.free = {{"droplets.k_evap", Transform::kLog, 1e-5, 1.0, {}}};
+  st.observables = {"gas.T", "bed.moisture"};
+  return st;
+}
+
+// A stage whose loss is flat in a parameter scans it, and restarts from a lower point as before; from the mere edge
+// of the flat region it restarts only when no later stage frees the parameter again (that stage's descent starts
+// there anyway, with data that may determine it). The earlier stage says so in its notes, without a warning.
+TEST(Calibrate, TheEdgeOfAFlatRegionIsLeftToALaterStageThatFreesIt) {
+  Scene s = short_headline();
+  auto exps = experiments({"gas.T", "bed.moisture"});
+  fill_with_model(s, exps, {}, 1.03);
+  CalibrationOptions o;
+  o.profile = false;
+  const std::map<std::string, double> start{{"droplets.k_evap", 1e-4}};
+  const CalibrationResult alone = calibrate(s, units::builtin(), exps, {evaporation_stage("first")}, o, start);
+  EXPECT_TRUE(contains(alone.warnings, "stage 'first': the loss was flat in droplets.k_evap")) << alone.brief();
+  EXPECT_TRUE(contains(alone.warnings, "found it responding from")) << alone.brief();
+
+  const CalibrationResult r =
+      calibrate(s, units::builtin(), exps, {evaporation_stage("first"), evaporation_stage("again")}, o, start);
+  ASSERT_EQ(r.stages.size(), 2u);
+  const StageResult& a = r.stages[0];
+  EXPECT_EQ(a.restarts, 0);
+  ASSERT_EQ(a.flat.size(), 1u);
+  EXPECT_TRUE(contains(a.notes,
+                       "a scan over its bounds found no lower cost: the data of this stage do not determine "
+                       "it; stage 'again' frees it again and decides it"))
+      << r.full_report();
+  EXPECT_FALSE(contains(r.warnings, "stage 'first'")) << r.brief();
+  EXPECT_LT(a.simulations, alone.stages[0].simulations);  // the scan, without the restart
+  // the last stage that frees it does as a single stage does
+  EXPECT_TRUE(contains(r.warnings, "stage 'again': the loss was flat in droplets.k_evap")) << r.brief();
+  EXPECT_TRUE(contains(r.warnings, "found it responding from")) << r.brief();
+}
+
 TEST(Calibrate, AProfileBelowTheEstimateRestartsTheStage) {
   Scene s = short_headline();
   const double truth = s.flowsheet->param("spray_zone.h_pen");

@@ -2,7 +2,10 @@
 // lower points that scans of flat parameters or profiles find, and what the user must know about it noted.
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <set>
+#include <string>
+#include <vector>
 
 #include "calibration_internal.hpp"
 #include "granuflow/errors.hpp"
@@ -48,12 +51,16 @@ struct StageDriver {
   const CalibrationOptions& opt;
   const Flowsheet& fs;
   CalibrationResult& out;
+  // Free parameters of this stage that a later stage frees again, each with the last such stage: the descent from
+  // the edge of a flat region here is left to it (its data may determine the parameter).
+  std::map<std::string, std::string> freed_later;
+  bool flat_scanned = false;  // the flat parameters of `r` were scanned (not so with max_restarts 0, or used up)
   std::vector<std::vector<double>> sigmas;
   StageResult r;
   long extra_sims = 0, extra_sens = 0;  // scans, profiles and runs a restart replaced
 
   StageDriver(const Scene& scene, const Registry<Unit>& reg, const std::vector<Experiment>& exps, const Stage& stage,
-              const CalibrationOptions& opt, CalibrationResult& out)
+              const CalibrationOptions& opt, CalibrationResult& out, std::map<std::string, std::string> freed_later)
       : scene(scene),
         reg(reg),
         exps(exps),
@@ -61,6 +68,7 @@ struct StageDriver {
         opt(opt),
         fs(*scene.flowsheet),
         out(out),
+        freed_later(std::move(freed_later)),
         r(run_stage(scene, reg, exps, stage, opt, out.parameters, true, opt.max_iterations, nullptr, &sigmas)) {}
 
   // Restarts from a lower point of the loss: a scan over the bounds of a parameter the loss is flat in at the
@@ -82,6 +90,7 @@ struct StageDriver {
     again.notes.push_back(why + "; restarted from there: cost " + fmt(old_cost, 6) + " -> " + fmt(again.cost, 6) +
                           " (Δχ² = " + fmt(2 * (old_cost - again.cost), 3) + ")");
     r = std::move(again);
+    flat_scanned = false;
     sigmas = std::move(sig);
     out.parameters = std::move(from);
     return true;
@@ -89,11 +98,20 @@ struct StageDriver {
 
   std::string unit_of(const std::string& name) const { return fs.param_spec(fs.param_id(name)).unit; }
 
+  // The flat parameters that no later stage frees again: this stage's to leave.
+  std::vector<std::string> own_flat() const {
+    std::vector<std::string> names;
+    for (const auto& name : r.flat)
+      if (!freed_later.count(name)) names.push_back(name);
+    return names;
+  }
+
   void scan_flat_and_restart() {
     while (!r.flat.empty() && opt.flat_scan_points > 0 && r.restarts < opt.max_restarts) {
       // The scan: the lowest point, and the edge of the flat region (the scan point nearest the estimate, in units
       // of the span, where the loss responds), from where the stage's descent can find a narrow valley the scan's
-      // spacing misses.
+      // spacing misses. That descent is left to a later stage that frees the parameter again: its data may
+      // determine it, and it starts from there anyway.
       std::string best_name, edge_name;
       double best_value = 0, best_cost = r.cost - 0.5 * opt.restart_delta_chi2, edge_value = 0, edge_distance = 2;
       for (const auto& name : r.flat) {
@@ -113,11 +131,13 @@ struct StageDriver {
           }
           const double c = half_sum_squares(res);
           if (c < best_cost) best_cost = c, best_name = name, best_value = sp.to_p(k, th[k]);
-          if (std::abs(c - r.cost) > 0.5 * opt.restart_delta_chi2 && std::abs(th[k] - at) / span < edge_distance)
+          if (std::abs(c - r.cost) > 0.5 * opt.restart_delta_chi2 && std::abs(th[k] - at) / span < edge_distance &&
+              !freed_later.count(name))
             edge_distance = std::abs(th[k] - at) / span, edge_name = name, edge_value = sp.to_p(k, th[k]);
         }
         extra_sims += run.simulations();
       }
+      flat_scanned = true;
       std::map<std::string, double> from = out.parameters;
       std::string why;
       if (!best_name.empty()) {
@@ -173,11 +193,18 @@ struct StageDriver {
   // What the user must know about this stage.
   void add_notes() {
     const std::string w = "stage '" + r.name + "': ";
-    for (const auto& name : r.flat)
-      r.notes.push_back("the loss is flat in " + name + " at its estimate " + fmt(out.parameters.at(name)) + " " +
-                        unit_of(name) +
-                        (opt.flat_scan_points > 0 ? " and a scan over its bounds found no lower cost" : "") +
-                        ": the data of this stage do not determine it from here (try other starts or bounds)");
+    std::vector<std::string> left_to_later;  // in the stage's notes, not warned: a later stage decides them
+    const std::string scanned = flat_scanned ? " and a scan over its bounds found no lower cost" : "";
+    for (const auto& name : r.flat) {
+      const std::string flat_at = "the loss is flat in " + name + " at its estimate " + fmt(out.parameters.at(name)) +
+                                  " " + unit_of(name) + scanned;
+      if (const auto later = freed_later.find(name); later != freed_later.end())
+        left_to_later.push_back(flat_at + ": the data of this stage do not determine it; stage '" + later->second +
+                                "' frees it again and decides it");
+      else
+        r.notes.push_back(flat_at + ": the data of this stage do not determine it from here (try other starts or " +
+                          "bounds)");
+    }
     if (!r.moved) {
       std::string names;
       for (const auto& e : r.estimates) names += (names.empty() ? "" : ", ") + e.name;
@@ -190,7 +217,8 @@ struct StageDriver {
                         " sensitivity solves failed and were retried with smaller steps or replaced by central "
                         "differences");
     for (const auto& n : r.notes)
-      if (n.rfind("no free parameter moved", 0) != 0 || !r.flat.empty()) out.warnings.push_back(w + n);
+      if (n.rfind("no free parameter moved", 0) != 0 || !own_flat().empty()) out.warnings.push_back(w + n);
+    r.notes.insert(r.notes.end(), left_to_later.begin(), left_to_later.end());
   }
 
   // Into the calibration's result, with the simulations of scans, profiles and replaced runs.
@@ -230,7 +258,10 @@ CalibrationResult calibrate(const Scene& scene, const Registry<Unit>& reg, const
     for (const auto& f : st.free)
       if (!out.parameters.count(f.name)) out.parameters[f.name] = fs.param(f.name);
   for (size_t s = 0; s < stages.size(); ++s) {
-    StageDriver driver(scene, reg, exps, stages[s], opt, out);
+    std::map<std::string, std::string> freed_later;
+    for (size_t t = s + 1; t < stages.size(); ++t)
+      for (const auto& f : stages[t].free) freed_later[f.name] = stages[t].name;
+    StageDriver driver(scene, reg, exps, stages[s], opt, out, std::move(freed_later));
     driver.scan_flat_and_restart();
     if (s + 1 == stages.size() && opt.profile) driver.profile_and_restart();
     driver.add_notes();

@@ -138,6 +138,8 @@ struct CalibrationOptions {
   // The loss is then scanned over its bounds (flat_scan_points values evenly spaced in θ, the other parameters at
   // their estimates; 0: no scan), and a scan point, or a point of a profile, whose χ² lies more than
   // restart_delta_chi2 below the estimate's restarts the stage from it (at most max_restarts times per stage).
+  // Failing that, the stage restarts from the edge of the flat region, where the loss starts to respond, unless a
+  // later stage frees the parameter again (its descent then starts there, with its own data).
   double flat_delta_chi2 = 0.01;    // > 0
   int flat_scan_points = 16;        // >= 0 (0: off; otherwise >= 3)
   double restart_delta_chi2 = 1.0;  // > 0
