@@ -101,6 +101,12 @@ def decode(data: bytes, label: str, kind: str) -> str:
     return text
 
 
+def _loader(yaml):
+    """libyaml's safe loader where PyYAML was built with it (Debian's is), else the pure-Python one: the same
+    documents and events, parsed about ten times faster."""
+    return getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+
+
 def check_yaml(text: str, label: str, kind: str) -> None:
     """The limits of granuflow's YAML files, checked on PyYAML's event stream (which does not recurse):
     one document, nesting at most MAX_YAML_DEPTH, at most MAX_YAML_VALUES values with aliases expanded, no alias
@@ -132,7 +138,7 @@ def check_yaml(text: str, label: str, kind: str) -> None:
         state["seen"].add(event.value)
 
     try:
-        for ev in yaml.parse(text, Loader=yaml.SafeLoader):
+        for ev in yaml.parse(text, Loader=_loader(yaml)):
             if isinstance(ev, yaml.DocumentStartEvent):
                 documents += 1
                 if documents > 1:
@@ -188,6 +194,6 @@ def load_yaml(path: str | os.PathLike, kind: str) -> object:
     text = read_text(path, kind)
     check_yaml(text, path, kind)
     try:
-        return yaml.safe_load(text)
+        return yaml.load(text, Loader=_loader(yaml))
     except (yaml.YAMLError, ValueError, OverflowError) as e:  # e.g. a timestamp out of range
         raise ConfigError(f"{path}: not valid YAML ({short(' '.join(str(e).split()), 120)})") from None
