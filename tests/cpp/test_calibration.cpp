@@ -273,7 +273,8 @@ Stage evaporation_stage(const std::string& name) {
 
 // A stage whose loss is flat in a parameter scans it, and restarts from a lower point as before; from the mere edge
 // of the flat region it restarts only when no later stage frees the parameter again (that stage's descent starts
-// there anyway, with data that may determine it). The earlier stage says so in its notes, without a warning.
+// there anyway, with data that may determine it), and the parameter goes on at its value from before the stage
+// where the loss is the same there. The earlier stage says so in its notes, without a warning.
 TEST(Calibrate, TheEdgeOfAFlatRegionIsLeftToALaterStageThatFreesIt) {
   Scene s = short_headline();
   auto exps = experiments({"gas.T", "bed.moisture"});
@@ -291,12 +292,24 @@ TEST(Calibrate, TheEdgeOfAFlatRegionIsLeftToALaterStageThatFreesIt) {
   const StageResult& a = r.stages[0];
   EXPECT_EQ(a.restarts, 0);
   ASSERT_EQ(a.flat.size(), 1u);
+  // the descent drifted it on the plateau; it goes on at its start, where the loss is the same
+  EXPECT_GT(std::abs(std::log(a.estimates[0].value / 1e-4)), 0.1) << r.full_report();
   EXPECT_TRUE(contains(a.notes,
-                       "a scan over its bounds found no lower cost: the data of this stage do not determine "
-                       "it; stage 'again' frees it again and decides it"))
+                       "a scan over its bounds found no lower cost: the data of this stage do not determine it; it "
+                       "goes on at its value from before this stage, 0.0001 kg/m2, where the loss is the same, and "
+                       "stage 'again' frees it again and decides it"))
       << r.full_report();
+  EXPECT_NEAR(r.stages[1].estimates[0].start, 1e-4, 1e-15);
   EXPECT_FALSE(contains(r.warnings, "stage 'first'")) << r.brief();
   EXPECT_LT(a.simulations, alone.stages[0].simulations);  // the scan, without the restart
+  // from a start where the loss responds, the descent's estimate goes on: the data of the stage ruled the start out
+  const CalibrationResult high =
+      calibrate(s, units::builtin(), exps, {evaporation_stage("first"), evaporation_stage("again")}, o,
+                {{"droplets.k_evap", 0.3}});
+  ASSERT_EQ(high.stages[0].flat.size(), 1u) << high.full_report();
+  EXPECT_LT(high.stages[0].estimates[0].value, 0.03);
+  EXPECT_FALSE(contains(high.stages[0].notes, "goes on at its value from before")) << high.full_report();
+  EXPECT_NEAR(high.stages[1].estimates[0].start, high.stages[0].estimates[0].value, 1e-12);
   // the last stage that frees it does as a single stage does
   EXPECT_TRUE(contains(r.warnings, "stage 'again': the loss was flat in droplets.k_evap")) << r.brief();
   EXPECT_TRUE(contains(r.warnings, "found it responding from")) << r.brief();

@@ -54,6 +54,9 @@ struct StageDriver {
   // Free parameters of this stage that a later stage frees again, each with the last such stage: the descent from
   // the edge of a flat region here is left to it (its data may determine the parameter).
   std::map<std::string, std::string> freed_later;
+  const std::map<std::string, double> before;  // the parameters as this stage found them
+  // Flat parameters left to a later stage that go on at their value from before this stage (see scan_flat_and_restart)
+  std::map<std::string, double> handed_on;
   bool flat_scanned = false;  // the flat parameters of `r` were scanned (not so with max_restarts 0, or used up)
   std::vector<std::vector<double>> sigmas;
   StageResult r;
@@ -69,6 +72,7 @@ struct StageDriver {
         fs(*scene.flowsheet),
         out(out),
         freed_later(std::move(freed_later)),
+        before(out.parameters),
         r(run_stage(scene, reg, exps, stage, opt, out.parameters, true, opt.max_iterations, nullptr, &sigmas)) {}
 
   // Restarts from a lower point of the loss: a scan over the bounds of a parameter the loss is flat in at the
@@ -91,6 +95,7 @@ struct StageDriver {
                           " (Δχ² = " + fmt(2 * (old_cost - again.cost), 3) + ")");
     r = std::move(again);
     flat_scanned = false;
+    handed_on.clear();
     sigmas = std::move(sig);
     out.parameters = std::move(from);
     return true;
@@ -111,9 +116,13 @@ struct StageDriver {
       // The scan: the lowest point, and the edge of the flat region (the scan point nearest the estimate, in units
       // of the span, where the loss responds), from where the stage's descent can find a narrow valley the scan's
       // spacing misses. That descent is left to a later stage that frees the parameter again: its data may
-      // determine it, and it starts from there anyway.
+      // determine it, and it starts from there anyway. Such a parameter is also tried at its value from before
+      // this stage: where the loss is the same there (within restart_delta_chi2), the data of this stage prefer
+      // nothing, and it goes on at that value rather than where the descent drifted it on the plateau (often a
+      // bound, far from where the later stage's data put it).
       std::string best_name, edge_name;
       double best_value = 0, best_cost = r.cost - 0.5 * opt.restart_delta_chi2, edge_value = 0, edge_distance = 2;
+      handed_on.clear();
       for (const auto& name : r.flat) {
         const Space sp = make_space(fs, stage);
         const int k = static_cast<int>(std::find(sp.names.begin(), sp.names.end(), name) - sp.names.begin());
@@ -121,8 +130,13 @@ struct StageDriver {
         run.set_sigmas(sigmas);
         std::vector<double> th = start_theta(sp, out.parameters), res;
         const double at = th[k], span = sp.theta_upper(k) - sp.theta_lower(k);
-        for (int j = 0; j < opt.flat_scan_points; ++j) {
-          th[k] = sp.theta_lower(k) + span * j / (opt.flat_scan_points - 1);
+        const bool later = freed_later.count(name) > 0;
+        const double prior = later ? sp.to_theta(k, before.at(name)) : at;
+        bool try_prior = prior != at && prior >= sp.theta_lower(k) && prior <= sp.theta_upper(k);
+        for (int j = 0; j < opt.flat_scan_points && try_prior; ++j)  // a point of the scan already
+          try_prior = prior != sp.theta_lower(k) + span * j / (opt.flat_scan_points - 1);
+        for (int j = 0; j < opt.flat_scan_points + (try_prior ? 1 : 0); ++j) {
+          th[k] = j < opt.flat_scan_points ? sp.theta_lower(k) + span * j / (opt.flat_scan_points - 1) : prior;
           if (th[k] == at) continue;  // the estimate itself (often a bound): neither lower nor responding
           try {
             run.evaluate(th, res, nullptr, opt.num_threads);
@@ -131,9 +145,10 @@ struct StageDriver {
           }
           const double c = half_sum_squares(res);
           if (c < best_cost) best_cost = c, best_name = name, best_value = sp.to_p(k, th[k]);
-          if (std::abs(c - r.cost) > 0.5 * opt.restart_delta_chi2 && std::abs(th[k] - at) / span < edge_distance &&
-              !freed_later.count(name))
+          const bool responds = std::abs(c - r.cost) > 0.5 * opt.restart_delta_chi2;
+          if (responds && std::abs(th[k] - at) / span < edge_distance && !later)
             edge_distance = std::abs(th[k] - at) / span, edge_name = name, edge_value = sp.to_p(k, th[k]);
+          if (th[k] == prior && later && !responds) handed_on[name] = before.at(name);
         }
         extra_sims += run.simulations();
       }
@@ -156,6 +171,7 @@ struct StageDriver {
       }
       if (!restart_from(from, why)) break;
     }
+    for (const auto& [name, value] : handed_on) out.parameters[name] = value;
   }
 
   // Profiles of the flagged estimates (the last stage's); a profile point below the estimate's cost restarts the stage.
@@ -196,11 +212,17 @@ struct StageDriver {
     std::vector<std::string> left_to_later;  // in the stage's notes, not warned: a later stage decides them
     const std::string scanned = flat_scanned ? " and a scan over its bounds found no lower cost" : "";
     for (const auto& name : r.flat) {
-      const std::string flat_at = "the loss is flat in " + name + " at its estimate " + fmt(out.parameters.at(name)) +
-                                  " " + unit_of(name) + scanned;
+      const auto e =
+          std::find_if(r.estimates.begin(), r.estimates.end(), [&](const Estimate& x) { return x.name == name; });
+      const std::string flat_at =
+          "the loss is flat in " + name + " at its estimate " + fmt(e->value) + " " + unit_of(name) + scanned;
       if (const auto later = freed_later.find(name); later != freed_later.end())
-        left_to_later.push_back(flat_at + ": the data of this stage do not determine it; stage '" + later->second +
-                                "' frees it again and decides it");
+        left_to_later.push_back(flat_at + ": the data of this stage do not determine it; " +
+                                (handed_on.count(name)
+                                     ? "it goes on at its value from before this stage, " + fmt(handed_on.at(name)) +
+                                           " " + unit_of(name) + ", where the loss is the same, and "
+                                     : "") +
+                                "stage '" + later->second + "' frees it again and decides it");
       else
         r.notes.push_back(flat_at + ": the data of this stage do not determine it from here (try other starts or " +
                           "bounds)");

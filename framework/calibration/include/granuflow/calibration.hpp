@@ -139,7 +139,8 @@ struct CalibrationOptions {
   // their estimates; 0: no scan), and a scan point, or a point of a profile, whose χ² lies more than
   // restart_delta_chi2 below the estimate's restarts the stage from it (at most max_restarts times per stage).
   // Failing that, the stage restarts from the edge of the flat region, where the loss starts to respond, unless a
-  // later stage frees the parameter again (its descent then starts there, with its own data).
+  // later stage frees the parameter again (its descent then starts there, with its own data); such a parameter
+  // goes on at its value from before the stage if the loss there is within restart_delta_chi2 of the estimate's.
   double flat_delta_chi2 = 0.01;    // > 0
   int flat_scan_points = 16;        // >= 0 (0: off; otherwise >= 3)
   double restart_delta_chi2 = 1.0;  // > 0
