@@ -106,6 +106,23 @@ class Result:
         self.__dict__[name] = v
         return v
 
+    def __getstate__(self) -> dict:
+        """For pickle (a process pool's results, a cache on disk): the core's buffers as NumPy arrays of their own.
+        ``flowsheet``, the live scene that made the result, does not travel: it is None after unpickling."""
+        import numpy as np
+
+        state = dict(self.__dict__)
+        if "flowsheet" in state:
+            state["flowsheet"] = None
+        raw = state.pop("_raw", None) or {}
+        for name, v in raw.items():
+            if name not in state:
+                state[name] = None if v is None else np.array(v)
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+
     def _buf(self, name: str):
         """The array ``name`` as a float64 buffer without importing NumPy: the core's own until a caller asks for (or
         sets) the attribute, then that; anything that is not a float64 buffer goes through NumPy."""

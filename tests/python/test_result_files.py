@@ -77,3 +77,24 @@ def test_the_core_formats_every_double_as_python_does():
     data = np.concatenate([special * 4, bits.view(np.float64), rng.lognormal(0, 20, 4000)])[:24060].reshape(-1, 12)
     assert _core.csv_rows(data) == "".join(",".join("%.10g" % x for x in row) + "\n" for row in data.tolist())
     assert _core.csv_rows(np.zeros((0, 3))) == ""
+
+
+def test_a_result_pickles_with_its_arrays_summary_and_checks(tmp_path):
+    """A result crosses a process pool or goes into a cache on disk: the core's buffers travel as arrays of their
+    own, with the summary, warnings and grid check; the live flowsheet does not (None after unpickling)."""
+    import pickle
+
+    r = gf.load(SCENE).simulate(warn=False, grid_check=True, sensitivities=["wall.k_wall"])
+    _ = r.y  # one array taken as a NumPy view of the core's buffer before pickling, the others not yet
+    q = pickle.loads(pickle.dumps(r))
+    for name in ("t", "y", "yp", "outputs", "sens"):
+        np.testing.assert_array_equal(getattr(q, name), getattr(r, name), err_msg=name)
+    assert q.sens.shape == (len(r.t), 1, len(r.state_names))
+    assert q.summary == r.summary and q.warnings == r.warnings and q.stats == r.stats
+    assert q.grid_check.errors == r.grid_check.errors and q.grid_check.suggest == r.grid_check.suggest
+    assert q.balance_closure() == r.balance_closure()
+    assert r.flowsheet is not None and q.flowsheet is None
+    a, b = tmp_path / "a.csv", tmp_path / "b.csv"
+    r.to_csv(str(a))
+    q.to_csv(str(b))
+    assert a.read_bytes() == b.read_bytes()
