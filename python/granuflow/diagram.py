@@ -39,8 +39,9 @@ def _scene_graph(fs) -> tuple[dict, list, dict]:
     import yaml
 
     from .reference import unit_reference
+    from .textfile import yaml_loader
 
-    doc = yaml.load(fs.text, Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader)) or {}
+    doc = yaml.load(fs.text, Loader=yaml_loader(yaml)) or {}
     units, signals = {}, {}
     for name, spec in (doc.get("units") or {}).items():
         spec = spec or {}

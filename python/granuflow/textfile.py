@@ -101,7 +101,7 @@ def decode(data: bytes, label: str, kind: str) -> str:
     return text
 
 
-def _loader(yaml):
+def yaml_loader(yaml):
     """libyaml's safe loader where PyYAML was built with it (Debian's is), else the pure-Python one: the same
     documents and events, parsed about ten times faster."""
     return getattr(yaml, "CSafeLoader", yaml.SafeLoader)
@@ -138,7 +138,7 @@ def check_yaml(text: str, label: str, kind: str) -> None:
         state["seen"].add(event.value)
 
     try:
-        for ev in yaml.parse(text, Loader=_loader(yaml)):
+        for ev in yaml.parse(text, Loader=yaml_loader(yaml)):
             if isinstance(ev, yaml.DocumentStartEvent):
                 documents += 1
                 if documents > 1:
@@ -194,6 +194,6 @@ def load_yaml(path: str | os.PathLike, kind: str) -> object:
     text = read_text(path, kind)
     check_yaml(text, path, kind)
     try:
-        return yaml.load(text, Loader=_loader(yaml))
+        return yaml.load(text, Loader=yaml_loader(yaml))
     except (yaml.YAMLError, ValueError, OverflowError) as e:  # e.g. a timestamp out of range
         raise ConfigError(f"{path}: not valid YAML ({short(' '.join(str(e).split()), 120)})") from None

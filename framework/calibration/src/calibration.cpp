@@ -132,11 +132,14 @@ struct StageDriver {
         const double at = th[k], span = sp.theta_upper(k) - sp.theta_lower(k);
         const bool later = freed_later.count(name) > 0;
         const double prior = later ? sp.to_theta(k, before.at(name)) : at;
-        bool try_prior = prior != at && prior >= sp.theta_lower(k) && prior <= sp.theta_upper(k);
-        for (int j = 0; j < opt.flat_scan_points && try_prior; ++j)  // a point of the scan already
-          try_prior = prior != sp.theta_lower(k) + span * j / (opt.flat_scan_points - 1);
-        for (int j = 0; j < opt.flat_scan_points + (try_prior ? 1 : 0); ++j) {
-          th[k] = j < opt.flat_scan_points ? sp.theta_lower(k) + span * j / (opt.flat_scan_points - 1) : prior;
+        std::vector<double> points;  // evenly over the bounds, then the value from before unless among them
+        for (int j = 0; j < opt.flat_scan_points; ++j)
+          points.push_back(sp.theta_lower(k) + span * j / (opt.flat_scan_points - 1));
+        if (prior >= sp.theta_lower(k) && prior <= sp.theta_upper(k) &&
+            std::find(points.begin(), points.end(), prior) == points.end())
+          points.push_back(prior);
+        for (const double point : points) {
+          th[k] = point;
           if (th[k] == at) continue;  // the estimate itself (often a bound): neither lower nor responding
           try {
             run.evaluate(th, res, nullptr, opt.num_threads);
