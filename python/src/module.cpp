@@ -3,6 +3,7 @@
 
 #include <thread>
 
+#include "allocator.hpp"
 #include "granuflow/errors.hpp"
 #include "granuflow/interrupt.hpp"
 #include "granuflow/quantity.hpp"
@@ -23,6 +24,7 @@ void register_result(py::module_& m);
 
 PYBIND11_MODULE(_core, m) {
   m.doc() = "granuflow compiled core (use the granuflow package)";
+  granuflow::python::tune_allocator();
   // ConfigError -> ValueError subclass; SolverError -> RuntimeError subclass with t, unit, worst_residual.
   static py::exception<granuflow::ConfigError> config_error(m, "ConfigError", PyExc_ValueError);
   static py::exception<granuflow::SolverError> solver_error(m, "SolverError", PyExc_RuntimeError);
@@ -56,6 +58,9 @@ PYBIND11_MODULE(_core, m) {
     } catch (...) {  // the first unit parsed reports a missing database, naming it
     }
   }).detach();
+  m.def("allocator_tuned", &granuflow::python::allocator_tuned,
+        "Whether importing granuflow set glibc's malloc to keep freed blocks for the next solve (allocator.cpp; "
+        "not when the environment configures malloc itself or sets GRANUFLOW_MALLOC_TUNING=0).");
   m.def("interrupt", &granuflow::request_interrupt,
         "Stops the core's runs in progress on every thread, as Ctrl-C does (each ends with KeyboardInterrupt): for "
         "Python code that waits on threads which run them, where Python raised the interrupt itself.");

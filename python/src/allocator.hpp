@@ -1,0 +1,11 @@
+// The allocator policy of a process that imports granuflow._core (allocator.cpp says why and what).
+#pragma once
+
+namespace granuflow::python {
+
+// Keeps freed blocks for the next solve (glibc only; nothing when the user configured malloc in the environment).
+void tune_allocator();
+// Whether tune_allocator() changed the allocator's thresholds in this process.
+bool allocator_tuned();
+
+}  // namespace granuflow::python
