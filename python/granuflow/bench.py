@@ -100,8 +100,10 @@ def scene_variant_text(path: str, classes: int, breakage: bool = True) -> str:
     """The headline scene with `classes` size classes (the particle system's grid), breakage on or off."""
     import yaml
 
+    from .textfile import yaml_loader
+
     with open(path, encoding="utf-8") as f:
-        doc = yaml.safe_load(f)
+        doc = yaml.load(f, Loader=yaml_loader(yaml))
     doc.setdefault("particles", {}).setdefault("settings", {})["classes"] = classes
     if not breakage:
         doc["units"]["bed"].setdefault("settings", {})["breakage"] = "none"

@@ -165,8 +165,10 @@ def _scene_path(prov: dict) -> str | None:
     for key in ("sweepfile", "experiments"):
         if key in inputs and "text" in inputs[key]:
             import yaml
+
+            from .textfile import yaml_loader
             try:
-                scene = (yaml.safe_load(inputs[key]["text"]) or {}).get("scene")
+                scene = (yaml.load(inputs[key]["text"], Loader=yaml_loader(yaml)) or {}).get("scene")
             except yaml.YAMLError:
                 return None
             if isinstance(scene, str):
