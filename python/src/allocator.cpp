@@ -3,11 +3,11 @@
 // Every solve hands its arrays to a Result: at 80 size classes the headline scene's states, derivatives and outputs
 // at 121 times are 1.2 MB, at 20 classes 0.35 MB. glibc serves blocks above its mmap threshold (128 KiB at first,
 // raised to the size of each such block freed) with fresh mappings, and gives the heap's top back to the kernel once
-// more than twice that threshold is free. So each solve of a notebook's or a sweep's loop faulted its arrays in
-// page by page again: 55 faults per solve at 20 classes and 309 at 80, at about 19 us each on this project's
-// virtual machines, a fifth of the solve. With blocks up to 32 MiB (glibc's own ceiling for its moving threshold)
-// taken from the heap, and up to 64 MiB of freed heap kept, the next solve reuses the pages: 26.3 -> 21.0 ms at 80
-// classes (perf stat, 100 solves; docs/design.md, "Speed and accuracy"). The price is that a process keeps up to 64 MiB it freed.
+// more than twice that threshold is free. So each solve of a loop over simulate() faulted its arrays in page by page
+// again, up to 320 faults per solve at 80 classes, and a fault costs 12-19 us on this project's virtual machines.
+// With blocks up to 32 MiB (glibc's own ceiling for its moving threshold) taken from the heap, and the heap's free
+// top returned only beyond 64 MiB, the next solve reuses the pages: 24.2 -> 18.8 ms at 80 classes (docs/design.md,
+// "Speed and accuracy"). The price: a process keeps what it freed for reuse instead of returning it at once.
 //
 // The user's own choice wins: with any of glibc's MALLOC_*_ variables or a glibc.malloc tunable in the environment,
 // or GRANUFLOW_MALLOC_TUNING=0, nothing is changed.

@@ -70,6 +70,12 @@ class CalibrationReport:
 
         return pd.DataFrame(self.fit_rows).set_index(["set", "output"])
 
+    def fit_text(self) -> str:
+        """The fit table as text (what ``granuflow calibrate`` prints): one row per set and output, numbers to four
+        significant digits, the set named on its first row. Without pandas, whose import alone took 0.3-0.45 s, a
+        fifth of the shipped calibration's wall time."""
+        return fit_table_text(self.fit_rows)
+
     def recovery(self):
         """Estimates against known true values (synthetic data): error in standard errors, verdict."""
         import pandas as pd
@@ -147,6 +153,35 @@ class CalibrationReport:
         if plots:
             files += [os.path.basename(x) for x in self.parity_plots(out_dir)]
         return files
+
+
+def fit_table_text(rows: Sequence[Mapping[str, Any]], index: Sequence[str] = ("set", "output")) -> str:
+    """``rows`` as an aligned text table: the ``index`` columns left-aligned (a value repeated from the row above
+    left blank, as for a grouped index), the others right-aligned in order of first appearance; floats to four
+    significant digits, a missing value or NaN as NaN."""
+    cols = list(dict.fromkeys(k for r in rows for k in r if k not in index))
+
+    def text(v):
+        if v is None or (isinstance(v, float) and math.isnan(v)):
+            return "NaN"
+        return f"{v:.4g}" if isinstance(v, float) else str(v)
+
+    body, last = [], [None] * len(index)
+    for r in rows:
+        keys = [str(r.get(k, "")) for k in index]
+        shown = ["" if all(keys[j] == last[j] for j in range(i + 1)) else keys[i] for i in range(len(index))]
+        last = keys
+        body.append(shown + [text(r.get(c)) for c in cols])
+    header = list(index) + cols
+    widths = [max(len(h), *(len(b[i]) for b in body)) if body else len(h) for i, h in enumerate(header)]
+    ni = len(index)
+
+    def line(cells):
+        left = [c.ljust(w) for c, w in zip(cells[:ni], widths[:ni])]
+        right = [c.rjust(w) for c, w in zip(cells[ni:], widths[ni:])]
+        return "  ".join(left + right).rstrip()
+
+    return "\n".join([line(header)] + [line(b) for b in body])
 
 
 def _cell(v):

@@ -53,6 +53,6 @@ def cmd_calibrate(args) -> int:
         if comparison is not None:
             print(f"all at once: cost {comparison.cost:.6g}, {comparison.simulations} simulations "
                   f"({comparison.sensitivity_solves} sensitivity solves), {comparison.wall_time_s:.2f} s")
-        print(rep.fit.to_string(float_format=lambda x: f"{x:.4g}"))
+        print(rep.fit_text())
         print(f"wrote {', '.join(written)} to {args.out}")
     return 0
