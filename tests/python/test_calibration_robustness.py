@@ -3,11 +3,13 @@ left (the penetration depth below about 130 um, where d50 does not respond), sta
 named, data that no stage uses is reported, and every warning reaches report.json, report.txt and stderr."""
 import json
 import os
+import subprocess
+import sys
 
 import numpy as np
 import pytest
 
-from conftest import SCENE, cli, sha256
+from conftest import SCENE, cli, package_env, sha256
 
 import granuflow as gf
 from granuflow import calibration as cal
@@ -105,6 +107,50 @@ def test_data_no_stage_uses_is_reported_everywhere(tmp_path):
     assert rep["warnings"] == [warned[0][len("granuflow: warning: "):]]
     assert "warning: data that no stage uses" in (tmp_path / "out" / "report.txt").read_text()
     assert [sha256(exp), sha256(st), sha256(SCENE)] == before
+
+
+def test_the_command_prints_its_fit_table_without_pandas(tmp_path):
+    """`granuflow calibrate` prints the report and the fit table; importing pandas for that took 0.3-0.45 s, a fifth
+    of the shipped calibration's wall time, so the command (with --no-plots) must not import it."""
+    exp, st = tmp_path / "exps.yaml", tmp_path / "stages.yaml"
+    exp.write_text(EXPERIMENTS)
+    st.write_text(STAGES)
+    code = ("import sys; from granuflow.cli import main\n"
+            f"sys.argv = ['granuflow', 'calibrate', {str(exp)!r}, '--stages', {str(st)!r}, '--out', "
+            f"{str(tmp_path / 'out')!r}, '--no-plots', '--no-progress']\n"
+            "try:\n    main()\nexcept SystemExit as e:\n    assert not e.code, e.code\n"
+            "print('pandas imported:', 'pandas' in sys.modules)")
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, env=package_env())
+    assert p.returncode == 0, p.stderr
+    assert p.stdout.rstrip().endswith("pandas imported: False"), p.stdout[-500:]
+    # the printed table holds the rows of fit.csv: set (on its first row), output, n, r2, rmse, mean_abs_rel, unit
+    lines = p.stdout.splitlines()
+    head = next(i for i, line in enumerate(lines) if line.split()[:2] == ["set", "output"])
+    assert lines[head].split() == ["set", "output", "n", "r2", "rmse", "mean_abs_rel", "unit"]
+    import csv
+    with open(tmp_path / "out" / "fit.csv") as f:
+        rows = list(csv.DictReader(f))
+    printed = [line.split() for line in lines[head + 1:head + 1 + len(rows)]]
+    for k, (row, cells) in enumerate(zip(rows, printed)):
+        expect = ([row["set"]] if k == 0 or rows[k - 1]["set"] != row["set"] else []) + [row["output"], row["n"]]
+        expect += [f"{float(row[c]):.4g}" if row[c] else "NaN" for c in ("r2", "rmse", "mean_abs_rel")] + [row["unit"]]
+        assert cells == expect, (cells, expect)
+
+
+def test_fit_table_text_aligns_groups_numbers_and_missing_values():
+    from granuflow.calibration.report import fit_table_text
+
+    rows = [{"set": "calibration", "output": "gas.T", "n": 96, "r2": 0.967123, "rmse": 2.17812, "unit": "K"},
+            {"set": "calibration", "output": "size", "n": 864, "r2": float("nan"), "rmse": 5.5661e-05, "unit": "m",
+             "max_model_error_over_sigma": 0.0123},
+            {"set": "validation", "output": "gas.T", "n": 84, "r2": 0.91591, "rmse": None, "unit": "K"}]
+    lines = fit_table_text(rows).splitlines()
+    assert lines[0].split() == ["set", "output", "n", "r2", "rmse", "unit", "max_model_error_over_sigma"]
+    assert lines[1].split() == ["calibration", "gas.T", "96", "0.9671", "2.178", "K", "NaN"]
+    assert lines[2].split() == ["size", "864", "NaN", "5.566e-05", "m", "0.0123"]  # the set named once
+    assert lines[3].split() == ["validation", "gas.T", "84", "0.9159", "NaN", "K", "NaN"]
+    assert len({len(line) for line in lines}) == 1  # numbers right-aligned to one column edge
+    assert lines[2].index("size") == lines[1].index("gas.T")
 
 
 def test_unused_observations_from_python(fs):
