@@ -1,5 +1,6 @@
 """Importing granuflow sets glibc's malloc to keep what a solve frees for the next one (python/src/allocator.cpp):
 repeated solves reuse their pages instead of faulting fresh ones, and a user's own malloc settings win."""
+import platform
 import subprocess
 import sys
 
@@ -38,7 +39,7 @@ def probe(**env):
     return tuned == "True", int(block), float(per_solve), float(d50)
 
 
-@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="glibc's malloc")
+@pytest.mark.skipif(platform.libc_ver()[0] != "glibc", reason="glibc's malloc")
 def test_freed_memory_is_reused_unless_the_user_configured_malloc():
     tuned, block, per_solve, d50 = probe()
     assert tuned
