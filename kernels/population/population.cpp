@@ -30,6 +30,13 @@ const char* field_name(Field f) {
   return names[static_cast<int>(f)];
 }
 
+bool same_parameters(std::vector<Jet>& memo, const Jet* p, int first, int count) {
+  bool same = static_cast<int>(memo.size()) == count;
+  for (int k = 0; k < count && same; ++k) same = memo[k].a == p[first + k].a && memo[k].v == p[first + k].v;
+  if (!same) memo.assign(p + first, p + first + count);
+  return same;
+}
+
 void make_jets(Population::Work& w) {
   if (w.jets) return;
   to_jets(w.Kh, w.Kh_jet), to_jets(w.A, w.A_jet), to_jets(w.BN, w.BN_jet), to_jets(w.BQ, w.BQ_jet);
@@ -130,6 +137,7 @@ void Population::configure(Work& w, const double* p, const std::string& where) c
   for (const auto& [k, first] : kernels)
     if (k) k->check(cs, p + first, where);
   w.fresh = false;
+  w.kh_params.clear(), w.brk_params.clear(), w.frag_params.clear();
   refresh(w, p);
 }
 

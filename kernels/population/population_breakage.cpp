@@ -56,8 +56,19 @@ void Population::breakage_rates(Work& w, const State<T>& s, const ClassState<T>&
   const T* N = s.N;
   // Paper 001, Eqs. (23), (25): dN/dt = A (S o N) = BN N; a property follows the volume of its parent's fragments.
   const T *BN, *BQ;
-  if (sel_.kernel->state_dependent() || fresh_tables(w, s.p, sel_.first, sel_.count) ||
-      fresh_tables(w, s.p, frag_.first, frag_.count)) {
+  bool reuse = false;  // Jet tables built from these very parameter Jets by the last call (Work::brk_params)
+  if constexpr (std::is_same_v<T, Jet>) {
+    if (!sel_.kernel->state_dependent() &&
+        (fresh_tables(w, s.p, sel_.first, sel_.count) || fresh_tables(w, s.p, frag_.first, frag_.count))) {
+      const bool same_sel = same_parameters(w.brk_params, s.p, sel_.first, sel_.count);
+      const bool same_frag = same_parameters(w.frag_params, s.p, frag_.first, frag_.count);  // both memos kept
+      reuse = same_sel && same_frag;
+    }
+  }
+  if (reuse) {
+    BN = sc.BN.data(), BQ = sc.BQ.data();
+  } else if (sel_.kernel->state_dependent() || fresh_tables(w, s.p, sel_.first, sel_.count) ||
+             fresh_tables(w, s.p, frag_.first, frag_.count)) {
     sc.S.resize(n);
     sel_.kernel->evaluate(cs, s.p + sel_.first, sc.S.data());
     const T* A;

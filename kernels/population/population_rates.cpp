@@ -93,9 +93,11 @@ void Population::aggregation_rates(Work& w, const State<T>& s, const ClassState<
   if constexpr (std::is_same_v<T, double>) {
     Kh = w.Kh.data();
   } else if (fresh_tables(w, s.p, agg_.first, agg_.count)) {
-    sc.K.resize(size_t(n) * n);
-    agg_.kernel->factor(cs, s.p + agg_.first, sc.K.data());
-    pack_pairs(sc.K, n, sc.Kh);
+    if (!same_parameters(w.kh_params, s.p, agg_.first, agg_.count)) {
+      sc.K.resize(size_t(n) * n);
+      agg_.kernel->factor(cs, s.p + agg_.first, sc.K.data());
+      pack_pairs(sc.K, n, sc.Kh);
+    }
     Kh = sc.Kh.data();
   } else {
     Kh = w.Kh_jet.data();

@@ -40,6 +40,10 @@ struct Population::Work {
   // ((n + 1) x n: class rows, then the volume below) moves a property with its parent's share of volume.
   std::vector<double> BN, BQ;
   std::vector<Jet> BN_jet, BQ_jet;
+  // The parameters (values and derivatives) the Jet scratch's Kh and BN, BQ were last built from when they carry
+  // derivatives (a sensitivity run's residuals): the tables depend on the sizes and those parameters only, so the
+  // next evaluation with the same Jets reuses them instead of rebuilding h K and the breakage tables per call.
+  std::vector<Jet> kh_params, brk_params, frag_params;
   template <class T>
   struct Scratch {
     std::vector<T> K, Kh, S, A, BN, BQ, phi, E, pi, shape, amount, F, rows, dq, brk;
@@ -72,6 +76,9 @@ void pack_pairs(const std::vector<T>& K, int n, std::vector<T>& Kh) {
 // BN = A diag(S), BQ = (x_r / x_k) BN over the class rows and the volume-below row (population_breakage.cpp).
 template <class T>
 void breakage_tables(const Grid& g, const T* A, const T* S, std::vector<T>& BN, std::vector<T>& BQ);
+
+// Whether p[first, first + count) equals `memo` in values and derivatives; if not, `memo` becomes a copy of it.
+bool same_parameters(std::vector<Jet>& memo, const Jet* p, int first, int count);
 
 // Whether a kernel's parameters carry derivatives (a Jet evaluation then rebuilds its tables from them).
 inline bool has_derivative(const double*, int, int) { return false; }
