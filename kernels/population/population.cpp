@@ -137,7 +137,7 @@ void Population::configure(Work& w, const double* p, const std::string& where) c
   for (const auto& [k, first] : kernels)
     if (k) k->check(cs, p + first, where);
   w.fresh = false;
-  w.kh_params.clear(), w.brk_params.clear(), w.frag_params.clear();
+  w.kh_params.clear(), w.sel_params.clear(), w.frag_params.clear();
   refresh(w, p);
 }
 

@@ -56,23 +56,24 @@ void Population::breakage_rates(Work& w, const State<T>& s, const ClassState<T>&
   const T* N = s.N;
   // Paper 001, Eqs. (23), (25): dN/dt = A (S o N) = BN N; a property follows the volume of its parent's fragments.
   const T *BN, *BQ;
-  bool reuse = false;  // Jet tables built from these very parameter Jets by the last call (Work::brk_params)
+  const bool state = sel_.kernel->state_dependent();
+  const bool fresh_sel = fresh_tables(w, s.p, sel_.first, sel_.count);
+  const bool fresh_frag = fresh_tables(w, s.p, frag_.first, frag_.count);
+  bool kept = false;  // Jet tables the last call built from these very parameter Jets (Work::sel_params)
   if constexpr (std::is_same_v<T, Jet>) {
-    if (!sel_.kernel->state_dependent() &&
-        (fresh_tables(w, s.p, sel_.first, sel_.count) || fresh_tables(w, s.p, frag_.first, frag_.count))) {
-      const bool same_sel = same_parameters(w.brk_params, s.p, sel_.first, sel_.count);
+    if (!state && (fresh_sel || fresh_frag)) {
+      const bool same_sel = same_parameters(w.sel_params, s.p, sel_.first, sel_.count);
       const bool same_frag = same_parameters(w.frag_params, s.p, frag_.first, frag_.count);  // both memos kept
-      reuse = same_sel && same_frag;
+      kept = same_sel && same_frag;
     }
   }
-  if (reuse) {
+  if (kept) {
     BN = sc.BN.data(), BQ = sc.BQ.data();
-  } else if (sel_.kernel->state_dependent() || fresh_tables(w, s.p, sel_.first, sel_.count) ||
-             fresh_tables(w, s.p, frag_.first, frag_.count)) {
+  } else if (state || fresh_sel || fresh_frag) {
     sc.S.resize(n);
     sel_.kernel->evaluate(cs, s.p + sel_.first, sc.S.data());
     const T* A;
-    if (fresh_tables(w, s.p, frag_.first, frag_.count)) {
+    if (fresh_frag) {
       sc.A.resize(size_t(n + kOutsideRows) * n);
       brk_scheme_->build(*grid_, *frag_.kernel, s.p + frag_.first, sc.A.data());
       A = sc.A.data();

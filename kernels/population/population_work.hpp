@@ -43,7 +43,7 @@ struct Population::Work {
   // The parameters (values and derivatives) the Jet scratch's Kh and BN, BQ were last built from when they carry
   // derivatives (a sensitivity run's residuals): the tables depend on the sizes and those parameters only, so the
   // next evaluation with the same Jets reuses them instead of rebuilding h K and the breakage tables per call.
-  std::vector<Jet> kh_params, brk_params, frag_params;
+  std::vector<Jet> kh_params, sel_params, frag_params;
   template <class T>
   struct Scratch {
     std::vector<T> K, Kh, S, A, BN, BQ, phi, E, pi, shape, amount, F, rows, dq, brk;

@@ -106,10 +106,10 @@ def target_run(repeats: int, progress: bool) -> dict:
     beside Python alone and Python importing NumPy, in alternating rounds (the machine's speed drifts by tens of
     percent within minutes: one process after the other, each median comes from the same stretch of time)."""
     scene = os.path.join(bench.repo_root(), "flowsheets", "stoeckl_gf25_batch.yaml")
-    cmds = {"python": [sys.executable, "-c", "pass"], "numpy": [sys.executable, "-c", "import numpy"]}
-    rounds = {k: [] for k in ("run", *cmds)}
     with tempfile.TemporaryDirectory(prefix="granuflow-bench-") as out:
-        cmds = {"run": launcher() + ["run", scene, "--out", out, "--no-plots"], **cmds}
+        cmds = {"run": launcher() + ["run", scene, "--out", out, "--no-plots"],
+                "python": [sys.executable, "-c", "pass"], "numpy": [sys.executable, "-c", "import numpy"]}
+        rounds = {k: [] for k in cmds}
         for r in range(max(1, repeats)):
             _say(progress, f"run --no-plots of the headline scene: round {r + 1}/{max(1, repeats)}")
             for k, cmd in cmds.items():

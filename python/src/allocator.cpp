@@ -10,11 +10,13 @@
 // "Speed and accuracy"). The price: a process keeps what it freed for reuse instead of returning it at once.
 //
 // The user's own choice wins: with any of glibc's MALLOC_*_ variables or a glibc.malloc tunable in the environment,
-// or GRANUFLOW_MALLOC_TUNING=0, nothing is changed.
+// or GRANUFLOW_MALLOC_TUNING=0, nothing is changed. Another value of GRANUFLOW_MALLOC_TUNING than 0 or 1 changes
+// nothing either, and the import warns, naming it.
 #include "allocator.hpp"
 
 #include <cstdlib>
 #include <cstring>
+#include <string>
 #if defined(__GLIBC__)
 #include <malloc.h>
 #endif
@@ -27,9 +29,7 @@ namespace {
 constexpr int kMmapThreshold = 32 << 20;
 constexpr int kTrimThreshold = 64 << 20;
 
-bool user_chose_allocator() {
-  const char* own = std::getenv("GRANUFLOW_MALLOC_TUNING");
-  if (own && std::strcmp(own, "0") == 0) return true;
+bool glibc_configured() {
   const char* tunables = std::getenv("GLIBC_TUNABLES");
   if (tunables && std::strstr(tunables, "glibc.malloc.")) return true;
   for (char** e = environ; e && *e; ++e)
@@ -40,11 +40,18 @@ bool user_chose_allocator() {
 bool tuned = false;
 }  // namespace
 
-void tune_allocator() {
+std::string tune_allocator() {
+  const char* own = std::getenv("GRANUFLOW_MALLOC_TUNING");
+  const std::string choice = own ? own : "1";
+  if (choice != "0" && choice != "1")
+    return "GRANUFLOW_MALLOC_TUNING='" + choice +
+           "': expected 0 (glibc's own malloc behaviour) or 1 (keep freed memory for the next solve, the default); "
+           "glibc's behaviour is kept";
 #if defined(__GLIBC__)
-  if (user_chose_allocator()) return;
-  tuned = mallopt(M_MMAP_THRESHOLD, kMmapThreshold) == 1 && mallopt(M_TRIM_THRESHOLD, kTrimThreshold) == 1;
+  if (choice == "1" && !glibc_configured())
+    tuned = mallopt(M_MMAP_THRESHOLD, kMmapThreshold) == 1 && mallopt(M_TRIM_THRESHOLD, kTrimThreshold) == 1;
 #endif
+  return "";
 }
 
 bool allocator_tuned() { return tuned; }

@@ -1,6 +1,7 @@
 // granuflow._core: the private compiled core. The public API is the pure-Python package granuflow.
 #include <pybind11/pybind11.h>
 
+#include <string>
 #include <thread>
 
 #include "allocator.hpp"
@@ -24,7 +25,8 @@ void register_result(py::module_& m);
 
 PYBIND11_MODULE(_core, m) {
   m.doc() = "granuflow compiled core (use the granuflow package)";
-  granuflow::python::tune_allocator();
+  if (const std::string w = granuflow::python::tune_allocator(); !w.empty())
+    if (PyErr_WarnEx(PyExc_RuntimeWarning, w.c_str(), 1) < 0) throw py::error_already_set();
   // ConfigError -> ValueError subclass; SolverError -> RuntimeError subclass with t, unit, worst_residual.
   static py::exception<granuflow::ConfigError> config_error(m, "ConfigError", PyExc_ValueError);
   static py::exception<granuflow::SolverError> solver_error(m, "SolverError", PyExc_RuntimeError);

@@ -54,3 +54,16 @@ def test_freed_memory_is_reused_unless_the_user_configured_malloc():
     assert not probe(GLIBC_TUNABLES="glibc.malloc.trim_threshold=1000000")[0]
     # an unrelated tunable does not count as configuring malloc
     assert probe(GLIBC_TUNABLES="glibc.rtld.optional_static_tls=1024")[0]
+
+
+def test_a_malformed_choice_warns_and_changes_nothing():
+    code = ("import warnings; warnings.simplefilter('always')\n"
+            "with warnings.catch_warnings(record=True) as w:\n"
+            "    import granuflow._core as core\n"
+            "print(core.allocator_tuned()); print([str(x.message) for x in w if x.category is RuntimeWarning])")
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60,
+                       env=package_env(GRANUFLOW_MALLOC_TUNING="off"))
+    assert p.returncode == 0, p.stderr
+    tuned, warned = p.stdout.splitlines()
+    assert tuned == "False"
+    assert "GRANUFLOW_MALLOC_TUNING='off'" in warned and "expected 0" in warned and " or 1 " in warned, warned
