@@ -162,9 +162,16 @@ void DaeSystem::schur_subtract_z(double* dense) {
   const auto& units = fs_.units();
   const int nr = static_cast<int>(schur_rows_.size());
   constexpr double kDenseGain = 4.0;
+  // Each explicit column's row of Z, looked up once per column: J_RS lists tens of thousands of entries at 80
+  // classes, and finding each one's unit through the flowsheet was most of this function's time.
+  schur_zrow_.resize(size_t(m));
+  for (int col = 0; col < m; ++col) {
+    const int s = n_ + col, u = fs_.state_unit(s);
+    schur_zrow_[col] = {&z_rows_[u], s - units[u].offset};
+  }
   auto z_count = [&](int col) {
-    const int s = n_ + col, u = fs_.state_unit(s), r = s - units[u].offset;
-    return z_rows_[u].start[r + 1] - z_rows_[u].start[r];
+    const auto& [z, r] = schur_zrow_[col];
+    return z->start[r + 1] - z->start[r];
   };
   double sparse_work = 0.0, dense_work = 0.0;
   schur_seen_.assign(size_t(m), 0);
@@ -179,19 +186,17 @@ void DaeSystem::schur_subtract_z(double* dense) {
     schur_cd_.setZero(nr, n_);
     for (int col = 0; col < m; ++col) {
       if (!schur_seen_[col]) continue;
-      const int s = n_ + col, u = fs_.state_unit(s), r = s - units[u].offset;
-      const SparseRows& z = z_rows_[u];
-      for (int q = z.start[r]; q < z.start[r + 1]; ++q) schur_cd_.col(z.col[q]) += z.val[q] * schur_jd_.col(col);
+      const auto& [z, r] = schur_zrow_[col];
+      for (int q = z->start[r]; q < z->start[r + 1]; ++q) schur_cd_.col(z->col[q]) += z->val[q] * schur_jd_.col(col);
     }
     for (const auto& [pos, row, len] : schur_row_runs_) out.middleRows(row, len) -= schur_cd_.middleRows(pos, len);
   } else {
     schur_c_.setZero(nr, n_);
     for (const auto& e : schur_t_) {
-      const int s = n_ + e.col(), u = fs_.state_unit(s), r = s - units[u].offset;
-      const SparseRows& z = z_rows_[u];
+      const auto& [z, r] = schur_zrow_[e.col()];
       double* row = schur_c_.data() + size_t(e.row()) * n_;
       const double a = e.value();
-      for (int q = z.start[r]; q < z.start[r + 1]; ++q) row[z.col[q]] += a * z.val[q];
+      for (int q = z->start[r]; q < z->start[r + 1]; ++q) row[z->col[q]] += a * z->val[q];
     }
     for (const auto& [pos, row, len] : schur_row_runs_) out.middleRows(row, len) -= schur_c_.middleRows(pos, len);
   }

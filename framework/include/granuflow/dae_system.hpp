@@ -194,7 +194,8 @@ class DaeSystem {
   // schur_acc_ += a * row r of z over the columns that row holds, each column listed once per stamp in `touched`
   void accumulate_row(const SparseRows& z, int r, double a, int stamp, std::vector<int>& touched);
   static OuterTerm& next_term(std::vector<OuterTerm>& terms, size_t& used, int unit, int n_rows, const double* u);
-  std::vector<SparseRows> z_rows_;  // per explicit unit: its rows of Z = J_SS^-1 J_SR
+  std::vector<SparseRows> z_rows_;                             // per explicit unit: its rows of Z = J_SS^-1 J_SR
+  std::vector<std::pair<const SparseRows*, int>> schur_zrow_;  // explicit column -> its unit's rows of Z, its row
   SparseRows s_rows_, product_rows_;
   std::vector<double> schur_acc_;
   std::vector<int> schur_mark_, schur_cols_touched_;
