@@ -53,6 +53,18 @@ void Population::jacobian(Work& w, const State<double>& s, const Map& m, Jacobia
     const std::vector<int>& fc = m.field_col[field_index_[fi]];
     for (int i = 0; i < n && !fc.empty(); ++i) cols[n * (1 + P) + static_cast<int>(fi) * n + i] = fc[i];
   }
+  // The engine's rows that land on consecutive unit rows (each class's number, each property), mapped as runs: a
+  // dense column then takes each run as one vector update instead of a test and an indexed add per entry (the mapping
+  // was 12 % of the Jacobian at 80 classes). A zero of D adds a zero, which leaves every entry's value as it was.
+  std::vector<Work::RowRun>& runs = w.map_runs;
+  runs.clear();
+  for (int r = 0; r < R; ++r) {
+    if (rows[r] < 0) continue;
+    if (!runs.empty() && runs.back().first + runs.back().len == r && runs.back().row + runs.back().len == rows[r])
+      ++runs.back().len;
+    else
+      runs.push_back({r, 1, rows[r]});
+  }
   // Column by column (D is column-major), so that a dense sink's column (the unit's rows, mostly consecutive) is
   // written in order. Each sink entry receives its terms in the same order as row by row (several engine columns can
   // map to one sink column: the temperature field).
@@ -61,8 +73,14 @@ void Population::jacobian(Work& w, const State<double>& s, const Map& m, Jacobia
     const double* d = &w.D[size_t(c) * R];
     const double sc = scales[c];
     if (double* col = sink.dense_column(cols[c])) {
-      for (int r = 0; r < R; ++r)
-        if (d[r] != 0.0 && rows[r] >= 0) col[rows[r]] += factors[r] * d[r] * sc;
+      for (const Work::RowRun& run : runs) {
+        const double* dr = d + run.first;
+        const double* fr = factors.data() + run.first;
+        double* to = col + run.row;
+        const int len = run.len;
+#pragma omp simd
+        for (int t = 0; t < len; ++t) to[t] += fr[t] * dr[t] * sc;
+      }
     } else {
       for (int r = 0; r < R; ++r)
         if (d[r] != 0.0 && rows[r] >= 0) sink.add(rows[r], cols[c], factors[r] * d[r] * sc);

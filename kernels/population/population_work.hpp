@@ -58,6 +58,10 @@ struct Population::Work {
   // Jacobian work
   std::vector<double> D, dF, jinv, map_factors, map_scales;
   std::vector<int> map_rows, map_cols;
+  struct RowRun {
+    int first, len, row;  // engine rows first .. first+len-1 map to the unit's rows row .. row+len-1
+  };
+  std::vector<RowRun> map_runs;
   std::vector<Jet> jp, jN, jq, jf, jphi;
   std::vector<double> eff, eff_da, eff_db;  // analytic Jacobian: E and dE/dphi of every pair
   std::vector<PairEvent> events;            // the events of one row of the pair triangle, and their inputs
