@@ -71,28 +71,26 @@ size_t scalar_end(const std::string& t, size_t pos, bool flow, const std::string
   return end;
 }
 
-// Adding "a: 1, b: 2" to the mapping `node`: an empty {} is replaced as a whole; a flow mapping gets them in front
-// of its first key; a block mapping one per line at its keys' indentation.
-Edit insertion(const std::string& t, const YAML::Node& node, const std::string& entries) {
+// Adding the entries ("a: 1", "b: 2") to the mapping `node`: an empty {} is replaced as a whole; a flow mapping gets
+// them in front of its first key; a block mapping one per line at its keys' indentation. An entry is never split: it
+// may itself be a flow mapping ("settings: {a: 1, b: 2}", which on two lines at the keys' indentation would not be
+// YAML) or a value with a comma in it.
+Edit insertion(const std::string& t, const YAML::Node& node, const std::vector<std::string>& entries) {
+  auto joined = [&](const std::string& sep) {
+    std::string s;
+    for (const auto& e : entries) s += (s.empty() ? "" : sep) + e;
+    return s;
+  };
   if (node.size() == 0) {
     const size_t start = static_cast<size_t>(node.Mark().pos);
     const size_t close = t.find('}', start);
-    return {start, close == std::string::npos ? start : close + 1, "{" + entries + "}"};
+    return {start, close == std::string::npos ? start : close + 1, "{" + joined(", ") + "}"};
   }
   const YAML::Mark first = node.begin()->first.Mark();
   const auto at = static_cast<size_t>(first.pos);
-  if (node.Style() == YAML::EmitterStyle::Flow) return {at, at, entries + ", "};
+  if (node.Style() == YAML::EmitterStyle::Flow) return {at, at, joined(", ") + ", "};
   const std::string indent(static_cast<size_t>(first.column), ' ');
-  std::string lines;
-  for (size_t k = 0; k < entries.size(); ++k) {
-    if (entries.compare(k, 2, ", ") == 0) {
-      lines += "\n" + indent;
-      ++k;
-    } else {
-      lines += entries[k];
-    }
-  }
-  return {at, at, lines + "\n" + indent};
+  return {at, at, joined("\n" + indent) + "\n" + indent};
 }
 
 }  // namespace
@@ -111,15 +109,10 @@ std::string splice_settings(const std::string& text, const std::string& unit,
   if (!section.IsMap()) throw ConfigError(label + ": no unit '" + unit + "' with a mapping in the scene text");
   std::vector<Edit> edits;
   const YAML::Node node = child(section, "settings");
-  auto joined = [](const std::vector<std::string>& items) {
-    std::string s;
-    for (const auto& i : items) s += (s.empty() ? "" : ", ") + i;
-    return s;
-  };
   if (!node.IsMap()) {
-    std::vector<std::string> all;
-    for (const auto& [k, v] : settings) all.push_back(k + ": " + v);
-    edits.push_back(insertion(text, section, "settings: {" + joined(all) + "}"));
+    std::string all;
+    for (const auto& [k, v] : settings) all += (all.empty() ? "" : ", ") + k + ": " + v;
+    edits.push_back(insertion(text, section, {"settings: {" + all + "}"}));
   } else {
     std::vector<std::string> missing;
     const bool flow = node.Style() == YAML::EmitterStyle::Flow;
@@ -132,7 +125,7 @@ std::string splice_settings(const std::string& text, const std::string& unit,
         missing.push_back(k + ": " + v);
       }
     }
-    if (!missing.empty()) edits.push_back(insertion(text, node, joined(missing)));
+    if (!missing.empty()) edits.push_back(insertion(text, node, missing));
   }
   std::sort(edits.begin(), edits.end(), [](const Edit& a, const Edit& b) {
     return std::tie(a.start, a.end, a.text) > std::tie(b.start, b.end, b.text);

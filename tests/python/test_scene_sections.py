@@ -139,6 +139,41 @@ def test_the_core_splices_settings_as_the_pyyaml_splice_did(unit, text, settings
     assert structure.splice_settings(text, unit, settings, "s.yaml") == _splice_with_pyyaml(text, unit, settings)
 
 
+# Where the PyYAML splice above went wrong: it split every ", " of what it added into lines, so two settings added to
+# a block-style unit without `settings:` became a flow mapping broken over two lines at the keys' indentation (not
+# YAML), and a value with ", " in it was cut in two.
+SEMANTIC_SPLICE_CASES = [
+    ("bed", "units:\n  bed:\n    type: fluid_bed\n    params: {bed_mass: 15 kg}\n",
+     {"aggregation": "none", "breakage": "none"}),
+    ("bed", "units:\n  bed:\n    type: fluid_bed\n    settings:\n      kernel: eke   # c\n",
+     {"note": "a, b", "aggregation": "none", "kernel": "glass_transition"}),
+    ("particles", "particles:\n  material: x\n  # grid\nunits: {}\n", {"classes": 12, "grid": "a, b"}),
+]
+
+
+@pytest.mark.parametrize("unit,text,settings", SEMANTIC_SPLICE_CASES)
+def test_settings_spliced_together_read_back_as_set_and_leave_the_rest(unit, text, settings):
+    out = structure.splice_settings(text, unit, settings, "s.yaml")
+    before, after = yaml.safe_load(text), yaml.safe_load(out)
+    where = (lambda d: d["particles"]) if unit == "particles" else (lambda d: d["units"][unit])
+    assert where(after)["settings"] == {**(where(before).get("settings") or {}), **settings}
+    where(after).pop("settings"), where(before).pop("settings", None)
+    assert after == before
+    assert all(line in out.splitlines() for line in text.splitlines() if "kernel" not in line)  # comments kept
+
+
+def test_two_settings_of_one_unit_change_the_headline_scene_together():
+    fs = gf.load(SCENE)
+    both = fs.with_settings({"bed.aggregation": "none", "bed.breakage": "none"})
+    kind, settings = both.unit_settings()["bed"]
+    assert kind == "fluid_bed" and settings["aggregation"] == "none" and settings["breakage"] == "none"
+    one = fs.with_settings({"bed.aggregation": "none"})
+    # the second setting took effect: breakage off moves the product of a run without aggregation
+    d_both = both.simulate(warn=False, grid_check=False, accuracy=False).summary
+    d_one = one.simulate(warn=False, grid_check=False, accuracy=False).summary
+    assert d_both["d10_um"] != d_one["d10_um"]
+
+
 def test_a_splice_refuses_what_it_cannot_keep_byte_for_byte():
     with pytest.raises(gf.ConfigError, match="s.yaml: no unit 'bed'"):
         structure.splice_settings("units: {}\n", "bed", {"classes": 3}, "s.yaml")
