@@ -10,11 +10,12 @@ namespace {
 
 // Koren's limited slope (Koren 1993) from the downwind jump a and the upwind jump b (both scaled to the cell width):
 // the kappa = 1/3 reconstruction (2a + b)/3, third-order upwind-biased where the solution is smooth, limited to
-// min(2|a|, 2|b|) with the common sign and 0 at extrema; da, db its derivatives.
+// min(2|a|, 2|b|) with the common sign and 0 at extrema; da, db its derivatives. The common sign is tested on the
+// signs, not on a b > 0, which underflows for jumps below 1e-154 (the far tail of a distribution).
 template <class T>
 T koren(const T& a, const T& b, double& da, double& db) {
   da = db = 0.0;
-  if (!(a * b > 0.0)) return T(0.0);
+  if (!((a > 0.0 && b > 0.0) || (a < 0.0 && b < 0.0))) return T(0.0);
   const double s = a > 0.0 ? 1.0 : -1.0;
   const T abs_a = s * a, abs_b = s * b;
   const T third = (2.0 * abs_a + abs_b) / 3.0;
@@ -32,18 +33,27 @@ T koren(const T& a, const T& b, double& da, double& db) {
 
 // van Albada's slope ab (a + b) / (a^2 + b^2) from the same jumps (0 where a = b = 0), and with kDerivatives its
 // derivatives; a select, so that the loop over the faces stays a vector loop for doubles.
+// The slope is a ratio of third- to second-degree terms and its derivatives of fourth-degree ones: for jumps below
+// about 1e-77 (the far tail of a narrow distribution on a wide grid) these underflow, to 0 / 0 under flush-to-zero,
+// and a NaN Jacobian stopped the run at its start. The slope is homogeneous of degree 1, so jumps below kSmall are
+// scaled by the larger one first and the slope scaled back; above it m = 1 and every operation gives the bits of the
+// plain formulas (x / 1 and 1 * s are exact, for Jets too).
 template <class T, bool kDerivatives>
 T van_albada(const T& a, const T& b, double& da, double& db) {
-  const double av = value_of(a), bv = value_of(b), q = av * av + bv * bv;
+  constexpr double kSmall = 1e-50;  // fourth-degree terms of larger jumps stay above 1e-200
+  const double big = std::max(std::fabs(value_of(a)), std::fabs(value_of(b)));
+  const double m = big > 0.0 && big < kSmall ? big : 1.0;
+  const T x = a / m, y = b / m;
+  const double xv = value_of(x), yv = value_of(y), q = xv * xv + yv * yv;
   da = db = 0.0;
   if constexpr (kDerivatives) {
     if (q > 0.0) {
-      const double num = av * bv * (av + bv);
-      da = (bv * (2.0 * av + bv) * q - 2.0 * av * num) / (q * q);
-      db = (av * (av + 2.0 * bv) * q - 2.0 * bv * num) / (q * q);
+      const double num = xv * yv * (xv + yv);
+      da = (yv * (2.0 * xv + yv) * q - 2.0 * xv * num) / (q * q);
+      db = (xv * (xv + 2.0 * yv) * q - 2.0 * yv * num) / (q * q);
     }
   }
-  return q > 0.0 ? T(a * b * (a + b) / (a * a + b * b)) : T(0.0);
+  return q > 0.0 ? T(m * (x * y * (x + y) / (x * x + y * y))) : T(0.0);
 }
 
 // The density at a face whose donor (density nd) has neighbours on both sides (densities n_down towards the face,

@@ -146,5 +146,54 @@ TEST(PbmGrowth, NormalizedFluxesOfDoublesFollowTheSchemeBitForBit) {
   }
 }
 
+// The far tail of a narrow distribution on a wide grid holds densities of 1e-100 and less. The limited scheme's
+// fluxes are homogeneous of degree 1 in N and its Jacobian of degree 0, so scaling the distribution by c scales the
+// fluxes by c and leaves the Jacobian as it is, down to densities near the smallest double. Before, van Albada's
+// derivatives divided q^2 = (a^2 + b^2)^2, which underflows below jumps of about 1e-77: 0 / 0, a NaN Jacobian, and
+// a run on such a grid stopped at t = 0. Both limiters, doubles and Jets.
+TEST(PbmGrowth, LimitedFluxesAndJacobianScaleWithTheDistributionDownToItsFarTail) {
+  std::vector<double> d(30);
+  for (size_t i = 0; i < d.size(); ++i) d[i] = 1e-4 * std::pow(40.0, double(i) / (d.size() - 1));
+  const kernels::Grid grid = kernels::Grid::from_diameter_pivots(d);
+  const int n = grid.size(), nf = n + 1;
+  const auto& de = grid.diameter_edges();
+  std::vector<double> N(n);
+  for (int i = 0; i < n; ++i) N[i] = i % 7 == 3 ? 0.0 : 1e6 * (1.3 + std::sin(1.7 * i)) * std::exp(-0.05 * i * i);
+  std::vector<double> shape(nf), amount = {3e-9};
+  for (int f = 0; f < nf; ++f) shape[f] = de[f] * de[f];
+  const kernels::GrowthTerms<double> g{1, shape.data(), amount.data(), false};
+  for (auto limiter : {kernels::Limiter::kVanAlbada, kernels::Limiter::kKoren}) {
+    kernels::FvGrowth fv(limiter);
+    fv.setup(grid);
+    std::vector<double> F0(nf), J0(size_t(nf) * n);
+    std::vector<int> donor(nf);
+    fv.fluxes(N.data(), g, F0.data(), donor.data());
+    fv.flux_jacobian(N.data(), g, J0.data());
+    double jmax = 0.0, fmax = 0.0;
+    for (double v : J0) jmax = std::max(jmax, std::abs(v));
+    for (double v : F0) fmax = std::max(fmax, std::abs(v));
+    ASSERT_GT(jmax, 0.0);
+    for (double c : {1e-60, 1e-100, 1e-140, 1e-200}) {
+      std::vector<double> Nc(n), F(nf), J(size_t(nf) * n);
+      for (int i = 0; i < n; ++i) Nc[i] = c * N[i];
+      fv.fluxes(Nc.data(), g, F.data(), donor.data());
+      fv.flux_jacobian(Nc.data(), g, J.data());
+      for (size_t k = 0; k < J.size(); ++k) {
+        ASSERT_TRUE(std::isfinite(J[k])) << "c " << c << " entry " << k;
+        EXPECT_NEAR(J[k], J0[k], 1e-12 * jmax) << "c " << c << " entry " << k;
+      }
+      for (int f = 0; f < nf; ++f) EXPECT_NEAR(F[f] / c, F0[f], 1e-12 * fmax) << "c " << c << " face " << f;
+      std::vector<Jet> Nj(n), shape_j(shape.begin(), shape.end()), amount_j(amount.begin(), amount.end()), Fj(nf);
+      for (int i = 0; i < n; ++i) Nj[i] = Jet(Nc[i]), Nj[i].v[0] = Nc[i];  // d/ds of N (1 + s): the fluxes again
+      fv.fluxes(Nj.data(), kernels::GrowthTerms<Jet>{1, shape_j.data(), amount_j.data(), false}, Fj.data(),
+                donor.data());
+      for (int f = 0; f < nf; ++f) {
+        ASSERT_TRUE(std::isfinite(Fj[f].a) && std::isfinite(Fj[f].v[0])) << "c " << c << " face " << f;
+        EXPECT_NEAR(Fj[f].v[0] / c, F0[f], 1e-12 * fmax) << "c " << c << " face " << f;
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace granuflow
