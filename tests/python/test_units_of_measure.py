@@ -66,6 +66,31 @@ def test_a_settings_si_unit_is_read_from_its_description():
     assert setting_si_unit({"type": "number", "description": "a count, dimensionless"}) == ""
 
 
+def test_a_real_setting_in_a_scene_file_may_carry_a_unit_as_a_parameter_does():
+    """`d_min: 50 um` in a scene file reads as 50e-6 (before: "expected a finite number", while `--set` converted
+    it); `--set particles.d_min=50um` without a space too; a unit of another dimension, or one on a setting that
+    has none, is refused naming the setting."""
+    text = open(SCENE).read()
+    plain = "settings: {classes: 10, d_min: 50e-6, d_max: 1000e-6}"
+    assert plain in text
+    si = gf.load_text(text, "si.yaml")
+    units = gf.load_text(text.replace(plain, "settings: {classes: 10, d_min: 50 um, d_max: 1mm}"), "units.yaml")
+    grid = lambda fs: {k: float(fs.unit_settings()["particles"][1][k]) for k in ("d_min", "d_max")}  # noqa: E731
+    assert grid(units) == pytest.approx(grid(si), rel=1e-15) and grid(si) == {"d_min": 50e-6, "d_max": 1e-3}
+    run = {"warn": False, "grid_check": False, "accuracy": False}
+    assert units.simulate(**run).summary["d50_um"] == pytest.approx(si.simulate(**run).summary["d50_um"], rel=1e-9)
+    assert grid(si.with_settings({"particles.d_min": "50um"})) == pytest.approx(grid(si), rel=1e-15)
+    with pytest.raises(gf.ConfigError, match=r"particles.settings.d_min = '50 kg': unit 'kg' is kg, but the value "
+                                             r"must be in m"):
+        gf.load_text(text.replace(plain, "settings: {classes: 10, d_min: 50 kg}"), "kg.yaml")
+    two_d = open(os.path.join(os.path.dirname(SCENE), "sen_2d_dem_kernel.yaml")).read()
+    assert "      liquid_classes: 40\n" in two_d
+    with pytest.raises(gf.ConfigError, match=r"number_scale = '1e9 kg': expected a plain number \(this setting "
+                                             r"has no unit\)"):
+        line = "      liquid_classes: 40\n"
+        gf.load_text(two_d.replace(line, line + "      number_scale: 1e9 kg\n"), "2d.yaml")
+
+
 def test_many_threads_get_the_same_conversions():
     texts = [("60 degC", "K"), ("700 m3/h", "m3/s"), ("3 mPa s", "Pa s"), ("5 W/K", "W/K"), ("2 kJ/(kg K)",
              "J/(kg K)")] * 40
