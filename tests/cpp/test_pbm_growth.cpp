@@ -88,6 +88,13 @@ TEST(PbmGrowth, MassGrowthRateIsExactForTheNormalizedLaws) {
 namespace granuflow {
 namespace {
 
+// Pivot diameters from 0.1 mm over a factor 40, evenly spaced in log d.
+kernels::Grid diameter_grid(size_t classes) {
+  std::vector<double> d(classes);
+  for (size_t i = 0; i < classes; ++i) d[i] = 1e-4 * std::pow(40.0, double(i) / (classes - 1));
+  return kernels::Grid::from_diameter_pivots(d);
+}
+
 // The residual's path for doubles and a volume-normalized law (FvGrowth::flux_values: the interior faces' densities
 // in one vector loop) against the scheme written out here operation by operation (fv_growth.hpp: upwind donor, van
 // Albada's slope a b (a + b) / (a^2 + b^2) on the density jumps scaled to the donor's width, nothing through the bottom
@@ -96,9 +103,7 @@ namespace {
 // slope's q = 0 case) and two growth terms, one without solids to deliver. The Jets' path (the same template) agrees
 // to round-off (a Jet divides by multiplying with the inverse).
 TEST(PbmGrowth, NormalizedFluxesOfDoublesFollowTheSchemeBitForBit) {
-  std::vector<double> d(23);
-  for (size_t i = 0; i < d.size(); ++i) d[i] = 1e-4 * std::pow(40.0, double(i) / (d.size() - 1));
-  const kernels::Grid grid = kernels::Grid::from_diameter_pivots(d);
+  const kernels::Grid grid = diameter_grid(23);
   const int n = grid.size(), nf = n + 1;
   const auto& de = grid.diameter_edges();
   std::vector<double> N(n);
@@ -152,9 +157,7 @@ TEST(PbmGrowth, NormalizedFluxesOfDoublesFollowTheSchemeBitForBit) {
 // derivatives divided q^2 = (a^2 + b^2)^2, which underflows below jumps of about 1e-77: 0 / 0, a NaN Jacobian, and
 // a run on such a grid stopped at t = 0. Both limiters, doubles and Jets.
 TEST(PbmGrowth, LimitedFluxesAndJacobianScaleWithTheDistributionDownToItsFarTail) {
-  std::vector<double> d(30);
-  for (size_t i = 0; i < d.size(); ++i) d[i] = 1e-4 * std::pow(40.0, double(i) / (d.size() - 1));
-  const kernels::Grid grid = kernels::Grid::from_diameter_pivots(d);
+  const kernels::Grid grid = diameter_grid(30);
   const int n = grid.size(), nf = n + 1;
   const auto& de = grid.diameter_edges();
   std::vector<double> N(n);
