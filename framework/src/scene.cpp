@@ -45,6 +45,13 @@ class Loader {
 
   Scene load(const YAML::Node& root) {
     if (!root.IsMap()) fail("", "the file must be a mapping of scene keys, got " + kind_name(root));
+    // A Monte Carlo scene (engine: monte_carlo, docs/monte_carlo.md) is valid, just not a flowsheet: say which
+    // commands take it instead of listing the keys a flowsheet allows.
+    if (const YAML::Node engine = root["engine"]; engine && engine.IsScalar() && engine.Scalar() == "monte_carlo")
+      fail("engine",
+           "monte_carlo: a scene for the Monte Carlo engine, not a flowsheet; `granuflow run` and "
+           "`granuflow describe` take it (Python: granuflow.montecarlo.scene.Scene(path).run()), the other "
+           "commands and granuflow.load() read flowsheets, which have no engine key");
     check_keys(root, "",
                {"scene", "description", "t_end", "output", "solver", "particles", "units", "connections", "inputs",
                 "summary", "plots", "sweep", "notes", "links", "accuracy", "events", "checkpoints", "plugins"});

@@ -68,6 +68,19 @@ def test_bad_scene_is_refused_with_one_line(tmp_path, extra, needles):
     assert_bad_input(cli("run", path, "--out", tmp_path / "o"), *needles)
 
 
+def test_a_flowsheet_command_names_the_commands_that_take_a_monte_carlo_scene(tmp_path):
+    # before: "engine: unknown key (allowed: ...)", as if the scene were a broken flowsheet
+    needles = ["engine: monte_carlo", "Monte Carlo engine, not a flowsheet", "`granuflow run`",
+               "granuflow.montecarlo.scene.Scene(path).run()"]
+    assert_bad_input(cli("steady", SCENE, "--out", tmp_path / "o"), *needles, path=SCENE)
+    with pytest.raises(gf.ConfigError) as e:
+        gf.load(SCENE)
+    assert all(n in str(e.value) for n in needles), str(e.value)
+    # another engine's name is no Monte Carlo scene: the flowsheet's keys are listed
+    with pytest.raises(gf.ConfigError, match="engine: unknown key"):
+        gf.load_text(open(SCENE).read().replace("engine: monte_carlo", "engine: dem"), "other.yaml")
+
+
 def test_bad_python_input_is_a_value_error():
     with pytest.raises(ValueError, match="mu_l = -1"):
         mc.run({"mu_l": -1.0}, {}, [0.0, 1.0])
