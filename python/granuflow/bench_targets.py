@@ -180,9 +180,13 @@ def target_writing(size: int, repeats: int, progress: bool) -> dict:
     startup = timed_process(launcher() + ["--version"], repeats)["wall_s"]
     fixed = small["wall_s"] - small_solve
     solve, write = statistics.median(solves), statistics.median(writes)
-    beyond = (proc["wall_s"] - fixed) / proc_solve  # the run's time beyond its fixed start-up, per solve time
-    return _record("writing", write, "s", solve, f"solve of the 2-D scene at {size}x{size}", write / solve,
-                   "writing / solve", run_wall_s=proc["wall_s"], run_cpu_s=proc["cpu_s"], run_solve_s=proc_solve,
+    # The goal's figure: the whole run's time beyond its fixed start-up, against the solve in that run (the table
+    # showed the in-process writing against the solve here before, a ratio the goal does not name).
+    beyond = (proc["wall_s"] - fixed) / proc_solve
+    return _record("writing", proc["wall_s"] - fixed, "s", proc_solve,
+                   f"solve in the run of the 2-D scene at {size}x{size}", beyond, "run less fixed start-up / solve",
+                   write_s=write, solve_s=solve, write_over_solve=write / solve,
+                   run_wall_s=proc["wall_s"], run_cpu_s=proc["cpu_s"], run_solve_s=proc_solve,
                    startup_fixed_s=fixed, startup_fixed_cpu_s=small["cpu_s"] - small_solve,
                    run_beyond_startup_over_solve=beyond, startup_s=startup,
                    run_beyond_version_startup_over_solve=(proc["wall_s"] - startup) / proc_solve,
@@ -461,7 +465,7 @@ def summary(records) -> list[str]:
 
 DETAILS = {"run": ("cpu_s", "heavy_imports", "numpy_import_wall_s", "numpy_import_cpu_s", "solve_and_grid_check_s",
                    "d50_um"),
-           "writing": ("run_wall_s", "run_solve_s", "startup_fixed_s", "run_beyond_startup_over_solve", "startup_s",
+           "writing": ("write_s", "write_over_solve", "run_wall_s", "run_solve_s", "startup_fixed_s", "startup_s",
                        "run_beyond_version_startup_over_solve", "states", "csv_bytes"),
            "classes": ("cpu_ratio", "ratio_range", "rounds", "where_time_goes"),
            "contour": ("solver_only_per_s", "sims_per_s_2_workers", "same_values"),

@@ -16,7 +16,10 @@ def test_quick_targets_report_value_baseline_ratio_and_answer(tmp_path):
     records = json.loads(out.read_text())
     assert [r["target"] for r in records] == ["writing", "run"]
     for r in records:
-        assert r["value"] > 0 and r["baseline"] > 0 and r["goal"] and r["issue_before"] and r["command"]
+        # writing's value, the run beyond its fixed start-up, is a difference of two processes' times: at the quick
+        # 20x20 size it can fall to about 0 on a noisy machine, so only its definition is checked
+        assert (r["target"] == "writing" or r["value"] > 0) and r["baseline"] > 0
+        assert r["goal"] and r["issue_before"] and r["command"]
         assert math.isclose(r["ratio"], r["value"] / (r["baseline"] if r["target"] == "writing" else 0.1))
         assert r["quick"] is True and r["cores"] >= 1
     writing, run = records
@@ -26,6 +29,10 @@ def test_quick_targets_report_value_baseline_ratio_and_answer(tmp_path):
     assert writing["startup_fixed_s"] > 0 and writing["startup_fixed_cpu_s"] > 0
     assert math.isclose(writing["run_beyond_startup_over_solve"],
                         (writing["run_wall_s"] - writing["startup_fixed_s"]) / writing["run_solve_s"])
+    # the table's ratio is the goal's (run less its fixed start-up, per solve), not the in-process writing's
+    assert writing["ratio"] == writing["run_beyond_startup_over_solve"]
+    assert math.isclose(writing["value"], writing["run_wall_s"] - writing["startup_fixed_s"])
+    assert writing["write_s"] > 0 and math.isclose(writing["write_over_solve"], writing["write_s"] / writing["solve_s"])
     assert run["d50_um"] == pytest.approx(HEADLINE_D50_UM, rel=CPU_REL)  # the timed process computes the headline
     assert run["numpy_import_wall_s"] > 0 and run["cpu_s"] > 0
     lines = p.stdout.splitlines()
