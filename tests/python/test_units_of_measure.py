@@ -39,6 +39,19 @@ def test_composed_units_convert_to_si(text, si, expected):
     assert to_si(text, si, "x") == pytest.approx(expected, rel=1e-14)
 
 
+@pytest.mark.parametrize("text, spaced, si", [("50um", "50 um", "m"), ("90g/min", "90 g/min", "kg/s"),
+                                              ("1e-3m", "1e-3 m", "m"), ("60degC", "60 degC", "K"),
+                                              ("-3.5e+2mbar", "-3.5e+2 mbar", "Pa"), (".5kg", ".5 kg", "kg")])
+def test_a_unit_written_on_to_its_number_reads_as_with_a_space(text, spaced, si):
+    # as the core reads scene files and --set (parse_quantity); before, Python's edge refused "50um"
+    from granuflow.quantity import parse_time, split
+    assert to_si(text, si, "x") == to_si(spaced, si, "x")
+    assert parse_time("60min", "t_end") == 3600.0
+    for bad in ("fv_koren", "", "abc 3"):
+        with pytest.raises(gf.ConfigError, match="expected a number, optionally followed by a unit"):
+            split(bad, "x")
+
+
 def test_temperature_differences_drop_the_offset():
     from granuflow.quantity import difference_to_si
     assert difference_to_si("2 degC", "K", "sigma") == pytest.approx(2.0, rel=1e-14)
