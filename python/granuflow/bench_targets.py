@@ -402,12 +402,30 @@ def target_two_zone(repeats: int, progress: bool, scipy: bool = True) -> dict:
                    repeats=repeats, command="granuflow bench targets --only two_zone")
 
 
+def vcpu_probe(repeats: int = 7) -> dict[str, float]:
+    """Median wall time (ms) of ``python3 -c pass`` pinned to each vCPU this process may use. On this shared machine
+    the host slows one vCPU at a time by 25-40 %, and which one changes within minutes: every figure measured on the
+    slow one (a pinned or unpinned process, one of two workers) moves with it. Empty where affinity is not available."""
+    if not hasattr(os, "sched_getaffinity"):
+        return {}
+    out = {}
+    for cpu in sorted(os.sched_getaffinity(0)):
+        walls = []
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            subprocess.run([sys.executable, "-c", "pass"], check=True,
+                           preexec_fn=lambda c=cpu: os.sched_setaffinity(0, {c}))
+            walls.append(time.perf_counter() - t0)
+        out[str(cpu)] = statistics.median(walls) * 1e3  # str: the key JSON keeps
+    return out
+
+
 def bench_targets(*, quick: bool = False, repeats: int = 5, only=None, scipy: bool = True,
                   progress: bool = False) -> list[dict]:
     """One record per target (module docstring), with machine metadata and the load average around the run."""
     chosen = [t for t in TARGETS if (not only or t in only) and not (quick and t in QUICK_SKIPS and not only)]
     reps = 1 if quick else repeats
-    load_before = os.getloadavg()
+    load_before, probe_before = os.getloadavg(), vcpu_probe()
     run = {"calibration": lambda: target_calibration(1 if quick else min(reps, 3), progress),
            "contour": lambda: target_contour(5 if quick else 25, 1 if quick else min(reps, 3), progress),
            "classes": lambda: target_classes(reps, progress),
@@ -416,7 +434,7 @@ def bench_targets(*, quick: bool = False, repeats: int = 5, only=None, scipy: bo
            "run": lambda: target_run(reps, progress)}
     records = [run[t]() for t in chosen]
     meta = {**bench.meta(), "loadavg_before": list(load_before), "loadavg_after": list(os.getloadavg()),
-            "quick": quick}
+            "vcpu_ms_before": probe_before, "vcpu_ms_after": vcpu_probe(), "quick": quick}
     return [{**r, **meta} for r in records]
 
 
@@ -460,6 +478,11 @@ def summary(records) -> list[str]:
         la, lb = r0["loadavg_before"], r0["loadavg_after"]
         lines.append(f"load average before {la[0]:.2f}, after {lb[0]:.2f} ({r0['cores']} cores, commit "
                      f"{r0['commit']}); times are for information only, never pass/fail.")
+        pb, pa = r0.get("vcpu_ms_before") or {}, r0.get("vcpu_ms_after") or {}
+        if pb:
+            shown = ", ".join(f"vCPU {c} {pb[c]:.1f} ms" + (f" -> {pa[c]:.1f} ms" if c in pa else "") for c in pb)
+            lines.append(f"python3 -c pass pinned to each vCPU, before -> after: {shown} (one slower by 25 % or "
+                         "more lowers every figure measured on it)")
     return lines
 
 

@@ -37,6 +37,14 @@ def test_quick_targets_report_value_baseline_ratio_and_answer(tmp_path):
     assert run["numpy_import_wall_s"] > 0 and run["cpu_s"] > 0
     lines = p.stdout.splitlines()
     assert lines[0].split()[:2] == ["target", "value"]
+    # each vCPU's speed before and after, from pinned processes (the host slows one vCPU at a time)
+    import os
+    cpus = sorted(str(c) for c in os.sched_getaffinity(0))
+    for r in records:
+        assert sorted(r["vcpu_ms_before"]) == cpus and sorted(r["vcpu_ms_after"]) == cpus
+        assert all(v > 0 for v in list(r["vcpu_ms_before"].values()) + list(r["vcpu_ms_after"].values()))
+    probe = [line for line in lines if line.startswith("python3 -c pass pinned to each vCPU")]
+    assert len(probe) == 1 and all(f"vCPU {c} " in probe[0] for c in cpus), probe
     assert any(line.startswith("writing ") for line in lines) and any(line.startswith("run ") for line in lines)
     bad = cli("bench", "targets", "--only", "speed")
     assert bad.returncode == 2 and "--only speed: not a target" in bad.stderr
