@@ -10,6 +10,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <regex>
 #include <stdexcept>
 #include <utility>
 
@@ -171,6 +172,17 @@ const std::vector<std::string>& known_si_units() {
     return v;
   }();
   return units;
+}
+
+std::string setting_si_unit(const std::string& description) {
+  static const std::regex word(R"(,\s*([^\s,()]+))");
+  const auto& known = known_si_units();
+  for (auto it = std::sregex_iterator(description.begin(), description.end(), word); it != std::sregex_iterator();
+       ++it) {
+    const std::string w = (*it)[1].str();
+    if (w != "-" && std::find(known.begin(), known.end(), w) != known.end()) return w;
+  }
+  return "";
 }
 
 double to_si(double value, const std::string& from_unit, const std::string& si_unit, const std::string& where) {

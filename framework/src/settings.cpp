@@ -4,7 +4,6 @@
 #include <cstdlib>
 #include <iostream>
 #include <mutex>
-#include <regex>
 #include <set>
 
 #include "granuflow/errors.hpp"
@@ -56,23 +55,6 @@ long Settings::get_int(const std::string& name, long def, long lower, long upper
   return v;
 }
 
-namespace {
-
-// The SI unit a real setting declares in its description, after a comma ("smallest pivot diameter, m (Table 5)"); ""
-// for a plain number. The same reading as the Python package's structure.setting_si_unit (--set).
-std::string si_unit_of(const std::string& description) {
-  static const std::regex word(R"(,\s*([^\s,()]+))");
-  const auto& known = known_si_units();
-  for (auto it = std::sregex_iterator(description.begin(), description.end(), word); it != std::sregex_iterator();
-       ++it) {
-    const std::string w = (*it)[1].str();
-    if (w != "-" && std::find(known.begin(), known.end(), w) != known.end()) return w;
-  }
-  return "";
-}
-
-}  // namespace
-
 double Settings::get_real(const std::string& name, double def, double lower, double upper,
                           const std::string& description) {
   declared_.push_back({name, SettingType::Real, def, {}, lower, upper, description, ""});
@@ -85,7 +67,7 @@ double Settings::get_real(const std::string& name, double def, double lower, dou
     throw ConfigError(where + ": expected a finite number, optionally followed by a unit");
   // With a unit ("50 um"), as a parameter's value is read: converted once, here, to the SI unit the setting declares.
   if (!unit.empty()) {
-    const std::string si = si_unit_of(description);
+    const std::string si = setting_si_unit(description);
     if (si.empty()) throw ConfigError(where + ": expected a plain number (this setting has no unit)");
     v = to_si(v, unit, si, where);
   }

@@ -120,16 +120,10 @@ def with_settings(fs, settings: Mapping, where: str = "settings"):
 
 def setting_si_unit(spec: dict) -> str:
     """The SI unit of a real setting: the core declares it in the description, after a comma ("largest pivot
-    diameter, m (Table 5)"); "" for a plain number."""
-    import re
-
+    diameter, m (Table 5)"); "" for a plain number. The core's reading, the one its scene files use."""
     if spec.get("type") != "number":
         return ""
-    known = set(_core.known_si_units())
-    for word in re.findall(r",\s*([^\s,()]+)", spec.get("description", "")):
-        if word in known and word != "-":
-            return word
-    return ""
+    return _core.setting_si_unit(spec.get("description", ""))
 
 
 def si_text(fs, name: str, text: str, where: str) -> str:

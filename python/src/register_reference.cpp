@@ -161,6 +161,8 @@ void register_reference(py::module_& m) {
   m.def("kernel_reference", &kernel_reference,
         "Every registered kernel and scheme by family: description, parameters, settings, per-class needs.");
   m.def("known_si_units", &known_si_units, "The SI units parameters, states and outputs may declare.");
+  m.def("setting_si_unit", &setting_si_unit, "description"_a,
+        "The SI unit a real setting declares in its description (after a comma); '' for a plain number.");
   m.def(
       "material_catalogue",
       []() {

@@ -13,6 +13,10 @@ bool is_known_si_unit(const std::string& si_unit);
 // The common coherent SI units, for docs and for finding a unit in a setting's description.
 const std::vector<std::string>& known_si_units();
 
+// The SI unit a real setting declares in its description, after a comma ("smallest pivot diameter, m (Table 5)"); ""
+// for a plain number. Settings::get_real converts a value with a unit to it; the Python package reads it from here.
+std::string setting_si_unit(const std::string& description);
+
 // Converts `value` given in `from_unit` to the SI unit `si_unit`; throws ConfigError naming `where` when the
 // unit is unknown or of another dimension. An empty `from_unit` means the value is already SI.
 double to_si(double value, const std::string& from_unit, const std::string& si_unit, const std::string& where);
