@@ -25,8 +25,12 @@ def d50_by_classes():
 def test_finer_grid_from_the_command_line_approaches_the_converged_d50(tmp_path, d50_by_classes):
     r = cli("run", SCENE, "--out", tmp_path, "--no-plots", "--quiet", "--set", "particles.classes=40")
     assert r.returncode == 0, r.stderr
-    d50 = json.load(open(tmp_path / "summary.json"))["d50_um"]
+    summary = json.load(open(tmp_path / "summary.json"))
+    d50 = summary["d50_um"]
     assert d50 == d50_by_classes[40]
+    # --quiet: nothing on stdout; on stderr the run's warnings, each once, and nothing else
+    assert r.stdout == "" and summary["warnings"]
+    assert r.stderr.splitlines() == [f"granuflow: warning: {w}" for w in summary["warnings"]]
     # a coarse grid smears mass to large sizes: 40 classes lie between the paper's 10 and the converged 160
     assert d50_by_classes[160] < d50 < d50_by_classes[10]
     assert abs(d50 - d50_by_classes[160]) < 0.2 * abs(d50_by_classes[10] - d50_by_classes[160])

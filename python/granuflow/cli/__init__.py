@@ -42,7 +42,7 @@ def _add_batch_options(p) -> None:
     p.add_argument("--t-end", help="end time of every run in seconds (or with a unit, e.g. '60 min')")
     p.add_argument("--executor", default="threads", choices=["threads", "serial"])
     p.add_argument("--no-progress", action="store_true", help="no progress bar (default: only on a terminal)")
-    p.add_argument("--quiet", action="store_true", help="no output but errors (and no progress bar)")
+    p.add_argument("--quiet", action="store_true", help="no output but warnings and errors (and no progress bar)")
 
 
 def _version() -> str:
@@ -112,7 +112,7 @@ def _parser(named: str | None):
                         "separated, e.g. '10 min,30 min'; replaces the scene's checkpoints:)")
     r.add_argument("--restart", metavar="FILE",
                    help="resume from a checkpoint file of the same scene (bit-identical to the run that wrote it)")
-    r.add_argument("--quiet", action="store_true", help="no output but errors")
+    r.add_argument("--quiet", action="store_true", help="no output but warnings and errors")
     r.set_defaults(func=_cmd("run", "cmd_run"))
     st = add_parser("steady", help="solve a scene's steady state directly; write steady.json and steady_psd.csv")
     st.add_argument("scene")
@@ -120,7 +120,7 @@ def _parser(named: str | None):
     st.add_argument("--set", action="append", metavar="UNIT.PARAM=VALUE", help="override a parameter (unit allowed)")
     st.add_argument("--t", help="time at which scheduled inputs are evaluated (s, or with a unit: '70 h'; default 0)")
     st.add_argument("--no-stability", action="store_true", help="skip the eigenvalues of the linearized dynamics")
-    st.add_argument("--quiet", action="store_true", help="no output but errors")
+    st.add_argument("--quiet", action="store_true", help="no output but warnings and errors")
     st.set_defaults(func=_cmd("steady", "cmd_steady"))
     dr = add_parser("draw", help="draw a scene's flowsheet with Graphviz (units, streams, recycles)")
     dr.add_argument("scene")
@@ -203,7 +203,7 @@ def _parser(named: str | None):
                         "predictions.csv and, against sigma, in fit.csv")
     c.add_argument("--no-plots", action="store_true", help="write the report and tables without the parity PNGs")
     c.add_argument("--no-progress", action="store_true", help="no progress bar (default: only on a terminal)")
-    c.add_argument("--quiet", action="store_true", help="no output but errors (and no progress bar)")
+    c.add_argument("--quiet", action="store_true", help="no output but warnings and errors (and no progress bar)")
     c.set_defaults(func=_cmd("calibrate", "cmd_calibrate"))
     return p, sub
 
