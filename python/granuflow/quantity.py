@@ -55,17 +55,9 @@ def split(text: str, where: str = "") -> tuple[float, str]:
     """``"60 degC"`` -> ``(60.0, "degC")``; ``"1e-3"`` -> ``(0.001, "")``; a unit written on to the number
     (``"50um"``, ``"1e-3m"``) as the core's scene files and ``--set`` read it. ConfigError naming ``where``
     otherwise."""
-    parts = str(text).strip().split(None, 1)
-    try:
-        return float(parts[0]), (parts[1].strip() if len(parts) > 1 else "")
-    except (ValueError, IndexError):
-        pass
-    if parts:  # a decimal number with a unit attached: the longest number at the start, the rest its unit
-        import re
-
-        m = re.match(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?", parts[0])
-        if m and m.end() < len(parts[0]):
-            return float(m.group()), str(text).strip()[m.end():].strip()
+    parsed = _core.parse_quantity(str(text).strip())  # the core's own reading (quantity.cpp), so both edges agree
+    if parsed is not None:
+        return parsed
     raise ConfigError(f"{where + ' = ' if where else ''}'{text}': expected a number, optionally followed by a "
                       "unit")
 

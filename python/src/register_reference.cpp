@@ -6,7 +6,9 @@
 
 #include <algorithm>
 #include <map>
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "granuflow/errors.hpp"
@@ -161,6 +163,17 @@ void register_reference(py::module_& m) {
   m.def("kernel_reference", &kernel_reference,
         "Every registered kernel and scheme by family: description, parameters, settings, per-class needs.");
   m.def("known_si_units", &known_si_units, "The SI units parameters, states and outputs may declare.");
+  m.def(
+      "parse_quantity",
+      [](const std::string& text) -> std::optional<std::pair<double, std::string>> {
+        double v = 0.0;
+        std::string unit;
+        if (!parse_quantity(text, &v, &unit)) return std::nullopt;
+        return std::make_pair(v, unit);
+      },
+      "text"_a,
+      "(number, unit) of a quantity as scene files write it ('60 degC', '50um', '1e-3'), None where it does not "
+      "start with a number: the one reading of the core and the Python edge.");
   m.def("setting_si_unit", &setting_si_unit, "description"_a,
         "The SI unit a real setting declares in its description (after a comma); '' for a plain number.");
   m.def(
