@@ -25,10 +25,18 @@ std::vector<double> output_times(const SimOptions& opt) {
   return t_out;
 }
 
-// 100 times the absolute tolerance: what an integrator may leave below zero on a state that tends to zero.
+// 100 times the absolute tolerance: what an integrator may leave below zero on a state that tends to zero. A state
+// that is not a finite number is named as such (a NaN fails every comparison and was reported as negative).
 void check_nonnegative(const Flowsheet& fs, const SimOptions& opt, double t, const std::vector<double>& y) {
   for (size_t i = 0; i < y.size(); ++i) {
     const StateSpec& st = fs.state_spec(static_cast<int>(i));
+    if (!std::isfinite(y[i])) {
+      const std::string unit = fs.units()[fs.state_unit(static_cast<int>(i))].name;
+      throw SolverError("unit '" + unit + "': state " + st.name + " = " + fmt_num(y[i]) + " at t = " + fmt_num(t) +
+                            " s is not a finite number: a rate or closure of the unit gave it; check the size grid "
+                            "and the ranges the unit's closures hold for",
+                        t, unit, 0.0);
+    }
     if (!st.nonnegative || y[i] >= -100.0 * opt.atol * st.scale) continue;
     const std::string unit = fs.units()[fs.state_unit(static_cast<int>(i))].name;
     throw SolverError("unit '" + unit + "': inventory " + st.name + " = " + fmt_num(y[i]) + " " + st.unit +

@@ -49,6 +49,20 @@ TEST(PbmGrid, GeometricGridHasRatioTwoToTheOneOverQ) {
   EXPECT_NEAR(gp.diameter_edges()[1], std::sqrt(50e-6 * 100e-6), 1e-15);
 }
 
+// A grid whose end pivots' squares leave the doubles gave NaN rates at t = 0 (a doubling grid of 525 classes from
+// 2^-12 m3); it is refused naming the pivot, and the largest grid within range still has finite virtual pivots.
+TEST(PbmGrid, AGridBeyondTheRangeOfItsSquaredVolumesIsRefused) {
+  const auto last = Grid::geometric(std::exp2(-12.0), 1, 524);
+  EXPECT_TRUE(std::isfinite(last.upper_virtual()) && last.upper_virtual() > last.pivots().back());
+  try {
+    Grid::geometric(std::exp2(-12.0), 1, 525);
+    FAIL() << "a grid reaching 2e154 m3 was accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("grid pivot 524"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(Grid::from_pivots({1e-160, 1e-150, 1e-140}), ConfigError);  // the lower virtual pivot underflows
+}
+
 TEST(PbmGrid, CharacteristicDiametersInterpolateTheCumulativeMassInLogD) {
   const auto g = Grid::geometric(1.0, 1, 4);
   std::vector<double> N(4, 0.0);

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <regex>
 
 #include "granuflow/errors.hpp"
@@ -16,6 +17,7 @@ namespace {
 // A hold-up drained at a fixed rate whatever is left: dm/dt = -k (not positivity-preserving, on purpose).
 class FixedDrain : public UnitBase<FixedDrain> {
  public:
+  explicit FixedDrain(double m0 = 1.0) : m0_(m0) {}
   std::string type() const override { return "fixed_drain"; }
   void declare(UnitSpec& s, Settings&) override {
     p_k_ = s.add_param({"k", "kg/s", 1.0, 0.0, 10.0, "drain rate", "test"});
@@ -29,10 +31,11 @@ class FixedDrain : public UnitBase<FixedDrain> {
   }
   template <class T>
   void init(InitCtx<T>& c) const {
-    c.x(s_m_) = T(1.0);
+    c.x(s_m_) = T(m0_);
   }
 
  private:
+  double m0_;
   ParamId p_k_;
   StateId s_m_;
 };
@@ -55,6 +58,25 @@ TEST(Positivity, AnInventoryDrainedBelowZeroStopsTheRunNamingItAndTheTime) {
   o.t_end = 1.0, o.t_out = {0.0, 1.0};
   const SimResult r = simulate(fs, o);
   EXPECT_NEAR(r.state(1, 0), 0.0, 1e-9);
+}
+
+// A start that is not a number (as a grid beyond the doubles' range once gave): dm/dt = -k from m = NaN.
+TEST(Positivity, AnInventoryThatIsNotANumberIsNamedAsSuchNotAsNegative) {
+  Flowsheet fs("nan");
+  fs.add_unit("tank", std::make_unique<FixedDrain>(std::nan("")), Settings("tank", {}));
+  fs.finalize();
+  SimOptions o;
+  o.t_end = 1.0, o.t_out = {0.0, 1.0};
+  try {
+    simulate(fs, o);
+    FAIL() << "a NaN inventory was returned";
+  } catch (const SolverError& e) {
+    EXPECT_EQ(e.unit(), "tank");
+    const std::string what = e.what();
+    EXPECT_NE(what.find("state m = nan"), std::string::npos) << what;
+    EXPECT_NE(what.find("not a finite number"), std::string::npos) << what;
+    EXPECT_EQ(what.find("negative"), std::string::npos) << what;
+  }
 }
 
 TEST(Positivity, GridBeyondTheFluidizedRangeKeepsTheBedInventoriesNonNegative) {
