@@ -39,6 +39,7 @@ bool is_banded_lowrank_solver(SUNLinearSolver s);
 void banded_lowrank_same_but_diagonal(SUNLinearSolver s);
 struct BandedLowRankStats {
   long setups = 0, dense_setups = 0;     // setups, and those factored densely (the structure did not hold)
+  long untested_setups = 0;              // dense setups that did not look for it (it had failed in a row before)
   int lower = 0, upper = 0;              // band of the last banded setup
   int border = 0, rank = 0, states = 0;  // border states, outer products, unknowns
   double worst_outside = 0.0;            // largest |a_ij - u_i v_j| between distant classes, relative to max |a|

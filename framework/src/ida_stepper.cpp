@@ -393,7 +393,10 @@ void IdaStepper::finish(SolverStats& stats) {
     const BandedLowRankStats b = banded_lowrank_stats(user_.structured);
     if (b.dense_setups > 0)
       stats.linear_solver += "; " + std::to_string(b.dense_setups) + " of " + std::to_string(b.setups) +
-                             " setups dense LU (the matrix was not band + low rank)";
+                             " setups dense LU (the matrix was not band + low rank" +
+                             (b.untested_setups > 0 ? "; " + std::to_string(b.untested_setups) +
+                                                          " without looking, after it was not twice in a row)"
+                                                    : std::string(")"));
   }
   stats.method = "bdf (IDAS)";
   stats.method_reason = reason_;

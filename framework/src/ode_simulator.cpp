@@ -223,7 +223,7 @@ SimResult simulate_ode(Flowsheet& fs, const SimOptions& opt, Method requested,
                        std::chrono::steady_clock::time_point wall0) {
   // Explicit units are inlined (their states are no unknowns of an ODE); a Newton matrix over inlined units is the
   // dense Schur complement, so BDF on a system too large for dense algebra goes to IDAS instead.
-  const LinearSolverKind kind = choose_linear_solver(fs, opt.linear_solver, opt.dense_limit);
+  const LinearSolverKind kind = choose_linear_solver(fs, opt.linear_solver, opt.dense_limit, false);
   // banded: BDF factors its Newton matrix densely (the band + low-rank solver is IDAS's)
   const bool dense = kind == LinearSolverKind::kDense || kind == LinearSolverKind::kBanded,
              gmres = kind == LinearSolverKind::kGmres;

@@ -59,8 +59,10 @@ void make_linear_solver(bool dense, const DaeSystem& sys, N_Vector y, SUNContext
 // choice for units whose Jacobian is both large and dense (a 2-D population: every bin pair aggregates).
 // kBanded: the dense Jacobian, factored as band + outer products + border (banded_lowrank_solver.hpp).
 enum class LinearSolverKind { kDense, kSparse, kGmres, kBanded };
-// kAuto: dense up to dense_limit unknowns; beyond, gmres if a unit preconditions itself, else use_dense().
-LinearSolverKind choose_linear_solver(const Flowsheet& fs, LinearSolverChoice choice, int dense_limit);
+// kAuto: dense up to dense_limit unknowns; beyond, gmres if a unit preconditions itself, else (where the integrator
+// has it, `banded_available`: IDAS) banded when size classes hold most unknowns, else use_dense().
+LinearSolverKind choose_linear_solver(const Flowsheet& fs, LinearSolverChoice choice, int dense_limit,
+                                      bool banded_available = true);
 const char* linear_solver_name(LinearSolverKind k);
 inline constexpr int kGmresMaxKrylov = 20;  // Krylov dimension (no restarts)
 // SUNDIALS' name of a return flag from a *GetReturnFlagName call (which hands the string to the caller), or fallback.

@@ -86,12 +86,31 @@ TEST(BandedLowRankSolver, SolvesTheTwoZoneNewtonMatrixToRoundOff) {
       hi = i;
   ASSERT_GE(lo, 0);
   ASSERT_GE(hi, 0);
+  const Eigen::MatrixXd of_the_form = a;
   a(lo, hi) += 0.5 * a.cwiseAbs().maxCoeff();
   const Eigen::MatrixXd full = a;
   ASSERT_EQ(SUNLinSolSetup(ls, A), 0);
   EXPECT_EQ(detail::banded_lowrank_stats(ls).dense_setups, 1);
   ASSERT_EQ(SUNLinSolSolve(ls, A, x, b, 0.0), 0);
   EXPECT_LT(residual(full, xv, bv), 1e-13);
+  // Not of the form a second time in a row: the next eight setups factor densely without looking, even a matrix of
+  // the form; the one after looks again and finds it.
+  ASSERT_EQ(SUNLinSolSetup(ls, A), 0);
+  EXPECT_EQ(detail::banded_lowrank_stats(ls).dense_setups, 2);
+  EXPECT_EQ(detail::banded_lowrank_stats(ls).untested_setups, 0);
+  a = of_the_form;
+  for (int k = 1; k <= 8; ++k) {
+    ASSERT_EQ(SUNLinSolSetup(ls, A), 0);
+    EXPECT_EQ(detail::banded_lowrank_stats(ls).untested_setups, k);
+    EXPECT_EQ(detail::banded_lowrank_stats(ls).dense_setups, 2 + k);
+    ASSERT_EQ(SUNLinSolSolve(ls, A, x, b, 0.0), 0);
+    EXPECT_LT(residual(of_the_form, xv, bv), 1e-13);
+  }
+  ASSERT_EQ(SUNLinSolSetup(ls, A), 0);
+  EXPECT_EQ(detail::banded_lowrank_stats(ls).dense_setups, 10);
+  EXPECT_EQ(detail::banded_lowrank_stats(ls).untested_setups, 8);
+  ASSERT_EQ(SUNLinSolSolve(ls, A, x, b, 0.0), 0);
+  EXPECT_LT(residual(of_the_form, xv, bv), 1e-13);
   SUNLinSolFree(ls);
   N_VDestroy(b), N_VDestroy(x);
   SUNMatDestroy(A);
