@@ -258,9 +258,9 @@ double class_share(const Flowsheet& fs) {
 }
 
 // Past dense_limit, size-class populations go to the band + low-rank solver, which factors a setup densely where the
-// matrix is not of that form (aggregation): KLU filled in on them (the tank chains at 30 classes, 1677 unknowns
-// uninlined: 0.93 s against 0.11 s banded on 594), and dense LU was twice the banded solve for two zones at 200
-// classes (0.20 against 0.10 s).
+// matrix is not of that form (aggregation): KLU filled in on them (the tank chains at 60 classes, 3297 unknowns
+// uninlined: 7.9 s against 0.31 s banded on 1134), and dense LU was twice the banded solve for two zones at 200
+// classes (0.23 against 0.115 s).
 LinearSolverKind choose_linear_solver(const Flowsheet& fs, LinearSolverChoice choice, int dense_limit,
                                       bool banded_available) {
   if (choice == LinearSolverChoice::kGmres) return LinearSolverKind::kGmres;

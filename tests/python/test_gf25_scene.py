@@ -420,9 +420,9 @@ def test_linear_solver_choice_follows_the_jacobian_fill():
 
 @pytest.mark.parametrize("scene, classes", [("two_zone_layering.yaml", 200), ("tanks_in_series_rtd.yaml", 30)])
 def test_auto_factors_fine_layering_and_residence_grids_as_band_plus_low_rank(scene, classes):
-    """Past dense_limit (400 unknowns) `auto` took dense LU (two zones at 200 classes: 0.20 s against 0.10 s banded)
-    or KLU (30 classes in the tank chains: 0.93 s, its LU filling in); it now takes the band + low-rank solver,
-    which holds for every setup here and gives the dense run within the integrator's tolerance."""
+    """Past dense_limit (400 unknowns) `auto` took dense LU (two zones at 200 classes: 0.23 s against 0.115 s banded)
+    or KLU (30 classes in the tank chains: 0.92 s against 0.12 s, its LU filling in); it now takes the band + low-rank
+    solver, which holds for every setup here and gives the dense run within the integrator's tolerance."""
     fs = gf.load(os.path.join(ROOT, "flowsheets", scene)).with_settings({"particles.classes": classes})
     auto = fs.simulate(linear_solver="auto", warn=False, grid_check=False, accuracy=False)
     dense = fs.simulate(linear_solver="dense", warn=False, grid_check=False, accuracy=False)
