@@ -308,6 +308,11 @@ bool is_banded_lowrank_solver(SUNLinearSolver s) { return s && s->ops->setup == 
 
 void banded_lowrank_same_but_diagonal(SUNLinearSolver s) { content(s)->next_same = true; }
 
+void banded_lowrank_new_segment(SUNLinearSolver s) {
+  Content& c = *content(s);
+  c.misses = c.untested = 0;
+}
+
 BandedLowRankStats banded_lowrank_stats(SUNLinearSolver s) { return content(s)->stats; }
 
 }  // namespace granuflow::detail

@@ -37,6 +37,9 @@ bool is_banded_lowrank_solver(SUNLinearSolver s);
 // The next setup's matrix is the last setup's but on the diagonal (the integrator reuses a kept Jacobian at a new
 // cj, jacobian_cache.hpp): the outer products and the band are not looked for again.
 void banded_lowrank_same_but_diagonal(SUNLinearSolver s);
+// A new segment of the run (a breakpoint, an event, a checkpoint): the setups start to look for the form afresh, as a
+// run restarted from a checkpoint there does with a new solver, so that both take the same setups.
+void banded_lowrank_new_segment(SUNLinearSolver s);
 struct BandedLowRankStats {
   long setups = 0, dense_setups = 0;     // setups, and those factored densely (the structure did not hold)
   long untested_setups = 0;              // dense setups that did not look for it (it had failed in a row before)

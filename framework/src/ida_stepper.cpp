@@ -244,6 +244,7 @@ int IdaStepper::begin_segment(size_t seg, double t0, double t1, SolverStats& sta
   }
   if (ns_ > 0) check(IDASensToggleOff(mem), "IDASensToggleOff");
   user_.cache.valid = false;  // a segment starts from a fresh Jacobian
+  if (user_.structured) banded_lowrank_new_segment(user_.structured);
   const int flag = start_consistently(seg, t0, t1, stats);
   if (flag < 0) return flag;
   restored_ = false;

@@ -111,6 +111,15 @@ TEST(BandedLowRankSolver, SolvesTheTwoZoneNewtonMatrixToRoundOff) {
   EXPECT_EQ(detail::banded_lowrank_stats(ls).untested_setups, 8);
   ASSERT_EQ(SUNLinSolSolve(ls, A, x, b, 0.0), 0);
   EXPECT_LT(residual(of_the_form, xv, bv), 1e-13);
+  // Two misses again, then a new segment of the run (where a restarted run starts with a new solver): it looks again.
+  a = full;
+  for (int k = 0; k < 2; ++k) ASSERT_EQ(SUNLinSolSetup(ls, A), 0);
+  EXPECT_EQ(detail::banded_lowrank_stats(ls).dense_setups, 12);
+  detail::banded_lowrank_new_segment(ls);
+  a = of_the_form;
+  ASSERT_EQ(SUNLinSolSetup(ls, A), 0);
+  EXPECT_EQ(detail::banded_lowrank_stats(ls).dense_setups, 12);
+  EXPECT_EQ(detail::banded_lowrank_stats(ls).untested_setups, 8);
   SUNLinSolFree(ls);
   N_VDestroy(b), N_VDestroy(x);
   SUNMatDestroy(A);
