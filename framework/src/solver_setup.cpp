@@ -3,7 +3,6 @@
 #include <sunlinsol/sunlinsol_spgmr.h>
 
 #include <algorithm>
-#include <cstdio>
 #include <cstdlib>
 #include <stdexcept>
 
@@ -246,6 +245,7 @@ bool use_dense(const Flowsheet& fs, LinearSolverChoice choice, int dense_limit) 
 
 namespace granuflow::detail {
 
+namespace {
 // The share of the unknowns (explicit units inlined) that size-class populations hold, per class: what the band +
 // low-rank solver orders by class; the rest is its dense border.
 double class_share(const Flowsheet& fs) {
@@ -256,6 +256,7 @@ double class_share(const Flowsheet& fs) {
   }
   return double(in_classes) / std::max(1, fs.n_states() - fs.n_explicit_states());
 }
+}  // namespace
 
 // Past dense_limit, size-class populations go to the band + low-rank solver, which factors a setup densely where the
 // matrix is not of that form (aggregation): KLU filled in on them (the tank chains at 60 classes, 3297 unknowns
