@@ -30,15 +30,14 @@ std::vector<double> output_times(const SimOptions& opt) {
 void check_nonnegative(const Flowsheet& fs, const SimOptions& opt, double t, const std::vector<double>& y) {
   for (size_t i = 0; i < y.size(); ++i) {
     const StateSpec& st = fs.state_spec(static_cast<int>(i));
-    if (!std::isfinite(y[i])) {
-      const std::string unit = fs.units()[fs.state_unit(static_cast<int>(i))].name;
+    const bool finite = std::isfinite(y[i]);
+    if (finite && (!st.nonnegative || y[i] >= -100.0 * opt.atol * st.scale)) continue;
+    const std::string unit = fs.units()[fs.state_unit(static_cast<int>(i))].name;
+    if (!finite)
       throw SolverError("unit '" + unit + "': state " + st.name + " = " + fmt_num(y[i]) + " at t = " + fmt_num(t) +
                             " s is not a finite number: a rate or closure of the unit gave it; check the size grid "
                             "and the ranges the unit's closures hold for",
                         t, unit, 0.0);
-    }
-    if (!st.nonnegative || y[i] >= -100.0 * opt.atol * st.scale) continue;
-    const std::string unit = fs.units()[fs.state_unit(static_cast<int>(i))].name;
     throw SolverError("unit '" + unit + "': inventory " + st.name + " = " + fmt_num(y[i]) + " " + st.unit +
                           " at t = " + fmt_num(t) + " s is negative beyond the solver tolerance (" +
                           fmt_num(100.0 * opt.atol * st.scale) + " " + st.unit +

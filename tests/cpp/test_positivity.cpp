@@ -17,12 +17,12 @@ namespace {
 // A hold-up drained at a fixed rate whatever is left: dm/dt = -k (not positivity-preserving, on purpose).
 class FixedDrain : public UnitBase<FixedDrain> {
  public:
-  explicit FixedDrain(double m0 = 1.0) : m0_(m0) {}
+  explicit FixedDrain(double m0 = 1.0, bool nonnegative = true) : m0_(m0), nonnegative_(nonnegative) {}
   std::string type() const override { return "fixed_drain"; }
   void declare(UnitSpec& s, Settings&) override {
     p_k_ = s.add_param({"k", "kg/s", 1.0, 0.0, 10.0, "drain rate", "test"});
     s_m_ = s.add_state("m", StateKind::Differential, "kg", 1.0);
-    s.set_nonnegative(s_m_);
+    if (nonnegative_) s.set_nonnegative(s_m_);
   }
   template <class T>
   Status eval(const Ctx<T>& c) const {
@@ -36,6 +36,7 @@ class FixedDrain : public UnitBase<FixedDrain> {
 
  private:
   double m0_;
+  bool nonnegative_;
   ParamId p_k_;
   StateId s_m_;
 };
@@ -76,6 +77,25 @@ TEST(Positivity, AnInventoryThatIsNotANumberIsNamedAsSuchNotAsNegative) {
     EXPECT_NE(what.find("state m = nan"), std::string::npos) << what;
     EXPECT_NE(what.find("not a finite number"), std::string::npos) << what;
     EXPECT_EQ(what.find("negative"), std::string::npos) << what;
+  }
+}
+
+// The same start in a state that is not an inventory (a temperature, a signed rate): a NaN is no result either.
+TEST(Positivity, AStateThatIsNotANumberStopsTheRunWhateverItsSign) {
+  for (const char* method : {"auto", "erk", "bdf", "ida"}) {
+    SCOPED_TRACE(method);
+    Flowsheet fs("nan");
+    fs.add_unit("tank", std::make_unique<FixedDrain>(std::nan(""), false), Settings("tank", {}));
+    fs.finalize();
+    SimOptions o;
+    o.t_end = 1.0, o.t_out = {0.0, 1.0};
+    o.method = parse_method(method, "method");
+    try {
+      const SimResult r = simulate(fs, o);
+      FAIL() << "returned " << r.state(r.t.size() - 1, 0);
+    } catch (const SolverError& e) {
+      EXPECT_EQ(e.unit(), "tank") << e.what();
+    }
   }
 }
 
