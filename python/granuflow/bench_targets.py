@@ -207,17 +207,22 @@ def target_classes(repeats: int, progress: bool) -> dict:
 
     fs = load(os.path.join(bench.repo_root(), "flowsheets", "stoeckl_gf25_batch.yaml"))
     grids = {n: fs.with_settings({"particles.classes": n}) for n in (20, 80)}
-    for g in grids.values():
+    # The 80-class scene with its aggregation switched off: what the solve costs with its pair sums and pair rows at
+    # no cost at all, a floor for any faster pair algorithm (figures only; it is not the target's scene).
+    free = grids[80].with_settings({"bed.aggregation": "none"})
+    for g in (*grids.values(), free):
         g.simulate(warn=False, grid_check=False, accuracy=False)  # warm-up: the first solve sets up the solver
-    walls, cpus = {20: [], 80: []}, {20: [], 80: []}
+    walls, cpus, walls_free = {20: [], 80: []}, {20: [], 80: []}, []
     rounds = max(repeats, CLASSES_ROUNDS) if repeats > 1 else 1
     for r in range(rounds):
-        _say(progress, f"classes: round {r + 1}/{rounds} (20 and 80 classes)")
+        _say(progress, f"classes: round {r + 1}/{rounds} (20 and 80 classes, 80 without aggregation)")
         for n, g in grids.items():
             c0 = time.process_time()
             walls[n].append(g.simulate(warn=False, grid_check=False, accuracy=False).wall_time_s)
             cpus[n].append(time.process_time() - c0)
+        walls_free.append(free.simulate(warn=False, grid_check=False, accuracy=False).wall_time_s)
     ratios = [b / a for a, b in zip(walls[20], walls[80])]
+    free_ratios = [round(b / a, 3) for a, b in zip(walls[20], walls_free)]
     med = {n: statistics.median(w) for n, w in walls.items()}
     parts = {n: _where_time_goes(g, med[n]) for n, g in grids.items()}
     # The CPU times (the whole simulate() call) beside the solver's wall times: on a loaded machine only they compare.
@@ -226,7 +231,11 @@ def target_classes(repeats: int, progress: bool) -> dict:
                    cpu_s_80=statistics.median(cpus[80]),
                    cpu_ratio=statistics.median([b / a for a, b in zip(cpus[20], cpus[80])]),
                    ratio_range=[round(min(ratios), 2), round(max(ratios), 2)], rounds=rounds, repeats=repeats,
-                   where_time_goes=parts, **_rest_growth(parts, med), command="granuflow bench targets --only classes")
+                   where_time_goes=parts, **_rest_growth(parts, med),
+                   solve_80_without_aggregation_s=statistics.median(walls_free),
+                   without_aggregation_over_20=statistics.median(free_ratios),
+                   without_aggregation_over_20_rounds=free_ratios,
+                   command="granuflow bench targets --only classes")
 
 
 def _where_time_goes(fs, wall: float) -> dict:
@@ -536,7 +545,7 @@ DETAILS = {"run": ("cpu_s", "heavy_imports", "numpy_import_wall_s", "numpy_impor
            "writing": ("write_s", "write_over_solve", "run_wall_s", "run_solve_s", "startup_fixed_s", "startup_s",
                        "run_beyond_version_startup_over_solve", "states", "csv_bytes"),
            "classes": ("cpu_ratio", "ratio_range", "rounds", "where_time_goes", "pair_sums_80_over_solve_20",
-                       "rest_growth", "rest_growth_allowed", "rest_growth_undefined"),
+                       "rest_growth", "rest_growth_allowed", "rest_growth_undefined", "without_aggregation_over_20"),
            "contour": ("solver_only_per_s", "sims_per_s_2_workers", "same_values"),
            "calibration": ("cpu_s", "cpu_over_wall", "cpu_over_wall_1_worker", "estimates_max_rel_diff"),
            "two_zone": ("classes_at_target", "by_classes", "sigma_reference_um", "koren_classes_at_target",

@@ -3,6 +3,7 @@ computed from them, the headline's answer from the timed process, a table and th
 benchmarks never assert on time)."""
 import json
 import math
+import statistics
 
 import pytest
 from conftest import CPU_REL, HEADLINE_D50_UM, cli
@@ -71,6 +72,9 @@ def test_the_classes_target_says_where_the_time_goes(tmp_path):
             extra = 1e-3 * count * (per_call - w[part + "_us_without_aggregation"])
             assert math.isclose(w["aggregation_" + part + "_ms"], extra, rel_tol=1e-3, abs_tol=0.01)
         assert math.isclose(w["residual_ms"] + w["jacobian_ms"] + w["rest_ms"], 1e3 * wall, abs_tol=0.02)
+    # the floor: the 80-class scene with its aggregation off, against the 20-class scene with it, round by round
+    assert r["solve_80_without_aggregation_s"] > 0 and len(r["without_aggregation_over_20_rounds"]) == r["rounds"]
+    assert r["without_aggregation_over_20"] == statistics.median(r["without_aggregation_over_20_rounds"])
     pairs = {n: parts[n]["aggregation_residual_ms"] / 1e3 for n in (20, 80)}
     rest20 = r["baseline"] - pairs[20]
     if rest20 <= 0:  # the split drowned in noise: the figures are null with the reason, never a number
