@@ -92,3 +92,45 @@ def test_help_is_laid_out_at_the_width_shutil_gives(monkeypatch, columns):
     assert mine.format_help() == plain.format_help()
     assert mine._subparsers._group_actions[0].choices["run"].format_help() == \
         plain._subparsers._group_actions[0].choices["run"].format_help()
+
+
+def _mo_file(path, translations: dict) -> None:
+    """A GNU gettext catalogue (.mo) holding ``translations``, written the way msgfmt lays it out."""
+    import struct
+
+    keys = sorted(translations)
+    ids = b"".join(k.encode() + b"\0" for k in keys)
+    strs = b"".join(translations[k].encode() + b"\0" for k in keys)
+    start = 7 * 4 + 16 * len(keys)
+    offsets, o = [], 0
+    for k in keys:
+        offsets.append((len(k.encode()), start + o))
+        o += len(k.encode()) + 1
+    trans, o = [], 0
+    for k in keys:
+        v = translations[k].encode()
+        trans.append((len(v), start + len(ids) + o))
+        o += len(v) + 1
+    head = struct.pack("7I", 0x950412DE, 0, len(keys), 28, 28 + 8 * len(keys), 0, 0)
+    path.write_bytes(head + b"".join(struct.pack("2I", *p) for p in offsets + trans) + ids + strs)
+
+
+@pytest.mark.parametrize("language", ["xx", "yy"])
+def test_argparse_messages_still_go_through_the_locale_catalogue(tmp_path, language):
+    # issue 32: the command line looks the catalogue up once instead of on every string argparse builds; a user
+    # whose locale has one still reads argparse's messages through it, and one without reads them as written
+    import subprocess
+    import sys
+
+    (tmp_path / "xx" / "LC_MESSAGES").mkdir(parents=True)
+    _mo_file(tmp_path / "xx" / "LC_MESSAGES" / "messages.mo", {"usage: ": "Aufruf: "})
+    code = ("import gettext, sys; gettext.bindtextdomain('messages', sys.argv[1]); "
+            "import argparse; from granuflow.cli import common; "
+            "assert argparse._ is not gettext.gettext; "
+            "print(argparse._('usage: ') + '|' + gettext.gettext('usage: ')); "
+            "common.Parser(prog='granuflow').print_usage()")
+    env = dict(os.environ, LANGUAGE=language, LC_ALL="C")
+    p = subprocess.run([sys.executable, "-c", code, str(tmp_path)], capture_output=True, text=True, env=env)
+    assert p.returncode == 0, p.stderr
+    word = "Aufruf: " if language == "xx" else "usage: "
+    assert p.stdout.splitlines() == [f"{word}|{word}", f"{word}granuflow [-h]"]

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import gettext
 import math
 import os
 import sys
@@ -29,6 +30,21 @@ def _columns() -> int:
         return os.get_terminal_size(sys.__stdout__.fileno()).columns or 80
     except (AttributeError, ValueError, OSError):
         return 80
+
+
+def _catalogue_gettext():
+    """gettext.gettext of this process's locale, its catalogue looked up once: argparse passes each string it
+    builds through gettext.gettext, which searches the locale folders for a catalogue on every call (about 0.5 ms
+    each, 3 ms of every ``granuflow run``, issue 32). The catalogue a lookup finds (or that none exists) does not
+    change while the process runs, so the messages are the same."""
+    domain = gettext.textdomain()
+    try:
+        return gettext.translation(domain, gettext.bindtextdomain(domain)).gettext
+    except OSError:  # no catalogue: gettext.gettext returns each message as it is
+        return str
+
+
+argparse._ = _catalogue_gettext()
 
 
 class HelpFormatter(argparse.HelpFormatter):
