@@ -207,9 +207,11 @@ def target_classes(repeats: int, progress: bool) -> dict:
 
     fs = load(os.path.join(bench.repo_root(), "flowsheets", "stoeckl_gf25_batch.yaml"))
     grids = {n: fs.with_settings({"particles.classes": n}) for n in (20, 80)}
-    # The 80-class scene with its aggregation switched off: what the solve costs with its pair sums and pair rows at
-    # no cost at all, a floor for any faster pair algorithm (figures only; it is not the target's scene).
-    free = grids[80].with_settings({"bed.aggregation": "none"})
+    # Each grid with its aggregation switched off: at 80 classes what the solve costs with its pair sums and pair
+    # rows at no cost at all, a floor for any faster pair algorithm (figures only; it is not the target's scene);
+    # both for the split of where the time goes.
+    without = {n: g.with_settings({"bed.aggregation": "none"}) for n, g in grids.items()}
+    free = without[80]
     for g in (*grids.values(), free):
         g.simulate(warn=False, grid_check=False, accuracy=False)  # warm-up: the first solve sets up the solver
     walls, cpus, walls_free = {20: [], 80: []}, {20: [], 80: []}, []
@@ -224,7 +226,7 @@ def target_classes(repeats: int, progress: bool) -> dict:
     ratios = [b / a for a, b in zip(walls[20], walls[80])]
     free_ratios = [round(b / a, 3) for a, b in zip(walls[20], walls_free)]
     med = {n: statistics.median(w) for n, w in walls.items()}
-    parts = {n: _where_time_goes(g, med[n]) for n, g in grids.items()}
+    parts = {n: _where_time_goes(g, without[n], med[n]) for n, g in grids.items()}
     # The CPU times (the whole simulate() call) beside the solver's wall times: on a loaded machine only they compare.
     return _record("classes", med[80], "s", med[20], "solve at 20 classes", statistics.median(ratios),
                    "80 / 20 classes, median of the rounds", cpu_s_20=statistics.median(cpus[20]),
@@ -238,15 +240,14 @@ def target_classes(repeats: int, progress: bool) -> dict:
                    command="granuflow bench targets --only classes")
 
 
-def _where_time_goes(fs, wall: float) -> dict:
+def _where_time_goes(fs, without, wall: float) -> dict:
     """Where a solve's time goes, from the solver's counts and one residual's and one Jacobian's time at the initial
-    state (Flowsheet.time_residual, medians of 21): residuals and Jacobians in ms, the rest (factorizations,
-    solves, the integrator) as what the solve's median wall time leaves. The aggregation's parts are what its
-    residuals and its Jacobians cost beyond those of the same scene without it (bed.aggregation: none), at the
-    solve's counts: in the residuals its pair sums, in the Jacobians its rows and the fill they bring into the Schur
-    complement."""
+    state (Flowsheet.time_residual, _call_times): residuals and Jacobians in ms, the rest (factorizations, solves,
+    the integrator) as what the solve's median wall time leaves. The aggregation's parts are what its residuals and
+    its Jacobians cost beyond those of ``without``, the same scene with bed.aggregation: none, at the solve's counts:
+    in the residuals its pair sums, in the Jacobians its rows and the fill they bring into the Schur complement."""
     stats = fs.simulate(warn=False, grid_check=False, accuracy=False).stats
-    t, t0 = _call_times(fs, fs.with_settings({"bed.aggregation": "none"}))
+    t, t0 = _call_times(fs, without)
     residual, jacobian = stats["residuals"] * t["residual_s"], stats["jacobians"] * t["jacobian_s"]
     pair_sums = residual - stats["residuals"] * t0["residual_s"]
     agg_jacobian = jacobian - stats["jacobians"] * t0["jacobian_s"]
@@ -269,12 +270,8 @@ def _call_times(fs, without) -> tuple[dict, dict]:
     CALL_TIME_ROUNDS medians of 21 taken in alternation: the split is a difference of two small times (at 20
     classes the aggregation's rows are some 20 us of a Jacobian), and a burst of load on one side of it only ever
     adds time, so the least median is the one a drifting machine disturbs least."""
-    with_, without_ = [], []
-    for _ in range(CALL_TIME_ROUNDS):
-        with_.append(fs.time_residual(21))
-        without_.append(without.time_residual(21))
-    least = lambda runs: {k: min(r[k] for r in runs) for k in ("residual_s", "jacobian_s")}  # noqa: E731
-    return least(with_), least(without_)
+    runs = [(fs.time_residual(21), without.time_residual(21)) for _ in range(CALL_TIME_ROUNDS)]
+    return tuple({k: min(r[side][k] for r in runs) for k in ("residual_s", "jacobian_s")} for side in (0, 1))
 
 
 def _rest_growth(parts: dict, wall: dict) -> dict:

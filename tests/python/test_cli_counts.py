@@ -99,20 +99,20 @@ def _mo_file(path, translations: dict) -> None:
     import struct
 
     keys = sorted(translations)
-    ids = b"".join(k.encode() + b"\0" for k in keys)
-    strs = b"".join(translations[k].encode() + b"\0" for k in keys)
+    ids = [k.encode() for k in keys]
+    strs = [translations[k].encode() for k in keys]
+
+    def table(strings, at):  # (length, offset) of each string, stored one after the other with a NUL after each
+        out = []
+        for text in strings:
+            out.append((len(text), at))
+            at += len(text) + 1
+        return out
     start = 7 * 4 + 16 * len(keys)
-    offsets, o = [], 0
-    for k in keys:
-        offsets.append((len(k.encode()), start + o))
-        o += len(k.encode()) + 1
-    trans, o = [], 0
-    for k in keys:
-        v = translations[k].encode()
-        trans.append((len(v), start + len(ids) + o))
-        o += len(v) + 1
+    offsets, trans = table(ids, start), table(strs, start + sum(len(k) + 1 for k in ids))
     head = struct.pack("7I", 0x950412DE, 0, len(keys), 28, 28 + 8 * len(keys), 0, 0)
-    path.write_bytes(head + b"".join(struct.pack("2I", *p) for p in offsets + trans) + ids + strs)
+    path.write_bytes(head + b"".join(struct.pack("2I", *p) for p in offsets + trans)
+                     + b"".join(t + b"\0" for t in ids + strs))
 
 
 @pytest.mark.parametrize("language", ["xx", "yy"])
