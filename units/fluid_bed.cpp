@@ -213,6 +213,7 @@ class FluidBed : public UnitBase<FluidBed> {
                         {wet_, wetting::Xwet(n_, 0)},
                         {feed_, solids::mdot(0)},
                         {feed_, solids::water(n_, 0)}}};
+    layout.class_local_newton = pop_.aggregation() || pop_.breakage();  // drying and heat act per class
     s.set_classes(layout);
     r_surface_ = s.add_reduction("particle surface");
     r_drying_ = s.add_reduction("drying");

@@ -10,11 +10,18 @@
 
 namespace granuflow {
 
-namespace {
-class DenseSink : public JacobianSink {
+class DaeSystem::DenseSink : public JacobianSink {
  public:
-  DenseSink(double* a, int n, int offset) : JacobianSink(a + offset, size_t(n)) {}
+  DenseSink(DaeSystem& sys, double* a, int n, int offset)
+      : JacobianSink(a + offset, size_t(n)), sys_(sys), offset_(offset) {}
+  void left_out(int row, int col, double value) override { sys_.record_left_out(offset_ + row, col, value); }
+
+ private:
+  DaeSystem& sys_;
+  int offset_;
 };
+
+namespace {
 
 class SparseSink : public JacobianSink {
  public:
@@ -83,7 +90,8 @@ class DaeSystem::FactoringSink : public JacobianSink {
 class DaeSystem::IntegratedSink : public JacobianSink {
  public:
   IntegratedSink(DaeSystem& sys, int unit, double* a, int ld, int offset)
-      : JacobianSink(a + offset, size_t(ld)), sys_(sys), unit_(unit) {}
+      : JacobianSink(a + offset, size_t(ld)), sys_(sys), unit_(unit), offset_(offset) {}
+  void left_out(int row, int col, double value) override { sys_.record_left_out(offset_ + row, col, value); }
   void add_outer(int n_rows, const double* u, int n_cols, const int* cols, const double* w) override {
     cols_.clear(), w_.clear();
     for (int k = 0; k < n_cols; ++k)
@@ -98,7 +106,7 @@ class DaeSystem::IntegratedSink : public JacobianSink {
 
  private:
   DaeSystem& sys_;
-  int unit_;
+  int unit_, offset_;
   std::vector<int> cols_;
   std::vector<double> w_;
 };
@@ -113,8 +121,37 @@ DaeSystem::OuterTerm& DaeSystem::next_term(std::vector<OuterTerm>& terms, size_t
   return t;
 }
 
+const std::vector<std::vector<int>>& DaeSystem::conserved_blocks() const {
+  if (!conserved_of_.empty() || n_ == 0) return conserved_;
+  conserved_of_.assign(n_, -1);
+  for (const auto& u : fs_.units()) {
+    const ClassLayout& layout = u.spec.classes();
+    if (u.spec.is_explicit() || !layout.class_local_newton) continue;
+    for (StateId b : layout.state_blocks) {
+      std::vector<int> block;
+      for (int i = 0; i < layout.n; ++i)
+        if (u.offset + b.i + i < n_) block.push_back(u.offset + b.i + i);
+      if (block.empty()) continue;
+      for (int k : block) conserved_of_[k] = static_cast<int>(conserved_.size());
+      conserved_.push_back(std::move(block));
+    }
+  }
+  return conserved_;
+}
+
+void DaeSystem::record_left_out(int state, int col, double value) {
+  // a block's rows and the unknowns' columns only, in a class-local evaluation
+  if (state < 0 || state >= n_ || col < 0 || col >= n_ || left_out_.empty()) return;
+  const int b = conserved_of_[state];
+  if (b >= 0) left_out_[size_t(b) * n_ + col] += value;
+}
+
 void DaeSystem::jacobian(double t, const double* y, const double* yp, double cj, double* dense, double* sparse) {
   ++n_jac_;
+  if (classes_local_) {
+    left_out_.assign(conserved_blocks().size() * size_t(n_), 0.0);
+    left_out_y_.assign(y, y + n_);
+  }
   fill_params(t);
   drive_states(y, pvals_);  // for the analytic parts; the AD sweeps drive their Jets (ad_unit)
   if (!inline_) {
@@ -168,12 +205,15 @@ void DaeSystem::assemble(double t, const double* y, const double* yp, double cj,
     };
     if (dense && factor_outer && units[u].spec.is_explicit()) {
       FactoringSink sink(*this, static_cast<int>(u));
+      sink.set_classes_local(classes_local_);
       run(sink);
     } else if (dense && factor_outer) {
       IntegratedSink sink(*this, static_cast<int>(u), dense, ld, units[u].offset);
+      sink.set_classes_local(classes_local_);
       run(sink);
     } else if (dense) {
-      DenseSink sink(dense, ld, units[u].offset);
+      DenseSink sink(*this, dense, ld, units[u].offset);
+      sink.set_classes_local(classes_local_);
       run(sink);
     } else {
       SparseSink sink(sparse, block_pos_[u], col_map_[u], static_cast<int>(local_cols_[u].size()), units[u].name);
@@ -202,7 +242,7 @@ void DaeSystem::reference_jacobian(double t, const double* y, const double* yp, 
       if (!(expl && local_cols_[u][j] >= off && local_cols_[u][j] < off + ns))
         plain.dirs.push_back({AdPlan::kCol, static_cast<int>(j)});
     plain.row_class.assign(ns, -1);
-    DenseSink sink(dense, n_, off);
+    DenseSink sink(*this, dense, n_, off);
     ad_unit(static_cast<int>(u), t, y, yp, cj, sink, &plain);
   }
 }

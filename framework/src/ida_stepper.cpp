@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "banded_lowrank_solver.hpp"
+#include "class_local_solver.hpp"
 #include "consistent_sensitivities.hpp"
 #include "consistent_start.hpp"
 #include "granuflow/errors.hpp"
@@ -78,7 +79,8 @@ IdaStepper::IdaStepper(DaeSystem& sys, const SimOptions& opt, LinearSolverKind k
     : sys_(sys),
       opt_(opt),
       kind_(kind),
-      dense_(kind == LinearSolverKind::kDense || kind == LinearSolverKind::kBanded),
+      dense_(kind == LinearSolverKind::kDense || kind == LinearSolverKind::kBanded ||
+             kind == LinearSolverKind::kClassLocal),
       sens_ids_(sens_ids),
       j0_(std::move(j0)),
       ewt_(sys.size()),
@@ -101,6 +103,7 @@ IdaStepper::IdaStepper(DaeSystem& sys, const SimOptions& opt, LinearSolverKind k
   for (int i = 0; i < n_; ++i) atol_.data()[i] = opt.atol * scales[i];
   user_.iterative = kind == LinearSolverKind::kGmres;
   user_.banded = kind == LinearSolverKind::kBanded;
+  user_.class_local = kind == LinearSolverKind::kClassLocal;
   ida_ = std::make_unique<Ida>(C_.ctx, user_, 0.0, y_, yp_, opt.rtol, atol_);
   void* mem = ida_->mem;
   if (dense_) user_.mem = mem;
@@ -217,7 +220,9 @@ int IdaStepper::start_consistently(size_t seg, double t0, double t1, SolverStats
     const double tout1 = t0 + 0.01 * (t1 - t0) * std::pow(0.1, k);
     ++stats.calcic_starts;
     user_.fresh_only = true;
+    if (user_.local) class_local_whole(user_.local, true);  // Newton from a guess: the exact matrix
     flag = IDACalcIC(mem, IDA_YA_YDP_INIT, tout1);
+    if (user_.local) class_local_whole(user_.local, false);
     user_.fresh_only = false;
     if (flag >= 0) break;
   }
@@ -398,6 +403,12 @@ void IdaStepper::finish(SolverStats& stats) {
                              (b.untested_setups > 0 ? "; " + std::to_string(b.untested_setups) +
                                                           " without looking, after it was not twice in a row)"
                                                     : std::string(")"));
+  }
+  if (user_.local) {  // setups that factored the whole matrix (consistent initial values): say how many
+    const ClassLocalStats c = class_local_stats(user_.local);
+    if (c.whole_setups > 0)
+      stats.linear_solver += "; " + std::to_string(c.whole_setups) + " of " + std::to_string(c.setups) +
+                             " setups whole (dense LU, consistent initial values)";
   }
   stats.method = "bdf (IDAS)";
   stats.method_reason = reason_;

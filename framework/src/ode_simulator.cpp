@@ -171,9 +171,10 @@ class OdeStepper : public Stepper {
     stats.method =
         retired_.empty() ? describe(method_, gmres) : describe(first_, gmres) + ", then " + describe(method_, gmres);
     stats.method_reason = reason_;
-    stats.linear_solver = method_ != Method::kBdf              ? "none"
-                          : kind_ == LinearSolverKind::kBanded ? "dense (Eigen LU): banded is IDAS's only"
-                                                               : linear_solver_name(kind_);
+    stats.linear_solver = method_ != Method::kBdf                  ? "none"
+                          : kind_ == LinearSolverKind::kBanded     ? "dense (Eigen LU): banded is IDAS's only"
+                          : kind_ == LinearSolverKind::kClassLocal ? "dense (Eigen LU): class_local is IDAS's only"
+                                                                   : linear_solver_name(kind_);
   }
 
  private:
@@ -224,8 +225,9 @@ SimResult simulate_ode(Flowsheet& fs, const SimOptions& opt, Method requested,
   // Explicit units are inlined (their states are no unknowns of an ODE); a Newton matrix over inlined units is the
   // dense Schur complement, so BDF on a system too large for dense algebra goes to IDAS instead.
   const LinearSolverKind kind = choose_linear_solver(fs, opt.linear_solver, opt.dense_limit, false);
-  // banded: BDF factors its Newton matrix densely (the band + low-rank solver is IDAS's)
-  const bool dense = kind == LinearSolverKind::kDense || kind == LinearSolverKind::kBanded,
+  // banded, class_local: BDF factors its Newton matrix densely (those solvers are IDAS's)
+  const bool dense = kind == LinearSolverKind::kDense || kind == LinearSolverKind::kBanded ||
+                     kind == LinearSolverKind::kClassLocal,
              gmres = kind == LinearSolverKind::kGmres;
   if (requested == Method::kBdf && kind == LinearSolverKind::kSparse && fs.n_explicit_states() > 0)
     throw NotAnOde("BDF with sparse linear algebra needs the explicit units as unknowns");

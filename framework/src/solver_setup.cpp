@@ -7,19 +7,23 @@
 #include <stdexcept>
 
 #include "banded_lowrank_solver.hpp"
+#include "class_local_solver.hpp"
 #include "eigen_linear_solver.hpp"
 #include "granuflow/interrupt.hpp"
 
 namespace granuflow::detail {
 
 // Dense: Eigen's blocked LU behind a SUNDenseMatrix; sparse: KLU on the flowsheet's sparsity pattern.
-void make_linear_solver(bool dense, const DaeSystem& sys, N_Vector y, SUNContext ctx, Mat& a, LinSol& ls, bool banded) {
+void make_linear_solver(bool dense, const DaeSystem& sys, N_Vector y, SUNContext ctx, Mat& a, LinSol& ls,
+                        LinearSolverKind structure) {
   const int n = sys.size();
   if (dense) {
     a.m = SUNDenseMatrix(n, n, ctx);
     // DaeSystem::jacobian writes all n^2 entries, so IDA's zeroing before each evaluation is skipped.
     a.m->ops->zero = [](SUNMatrix) -> int { return 0; };
-    ls.s = banded ? make_banded_lowrank_solver(ctx, class_structure(sys)) : make_eigen_dense_solver(ctx);
+    ls.s = structure == LinearSolverKind::kBanded       ? make_banded_lowrank_solver(ctx, class_structure(sys))
+           : structure == LinearSolverKind::kClassLocal ? make_class_local_solver(ctx, class_local_source(sys))
+                                                        : make_eigen_dense_solver(ctx);
   } else {
     a.m = SUNSparseMatrix(n, n, sys.pattern().nnz(), CSC_MAT, ctx);
     ls.s = SUNLinSol_KLU(y, a.m, ctx);
@@ -113,10 +117,20 @@ int ida_jac(realtype t, realtype cj, N_Vector y, N_Vector yp, N_Vector, SUNMatri
           a[size_t(i) * n + i] = k.diag[d] + (cj - k.cj);
         }
         if (u->structured) banded_lowrank_same_but_diagonal(u->structured);
+        if (u->local) class_local_same_but_diagonal(u->local);
         return 0;
       }
       k.held = nullptr;  // overwritten below; kept again if reusable
-      u->sys->jacobian(t, N_VGetArrayPointer(y), N_VGetArrayPointer(yp), cj, a, nullptr);
+      // A class-local Newton matrix does not read the couplings between classes: the units may skip them, except
+      // while consistent values are computed (the solver factors the whole matrix then).
+      {
+        struct Local {  // on for this evaluation only, also when it throws
+          DaeSystem& sys;
+          ~Local() { sys.set_classes_local(false); }
+        } local{*u->sys};
+        u->sys->set_classes_local(u->class_local && !u->fresh_only);
+        u->sys->jacobian(t, N_VGetArrayPointer(y), N_VGetArrayPointer(yp), cj, a, nullptr);
+      }
       if (!u->mem) return 0;
       if (k.reusable < 0) check_contract(*u->sys, t, N_VGetArrayPointer(y), N_VGetArrayPointer(yp), k);
       if (k.reusable == 1) k.keep(a, n, cj, step, fails);
@@ -179,9 +193,13 @@ Ida::Ida(SUNContext ctx, IdaUser& user, double t0, const NVec& y, const NVec& yp
     check(IDASetPreconditioner(mem, ida_psetup, ida_psolve), "IDASetPreconditioner");
     return;
   }
-  make_linear_solver(user.dense, sys, y.v, ctx, A, LS, user.banded);
+  make_linear_solver(user.dense, sys, y.v, ctx, A, LS,
+                     user.banded        ? LinearSolverKind::kBanded
+                     : user.class_local ? LinearSolverKind::kClassLocal
+                                        : LinearSolverKind::kDense);
   this->user = &user;
   if (user.banded) user.structured = LS.s;
+  if (user.class_local) user.local = LS.s;
   check(IDASetLinearSolver(mem, LS.s, A.m), "IDASetLinearSolver");
   check(IDASetJacFn(mem, ida_jac), "IDASetJacFn");
 }
@@ -213,15 +231,25 @@ Ida::Ida(SUNContext ctx, IdaUser& user, double t0, const NVec& y, const NVec& yp
 constexpr int kLargeBlock = 100, kCostlyJacobian = 64;
 constexpr double kLargeBlockNewtonTest = 0.2;
 void Ida::tune_refactoring() {
-  // The band + low-rank solver factors the whole matrix, cheaply: tuned as a block of that size.
+  // The band + low-rank and the class-local solvers factor the whole matrix, cheaply: tuned as a block of that size.
   if (user && user->dense)
     tune_refactoring(is_banded_lowrank_solver(LS.s) ? banded_lowrank_stats(LS.s).states
+                     : is_class_local_solver(LS.s)  ? class_local_stats(LS.s).states
                                                     : eigen_dense_largest_block(LS.s));
 }
 
+//
+// A class-local setup (class_local_solver.hpp) costs a few residuals: refactoring at every change of cj keeps the
+// approximate Newton matrix at the step's own cj, which saves more iterations than the setups cost. Headline scene
+// at 80 classes, solve ms (cj change that refactors: 0.5 -> 0.25 -> 0.1 -> any): 12.1 -> 11.0 -> 9.8 -> 9.7 (460,
+// 424, 341, 323 residuals; 18, 28, 35, 54 setups, 6-8 Jacobians).
+constexpr double kClassLocalDeltaCj = 0.0;
 void Ida::tune_refactoring(int block) {
   if (!user || !user->dense) return;
-  check(IDASetDeltaCjLSetup(mem, block >= kLargeBlock ? 0.5 : 0.25), "IDASetDeltaCjLSetup");
+  check(IDASetDeltaCjLSetup(mem, user->class_local      ? kClassLocalDeltaCj
+                                 : block >= kLargeBlock ? 0.5
+                                                        : 0.25),
+        "IDASetDeltaCjLSetup");
   check(IDASetNonlinConvCoef(mem, block >= kLargeBlock ? kLargeBlockNewtonTest : 0.33), "IDASetNonlinConvCoef");
   user->cache.max_age = block >= kCostlyJacobian ? 51 : 20;
 }
@@ -262,16 +290,34 @@ double class_share(const Flowsheet& fs) {
 // matrix is not of that form (aggregation): KLU filled in on them (the tank chains at 60 classes, 3297 unknowns
 // uninlined: 7.9 s against 0.31 s banded on 1134), and dense LU was twice the banded solve for two zones at 200
 // classes (0.23 against 0.115 s).
+//
+// A population whose pair processes couple every class with every other, slowly against each class's own terms
+// (ClassLayout::class_local_newton), goes to the class-local solver from kClassLocalClasses classes on: its Newton
+// matrix is dense, and the dense LU and the pair Jacobian grow as the cube and the square of the classes. Headline
+// scene, solve only, median of 7 pinned to one vCPU (ms, dense -> class_local): 10 classes 2.13 -> 1.85, 20 classes
+// 3.36 -> 2.51, 40 classes 6.24 -> 4.49, 80 classes 18.5 -> 9.4, 193 classes 106 -> 47. The coarse grids gain
+// least, and there the exact matrix keeps the paper's 10-class grid, on which its kinetics were fitted, and every
+// result computed on such grids to the bit; `linear_solver: class_local` asks for it on any grid.
 LinearSolverKind choose_linear_solver(const Flowsheet& fs, LinearSolverChoice choice, int dense_limit,
-                                      bool banded_available) {
+                                      bool structured_available, bool sensitivities) {
   if (choice == LinearSolverChoice::kGmres) return LinearSolverKind::kGmres;
   if (choice == LinearSolverChoice::kBanded) return LinearSolverKind::kBanded;
+  if (choice == LinearSolverChoice::kClassLocal) return LinearSolverKind::kClassLocal;
   const int n = fs.n_states() - fs.n_explicit_states();
   if (choice == LinearSolverChoice::kAuto && n > dense_limit) {
     for (const auto& u : fs.units())
       if (u.spec.has_preconditioner() && static_cast<int>(u.spec.states().size()) > dense_limit)
         return LinearSolverKind::kGmres;
-    if (banded_available && n <= kDenseMax && class_share(fs) >= kBandedShare) return LinearSolverKind::kBanded;
+  }
+  if (choice == LinearSolverChoice::kAuto && structured_available && !sensitivities && n <= kDenseMax &&
+      class_share(fs) >= kBandedShare)
+    for (const auto& u : fs.units()) {
+      const ClassLayout& layout = u.spec.classes();
+      if (!u.spec.is_explicit() && layout.class_local_newton && layout.n >= kClassLocalClasses)
+        return LinearSolverKind::kClassLocal;
+    }
+  if (choice == LinearSolverChoice::kAuto && n > dense_limit) {
+    if (structured_available && n <= kDenseMax && class_share(fs) >= kBandedShare) return LinearSolverKind::kBanded;
   }
   return use_dense(fs, choice, dense_limit) ? LinearSolverKind::kDense : LinearSolverKind::kSparse;
 }
@@ -284,6 +330,9 @@ const char* linear_solver_name(LinearSolverKind k) {
       return "sparse (KLU)";
     case LinearSolverKind::kBanded:
       return "banded (SUNDIALS band LU, outer products and border by Schur complement)";
+    case LinearSolverKind::kClassLocal:
+      return "class_local (an LU per size class and the border by Schur complement; the couplings between classes "
+             "left out of the Newton matrix, not of the equations)";
     default:
       return "gmres (SPGMR, unit preconditioners)";
   }

@@ -48,22 +48,27 @@ struct LinSol {
   }
 };
 
-// Dense: Eigen's blocked LU behind a SUNDenseMatrix (with `banded`: the band + low-rank solver of
-// banded_lowrank_solver.hpp on the same matrix); sparse: KLU on the flowsheet's sparsity pattern.
-void make_linear_solver(bool dense, const DaeSystem& sys, N_Vector y, SUNContext ctx, Mat& a, LinSol& ls,
-                        bool banded = false);
-
 // The linear solvers of the Newton iterations. Direct ones factor the exact Jacobian (dense or sparse); the
 // iterative one (gmres) never forms it: GMRES (SUNDIALS SPGMR) on difference-quotient Jacobian-vector products of
 // the residual, left-preconditioned by the units' blocks (DaeSystem::precondition_setup/solve). It is the only
 // choice for units whose Jacobian is both large and dense (a 2-D population: every bin pair aggregates).
 // kBanded: the dense Jacobian, factored as band + outer products + border (banded_lowrank_solver.hpp).
-enum class LinearSolverKind { kDense, kSparse, kGmres, kBanded };
-// kAuto: dense up to dense_limit unknowns; beyond, gmres if a unit preconditions itself, else (where the integrator
-// has it, `banded_available`: IDAS) banded when size classes hold most unknowns, else use_dense().
+// kClassLocal: the dense Jacobian without the couplings between size classes, factored per class and border
+// (class_local_solver.hpp): an approximate Newton matrix for populations whose pair processes couple every class.
+enum class LinearSolverKind { kDense, kSparse, kGmres, kBanded, kClassLocal };
+// kAuto: class_local for a population whose pair processes couple its classes (ClassLayout::class_local_newton) from
+// kClassLocalClasses classes on, where the integrator has it (`structured_available`: IDAS) and no sensitivities are
+// asked for; else dense up to dense_limit unknowns; beyond, gmres if a unit preconditions itself, else (IDAS) banded
+// when size classes hold most unknowns, else use_dense().
 LinearSolverKind choose_linear_solver(const Flowsheet& fs, LinearSolverChoice choice, int dense_limit,
-                                      bool banded_available = true);
+                                      bool structured_available = true, bool sensitivities = false);
+inline constexpr int kClassLocalClasses = 40;
 const char* linear_solver_name(LinearSolverKind k);
+// Dense: Eigen's blocked LU behind a SUNDenseMatrix (`structure` kBanded: the band + low-rank solver of
+// banded_lowrank_solver.hpp on the same matrix, kClassLocal: class_local_solver.hpp's); sparse: KLU on the
+// flowsheet's sparsity pattern.
+void make_linear_solver(bool dense, const DaeSystem& sys, N_Vector y, SUNContext ctx, Mat& a, LinSol& ls,
+                        LinearSolverKind structure = LinearSolverKind::kDense);
 inline constexpr int kGmresMaxKrylov = 20;  // Krylov dimension (no restarts)
 // SUNDIALS' name of a return flag from a *GetReturnFlagName call (which hands the string to the caller), or fallback.
 std::string flag_name(char* name, const char* fallback);
@@ -89,6 +94,8 @@ struct IdaUser {
   bool iterative = false;   // GMRES with the units' preconditioners instead of a factored Jacobian
   bool banded = false;      // dense Jacobian, band + low-rank factorization (LinearSolverKind::kBanded)
   SUNLinearSolver structured = nullptr;  // that solver, told when a kept Jacobian is reused
+  bool class_local = false;              // dense Jacobian, class-local factorization (LinearSolverKind::kClassLocal)
+  SUNLinearSolver local = nullptr;       // that solver, told to factor the whole matrix for consistent values
   std::function<int(double, const double*, const double*, double*)> roots;  // state events' g (events_run.hpp)
 };
 int ida_res(realtype t, N_Vector y, N_Vector yp, N_Vector r, void* ud);

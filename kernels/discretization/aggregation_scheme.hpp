@@ -138,6 +138,14 @@ class AggregationScheme {
   virtual void jacobian_start(Tables& /*t*/, const PopulationJacobian& /*J*/) const {}
   virtual void jacobian_row(Tables& t, const PopulationJacobian& J, const PairEvent* events, int count) const = 0;
   virtual void jacobian_finish(Tables& /*t*/, const PopulationJacobian& /*J*/) const {}
+  // What one event of pair (j, k), j <= k, places in the larger partner's own class k (`stay`: particles per event
+  // and share of the carried properties) and above the grid (`out_volume` per event, `out_share` of the properties):
+  // the births a class-local Jacobian keeps (Population::aggregation_local_jacobian). Filled per pair of the triangle,
+  // from the grid alone; false if the scheme's placement depends on the state (the engine forms the whole Jacobian).
+  struct LocalBirths {
+    double stay = 0.0, stay_share = 0.0, out_volume = 0.0, out_share = 0.0;
+  };
+  virtual bool local_births(std::vector<LocalBirths>& /*per_pair*/) const { return false; }
 };
 
 }  // namespace granuflow::kernels

@@ -145,6 +145,21 @@ void fixed_pivot_jacobian_row(const FixedPivotAggregation& s, const PopulationJa
 
 }  // namespace
 
+// An aggregate stays in the larger partner's class k when its volume falls between x_k and x_{k+1} (lo = k, Kumar &
+// Ramkrishna 1996, Eq. (9)); hi is never k. What leaves the grid (hi = -1) is reported for the engine's fold.
+bool FixedPivotAggregation::local_births(std::vector<LocalBirths>& per_pair) const {
+  per_pair.assign(targets_.size(), {});
+  size_t pr = 0;
+  const int n = static_cast<int>(run_first_.size());
+  for (int j = 0; j < n; ++j)
+    for (int k = j; k < n; ++k, ++pr) {
+      const Target& t = targets_[pr];
+      if (t.lo == k) per_pair[pr].stay = t.w_lo, per_pair[pr].stay_share = t.f_lo;
+      if (t.hi < 0) per_pair[pr].out_volume = t.f_hi * vsum_[pr], per_pair[pr].out_share = t.f_hi;
+    }
+  return true;
+}
+
 void FixedPivotAggregation::jacobian_row(Tables&, const PopulationJacobian& J, const PairEvent* events,
                                          int count) const {
   switch (J.P) {

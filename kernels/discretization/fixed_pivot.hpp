@@ -22,6 +22,7 @@ class FixedPivotAggregation : public RunScheme<FixedPivotAggregation> {
   std::string name() const override { return "fixed_pivot"; }
   void setup(const Grid& g) override;
   void jacobian_row(Tables& t, const PopulationJacobian& J, const PairEvent* events, int count) const override;
+  bool local_births(std::vector<LocalBirths>& per_pair) const override;
   const Target& target(size_t pair) const { return targets_[pair]; }
   double volume(size_t pair) const { return vsum_[pair]; }
   // For the engine's vectorized pair loop: the partners k of class j in [run_first(j), run_last(j)] (possibly empty)

@@ -170,10 +170,14 @@ class Population {
   void refresh(Work& w, const double* p) const;
   // The engine's Jacobian D (jacobian_rows() x input_cols(), column-major): rates of the class numbers, the
   // properties, the outside rows and the volume growth creates, against N, q and the fields read.
-  void analytic_jacobian(Work& w, const State<double>& s, std::vector<double>& D) const;
+  // `local`: only the entries within one class (and the rows outside the grid), JacobianSink::classes_local.
+  void analytic_jacobian(Work& w, const State<double>& s, std::vector<double>& D, bool local) const;
   void aggregation_jacobian(Work& w, const State<double>& s, const PopulationJacobian& J) const;
+  void aggregation_local_jacobian(Work& w, const State<double>& s, const PopulationJacobian& J) const;
+  // Whether the aggregation scheme can give the class-local births (asked once per run).
+  bool local_births_known(Work& w) const;
   void feature_gradients(Work& w, const State<double>& s, std::vector<double>& phi, std::vector<double>& G) const;
-  void breakage_jacobian(const Work& w, const PopulationJacobian& J) const;
+  void breakage_jacobian(const Work& w, const PopulationJacobian& J, bool local) const;
   void growth_jacobian(Work& w, const State<double>& s, const PopulationJacobian& J) const;
   void ad_jacobian(Work& w, const State<double>& s, std::vector<double>& D) const;
   void fold_rows(double* D, int cols) const;

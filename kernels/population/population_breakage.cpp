@@ -105,18 +105,19 @@ template void Population::breakage_rates<double>(Work&, const State<double>&, co
 template void Population::breakage_rates<Jet>(Work&, const State<Jet>&, const ClassState<Jet>&, Jet*, Jet*, Jet*) const;
 
 // d(rates)/dN and d(rates)/dq: the tables themselves (a selection rate that reads the state goes through AD).
-void Population::breakage_jacobian(const Work& w, const PopulationJacobian& J) const {
+// `local`: a class row's own entry only (fragments of class k that stay in k); nothing of the outside rows.
+void Population::breakage_jacobian(const Work& w, const PopulationJacobian& J, bool local) const {
   const int n = n_, P = properties();
   const double* BN = w.BN.data();
   const double* BQ = w.BQ.data();
-  for (int row = 0; row < n + kOutsideRows; ++row)
-    for (int k = row < n ? row : 0; k < n; ++k) {
+  for (int row = 0; row < (local ? n : n + kOutsideRows); ++row)
+    for (int k = row < n ? row : 0; k < (local ? row + 1 : n); ++k) {
       const double v = BN[size_t(row) * n + k];
       if (v != 0.0) J.add(row < n ? J.rowN(row) : J.rowO(row - n), k, v);
     }
   for (int p = 0; p < P; ++p)
-    for (int row = 0; row <= n; ++row)
-      for (int k = row < n ? row : 0; k < n; ++k) {
+    for (int row = 0; row < (local ? n : n + 1); ++row)
+      for (int k = row < n ? row : 0; k < (local ? row + 1 : n); ++k) {
         const double v = BQ[size_t(row) * n + k];
         if (v != 0.0) J.add(row < n ? J.rowQ(p, row) : J.rowO(out_property_below(p)), J.colQ(p, k), v);
       }

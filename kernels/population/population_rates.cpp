@@ -23,6 +23,7 @@ template <class T>
 bool Population::fresh_tables(const Work&, const T* p, int first, int count) const {
   return has_derivative(p, first, count);
 }
+template ClassState<double> Population::class_state<double>(const State<double>&) const;  // the local Jacobian's
 template bool Population::fresh_tables<double>(const Work&, const double*, int, int) const;
 template bool Population::fresh_tables<Jet>(const Work&, const Jet*, int, int) const;
 

@@ -66,6 +66,14 @@ struct Population::Work {
   std::vector<double> eff, eff_da, eff_db;  // analytic Jacobian: E and dE/dphi of every pair
   std::vector<PairEvent> events;            // the events of one row of the pair triangle, and their inputs
   std::vector<PairEvent::Input> inputs;
+  // Class-local Jacobian (aggregation_local_jacobian): per pair what stays in the larger partner's class, from the
+  // scheme once (0: not asked yet, 1: the scheme gave them, -1: it cannot); per class the sums of its own terms.
+  std::vector<AggregationScheme::LocalBirths> local_births;
+  int local_births_state = 0;
+  std::vector<double> local_sums;
+  // The pair terms' entries of a class-local Jacobian, per input column c (N, then q) and row q (0: its class's
+  // number, 1 + p: property p), before growth adds its own: what the unit reports left out (JacobianSink::left_out).
+  std::vector<double> local_kept;
 };
 
 // h K per pair, row-major upper triangle.

@@ -555,9 +555,11 @@ class Flowsheet:
 
         return _calibration.output_sensitivities(self._scene, t_end, times, list(params))
 
-    def time_residual(self, repeats: int = 7) -> dict:
-        """Median time of one residual and one Jacobian evaluation at the initial state (benchmarks)."""
-        return self._scene.time_residual(repeats)
+    def time_residual(self, repeats: int = 7, classes_local: bool = False) -> dict:
+        """Median time of one residual and one Jacobian evaluation at the initial state (benchmarks);
+        ``classes_local``: the Jacobian the class_local linear solver asks for (without the couplings between
+        size classes)."""
+        return self._scene.time_residual(repeats, classes_local=classes_local)
 
     def calibrate_raw(self, experiments: list, stages: list, options: dict, start: Mapping[str, float],
                       progress=None) -> dict:

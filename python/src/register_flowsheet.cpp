@@ -110,10 +110,12 @@ py::dict simulate(Scene& s, std::optional<double> t_end, std::optional<std::vect
 }
 
 // Median wall time of one residual and of one Jacobian (dense below dense_limit states, else sparse) at the
-// initial state, for the ns/state figures of the core benchmark.
-py::dict time_residual(Scene& s, int repeats, int dense_limit) {
+// initial state, for the ns/state figures of the core benchmark; `classes_local`: the Jacobian a class-local Newton
+// matrix asks for (DaeSystem::set_classes_local).
+py::dict time_residual(Scene& s, int repeats, int dense_limit, bool classes_local) {
   py::gil_scoped_release release;
   DaeSystem sys(*s.flowsheet);
+  sys.set_classes_local(classes_local);
   const int n = sys.size();
   std::vector<double> y, yp(n, 0.0), r(n);
   sys.initial_values(y);
@@ -257,7 +259,7 @@ void register_flowsheet(py::module_& m) {
              }
              return d;
            })
-      .def("time_residual", &time_residual, "repeats"_a = 7, "dense_limit"_a = 400)
+      .def("time_residual", &time_residual, "repeats"_a = 7, "dense_limit"_a = 400, "classes_local"_a = false)
       .def(
           "steady_state",
           [](Scene& s, double t, double ftol, long max_iterations, long max_pseudo_steps, bool stability) {

@@ -393,20 +393,23 @@ def test_banded_solver_says_when_the_matrix_is_not_band_plus_low_rank():
 
 
 def test_linear_solver_choice_follows_the_jacobian_fill():
-    """`linear_solver: auto` past dense_limit takes the band + low-rank solver for size classes (spray zone inlined);
-    at 200 classes aggregation couples every class pair, so every setup is factored densely, as the dense solver
-    would, to the bit, and after two such setups in a row the next ones do not look for the form. A long chain of
-    tanks (no size classes) is sparse."""
+    """At 200 classes (spray zone inlined) aggregation couples every class pair: `linear_solver: auto` takes the
+    class-local Newton matrix (issue 32), which gives the dense run within the tolerance; the band + low-rank solver
+    finds no band there and factors every setup densely, as the dense solver would, to the bit, and after two such
+    setups in a row the next ones do not look for the form. A long chain of tanks (no size classes) is sparse."""
     from granuflow import bench
 
     fine = gf.load_text(bench.scene_variant_text(SCENE, 200), "gf25_200")
-    res = fine.simulate(t_end=600, t_out=[0, 600])
+    res = fine.simulate(t_end=600, t_out=[0, 600], linear_solver="banded")
     n = res.stats["linear_solver"].split("; ")[1].split()
     assert res.stats["linear_solver"].startswith("banded") and n[0] == n[2] and int(n[0]) > 0
     assert "without looking, after it was not twice in a row" in res.stats["linear_solver"]
     dense = fine.simulate(t_end=600, t_out=[0, 600], linear_solver="dense")
     assert dense.stats["linear_solver"] == "dense (Eigen LU)"
     assert np.array_equal(res.y, dense.y) and res.stats["steps"] == dense.stats["steps"]
+    auto = fine.simulate(t_end=600, t_out=[0, 600])
+    assert auto.stats["linear_solver"].startswith("class_local")
+    assert np.allclose(auto["bed.d50"], dense["bed.d50"], rtol=1e-5, atol=0)
     # explicit: the spray zone's 3 per class, T and tau at the 201 faces, ..., the droplets' flows and w (2 + 2)
     assert (res.stats["states"], res.stats["explicit_states"]) == (2 * 200 + 9, 3 * 200 + 1 + 201 + 4 + 3 + 4 + 1)
     assert all(v < res.rtol for v in res.summary["balance"].values())

@@ -69,6 +69,16 @@ class DaeSystem {
 
   Status residual(double t, const double* y, const double* yp, double* r);
   // Dense column-major n x n (ld = n) when `dense` != nullptr, else values in `pattern()` order.
+  // With set_classes_local(true) the units may leave out the entries between two different size classes of their
+  // populations (JacobianSink::classes_local): for a class-local Newton matrix, which does not read them.
+  void set_classes_local(bool on) { classes_local_ = on; }
+  // The class state blocks whose totals the pair processes conserve (ClassLayout::class_local_newton; each a list of
+  // unknowns), and per block what the units left out of the last class-local Jacobian, summed over the block's rows
+  // (n values, one per column; JacobianSink::left_out).
+  const std::vector<std::vector<int>>& conserved_blocks() const;
+  const double* left_out(int block) const { return left_out_.data() + size_t(block) * n_; }
+  // The unknowns' values at that Jacobian (n values): where in a block what was left out goes.
+  const double* left_out_at() const { return left_out_y_.data(); }
   void jacobian(double t, const double* y, const double* yp, double cj, double* dense, double* sparse_values);
   // The same Jacobian by plain forward AD over every local column of every unit (no analytic parts, no colouring,
   // no reductions): the reference the structured Jacobian is tested against. Dense, without inlined units.
@@ -118,6 +128,8 @@ class DaeSystem {
   struct AdPlan;
   class Recorder;
   class FactoringSink;
+  class DenseSink;
+  void record_left_out(int state, int col, double value);
   void fill_params(double t);
   void build_sparse_maps() const;
   void build_schur_structure();
@@ -149,6 +161,10 @@ class DaeSystem {
   int n_ext_;  // all states
   int n_quad_ = 0;
   bool inline_ = false;
+  bool classes_local_ = false;
+  mutable std::vector<std::vector<int>> conserved_;  // conserved_blocks(), built on first use
+  mutable std::vector<int> conserved_of_;            // per unknown its block, -1 if none
+  std::vector<double> left_out_, left_out_y_;
   double fill_ = 0.0;
   std::vector<std::unique_ptr<Workspace>> ws_;  // per unit, this run's
   std::vector<int> explicit_order_;             // explicit units, each after the explicit units it reads

@@ -25,7 +25,7 @@ inline constexpr double kMinEndTime = 1e-9;  // s
 enum class Method { kAuto, kIda, kBdf, kAdams, kErk };
 // The Newton systems' linear solver (solver.linear_solver). auto: dense up to dense_limit states; beyond, gmres when a
 // unit preconditions itself, else dense or sparse by the Jacobian's fill.
-enum class LinearSolverChoice { kAuto, kDense, kSparse, kGmres, kBanded };
+enum class LinearSolverChoice { kAuto, kDense, kSparse, kGmres, kBanded, kClassLocal };
 // Options are text only at the edges (scene files, Python, the command line): parsed once here, with a ConfigError
 // naming `key`, the text and the names allowed.
 Method parse_method(const std::string& text, const std::string& key = "solver.method");

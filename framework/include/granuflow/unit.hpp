@@ -123,6 +123,12 @@ struct ClassLayout {
   int n = 0;
   std::vector<StateId> state_blocks;
   std::vector<std::pair<PortId, int>> field_blocks;  // (port, first field)
+  // The unit's pair processes (aggregation, breakage) couple every class with every other, slowly against each
+  // class's own terms (drying, heat exchange): its Newton matrix is dense, and one without the couplings between
+  // classes converges as fast. The automatic linear solver then takes the class-local one (class_local_solver.hpp)
+  // from kClassLocalClasses classes on (solver_setup.cpp). A unit whose rates are the pair processes alone (a bare
+  // population balance) leaves it false.
+  bool class_local_newton = false;
 };
 
 class Settings;  // scene settings of one unit (flowsheet.hpp)
@@ -366,6 +372,18 @@ class JacobianSink {
   // The unit's rows of global column `col` in dense storage (add(r, col, v) adds v to element r), or nullptr when
   // the sink is not dense: for units that add whole columns at a time.
   double* dense_column(int global_col) const { return dense_ ? dense_ + size_t(global_col) * ld_ : nullptr; }
+  // True when the Jacobian feeds a class-local Newton matrix (class_local_solver.hpp), which reads only the entries
+  // within one size class and those of the states that are not per class: a unit may then leave out the entries
+  // between two different classes of its populations (they would be ignored), and skip what they cost.
+  bool classes_local() const { return classes_local_; }
+  void set_classes_local(bool on) { classes_local_ = on; }
+  // What such a unit left out, for the conservation of its class state blocks (ClassLayout::class_local_newton):
+  // `value` is the sum, over the rows of the block that holds local row `row`, of the entries of global column `col`
+  // it did not form. The pair processes move mass and water between classes and never make or lose any, so their
+  // entries in a column sum to zero over a block; what a unit leaves out is minus what it kept. The solver adds these
+  // sums back as one outer product per block, and its Newton corrections conserve the block's total as the exact
+  // matrix's do.
+  virtual void left_out(int /*row*/, int /*col*/, double /*value*/) {}
 
  protected:
   JacobianSink() = default;
@@ -376,6 +394,7 @@ class JacobianSink {
  private:
   double* dense_ = nullptr;
   size_t ld_ = 0;
+  bool classes_local_ = false;
 };
 
 class Unit {
