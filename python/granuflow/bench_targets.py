@@ -200,9 +200,12 @@ CLASSES_ROUNDS = 9  # at least: one repeat's ratio moved between 5 and 8 on this
 
 
 def target_classes(repeats: int, progress: bool) -> dict:
-    """The headline scene's solve at 80 classes against 20 (the scene's own grid refined; no grid check), in
-    alternating rounds (a 20-class solve, then an 80-class one), so that each round's ratio is taken at one moment of
-    a machine whose speed drifts; the ratio is the median of the rounds' ratios, the times the medians of each grid."""
+    """The headline scene's solve at 80 classes against 20 (the scene's own grid refined; no grid check; each with its
+    automatic linear solver: dense LU at 20 classes, the class-local Newton matrix at 80), in alternating rounds (a
+    20-class solve, then an 80-class one), so that each round's ratio is taken at one moment of a machine whose speed
+    drifts; the ratio is the median of the rounds' ratios, the times the medians of each grid. Each round also
+    solves the 80-class scene with dense LU (the baseline of issue 32, ``dense_80_over_20``) and the 20-class one
+    with the class-local matrix (the same linear solver on both grids, ``class_local_80_over_20``)."""
     from .flowsheet import load
 
     fs = load(os.path.join(bench.repo_root(), "flowsheets", "stoeckl_gf25_batch.yaml"))
@@ -212,21 +215,30 @@ def target_classes(repeats: int, progress: bool) -> dict:
     # both for the split of where the time goes.
     without = {n: g.with_settings({"bed.aggregation": "none"}) for n, g in grids.items()}
     free = without[80]
+    quiet = dict(warn=False, grid_check=False, accuracy=False)
+    others = {"dense_80": (grids[80], "dense"), "class_local_20": (grids[20], "class_local")}
     for g in (*grids.values(), free):
-        g.simulate(warn=False, grid_check=False, accuracy=False)  # warm-up: the first solve sets up the solver
+        g.simulate(**quiet)  # warm-up: the first solve sets up the solver
+    for g, solver in others.values():
+        g.simulate(linear_solver=solver, **quiet)
     walls, cpus, walls_free = {20: [], 80: []}, {20: [], 80: []}, []
+    walls_other = {k: [] for k in others}
     rounds = max(repeats, CLASSES_ROUNDS) if repeats > 1 else 1
     for r in range(rounds):
-        _say(progress, f"classes: round {r + 1}/{rounds} (20 and 80 classes, 80 without aggregation)")
+        _say(progress, f"classes: round {r + 1}/{rounds} (20 and 80 classes; 80 dense, 20 class-local, 80 without "
+                       "aggregation)")
         for n, g in grids.items():
             c0 = time.process_time()
-            walls[n].append(g.simulate(warn=False, grid_check=False, accuracy=False).wall_time_s)
+            walls[n].append(g.simulate(**quiet).wall_time_s)
             cpus[n].append(time.process_time() - c0)
-        walls_free.append(free.simulate(warn=False, grid_check=False, accuracy=False).wall_time_s)
+        walls_free.append(free.simulate(**quiet).wall_time_s)
+        for k, (g, solver) in others.items():
+            walls_other[k].append(g.simulate(linear_solver=solver, **quiet).wall_time_s)
     ratios = [b / a for a, b in zip(walls[20], walls[80])]
     free_ratios = [round(b / a, 3) for a, b in zip(walls[20], walls_free)]
     med = {n: statistics.median(w) for n, w in walls.items()}
     parts = {n: _where_time_goes(g, without[n], med[n]) for n, g in grids.items()}
+    same_solver = [b / a for a, b in zip(walls_other["class_local_20"], walls[80])]
     # The CPU times (the whole simulate() call) beside the solver's wall times: on a loaded machine only they compare.
     return _record("classes", med[80], "s", med[20], "solve at 20 classes", statistics.median(ratios),
                    "80 / 20 classes, median of the rounds", cpu_s_20=statistics.median(cpus[20]),
@@ -237,6 +249,11 @@ def target_classes(repeats: int, progress: bool) -> dict:
                    solve_80_without_aggregation_s=statistics.median(walls_free),
                    without_aggregation_over_20=statistics.median(free_ratios),
                    without_aggregation_over_20_rounds=free_ratios,
+                   linear_solver={n: parts[n]["linear_solver"] for n in parts},
+                   solve_80_dense_s=statistics.median(walls_other["dense_80"]),
+                   dense_80_over_20=statistics.median([b / a for a, b in zip(walls[20], walls_other["dense_80"])]),
+                   solve_20_class_local_s=statistics.median(walls_other["class_local_20"]),
+                   class_local_80_over_20=statistics.median(same_solver),
                    command="granuflow bench targets --only classes")
 
 
@@ -247,11 +264,14 @@ def _where_time_goes(fs, without, wall: float) -> dict:
     its Jacobians cost beyond those of ``without``, the same scene with bed.aggregation: none, at the solve's counts:
     in the residuals its pair sums, in the Jacobians its rows and the fill they bring into the Schur complement."""
     stats = fs.simulate(warn=False, grid_check=False, accuracy=False).stats
-    t, t0 = _call_times(fs, without)
+    # a class-local run evaluates the Jacobian its solver asks for (without the pair terms between classes)
+    local = stats["linear_solver"].startswith("class_local")
+    t, t0 = _call_times(fs, without, local)
     residual, jacobian = stats["residuals"] * t["residual_s"], stats["jacobians"] * t["jacobian_s"]
     pair_sums = residual - stats["residuals"] * t0["residual_s"]
     agg_jacobian = jacobian - stats["jacobians"] * t0["jacobian_s"]
-    return {"unknowns": stats["states"], "steps": stats["steps"], "residuals": stats["residuals"],
+    return {"linear_solver": stats["linear_solver"].split(" ")[0], "unknowns": stats["states"], "steps": stats["steps"],
+            "residuals": stats["residuals"],
             "jacobians": stats["jacobians"], "factorizations": stats["linear_setups"],
             "residual_us": round(1e6 * t["residual_s"], 3), "jacobian_us": round(1e6 * t["jacobian_s"], 3),
             "residual_us_without_aggregation": round(1e6 * t0["residual_s"], 3),
@@ -265,12 +285,14 @@ def _where_time_goes(fs, without, wall: float) -> dict:
 CALL_TIME_ROUNDS = 5
 
 
-def _call_times(fs, without) -> tuple[dict, dict]:
+def _call_times(fs, without, local: bool = False) -> tuple[dict, dict]:
     """One residual's and one Jacobian's time with the aggregation and without it, each the least of
     CALL_TIME_ROUNDS medians of 21 taken in alternation: the split is a difference of two small times (at 20
     classes the aggregation's rows are some 20 us of a Jacobian), and a burst of load on one side of it only ever
-    adds time, so the least median is the one a drifting machine disturbs least."""
-    runs = [(fs.time_residual(21), without.time_residual(21)) for _ in range(CALL_TIME_ROUNDS)]
+    adds time, so the least median is the one a drifting machine disturbs least. ``local``: the class-local
+    Jacobian (Flowsheet.time_residual)."""
+    runs = [(fs.time_residual(21, classes_local=local), without.time_residual(21, classes_local=local))
+            for _ in range(CALL_TIME_ROUNDS)]
     return tuple({k: min(r[side][k] for r in runs) for k in ("residual_s", "jacobian_s")} for side in (0, 1))
 
 
@@ -503,6 +525,8 @@ def _detail(v) -> str:
                                f"{_num(r['aggregation_jacobian_ms'])} ms "
                                f"({r['unknowns']} unknowns, {r['steps']} steps, {r['factorizations']} factorizations)"
                                for n, r in v.items()) + "}"
+    if isinstance(v, dict) and all(isinstance(r, str) for r in v.values()):  # e.g. each grid's linear solver
+        return "{" + ", ".join(f"{n}: {r}" for n, r in v.items()) + "}"
     if isinstance(v, dict):
         return "{" + "; ".join(f"{n}: sigma error {_num(r['sigma_rel_error'])} in {_num(r['wall_s'])} s"
                                for n, r in v.items()) + "}"
@@ -541,8 +565,9 @@ DETAILS = {"run": ("cpu_s", "heavy_imports", "numpy_import_wall_s", "numpy_impor
                    "d50_um"),
            "writing": ("write_s", "write_over_solve", "run_wall_s", "run_solve_s", "startup_fixed_s", "startup_s",
                        "run_beyond_version_startup_over_solve", "states", "csv_bytes"),
-           "classes": ("cpu_ratio", "ratio_range", "rounds", "where_time_goes", "pair_sums_80_over_solve_20",
-                       "rest_growth", "rest_growth_allowed", "rest_growth_undefined", "without_aggregation_over_20"),
+           "classes": ("linear_solver", "dense_80_over_20", "class_local_80_over_20", "cpu_ratio", "ratio_range",
+                       "rounds", "where_time_goes", "pair_sums_80_over_solve_20", "rest_growth", "rest_growth_allowed",
+                       "rest_growth_undefined", "without_aggregation_over_20"),
            "contour": ("solver_only_per_s", "sims_per_s_2_workers", "same_values"),
            "calibration": ("cpu_s", "cpu_over_wall", "cpu_over_wall_1_worker", "estimates_max_rel_diff"),
            "two_zone": ("classes_at_target", "by_classes", "sigma_reference_um", "koren_classes_at_target",

@@ -72,6 +72,11 @@ def test_the_classes_target_says_where_the_time_goes(tmp_path):
             extra = 1e-3 * count * (per_call - w[part + "_us_without_aggregation"])
             assert math.isclose(w["aggregation_" + part + "_ms"], extra, rel_tol=1e-3, abs_tol=0.01)
         assert math.isclose(w["residual_ms"] + w["jacobian_ms"] + w["rest_ms"], 1e3 * wall, abs_tol=0.02)
+    # each grid's automatic linear solver, and the two comparisons measured beside them in the same rounds
+    assert r["linear_solver"] == {"20": "dense", "80": "class_local"}
+    assert [parts[n]["linear_solver"] for n in (20, 80)] == ["dense", "class_local"]
+    assert r["solve_80_dense_s"] > 0 and r["solve_20_class_local_s"] > 0
+    assert r["dense_80_over_20"] > 0 and r["class_local_80_over_20"] > 0
     # the floor: the 80-class scene with its aggregation off, against the 20-class scene with it, round by round
     assert r["solve_80_without_aggregation_s"] > 0 and len(r["without_aggregation_over_20_rounds"]) == r["rounds"]
     assert r["without_aggregation_over_20"] == statistics.median(r["without_aggregation_over_20_rounds"])
