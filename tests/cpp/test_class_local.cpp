@@ -45,20 +45,24 @@ struct Fixture {
   Eigen::Map<Eigen::VectorXd> bv() { return {N_VGetArrayPointer(b), n}; }
   Eigen::Map<Eigen::VectorXd> xv() { return {N_VGetArrayPointer(x), n}; }
   bool between_classes(int i, int j) const { return st.cls[i] >= 0 && st.cls[j] >= 0 && st.cls[i] != st.cls[j]; }
+  // A random matrix with a dominant diagonal into A, and a random right-hand side into b; returns the matrix.
+  Eigen::MatrixXd random(unsigned seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) a()(i, j) = u(rng) + (i == j ? 4.0 : 0.0);
+    for (int i = 0; i < n; ++i) bv()[i] = u(rng);
+    return a();
+  }
 };
 
 TEST(ClassLocalSolver, SolvesBlocksAndBorderToRoundOffAndReadsNothingBetweenClasses) {
   Fixture f;
-  std::mt19937 rng(3);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
   auto a = f.a();
-  Eigen::MatrixXd local(Fixture::n, Fixture::n);
+  Eigen::MatrixXd local = f.random(3);
   for (int j = 0; j < Fixture::n; ++j)
-    for (int i = 0; i < Fixture::n; ++i) {
-      a(i, j) = u(rng) + (i == j ? 4.0 : 0.0);
-      local(i, j) = f.between_classes(i, j) ? 0.0 : a(i, j);
-    }
-  for (int i = 0; i < Fixture::n; ++i) f.bv()[i] = u(rng);
+    for (int i = 0; i < Fixture::n; ++i)
+      if (f.between_classes(i, j)) local(i, j) = 0.0;
   const Eigen::VectorXd rhs = f.bv();
   SUNLinearSolver ls = detail::make_class_local_solver(f.ctx, {f.st, {}, nullptr});
   ASSERT_EQ(SUNLinSolSetup(ls, f.A), 0);
@@ -90,23 +94,17 @@ TEST(ClassLocalSolver, SolvesBlocksAndBorderToRoundOffAndReadsNothingBetweenClas
 // their column sums over the block) and the others present but not factored.
 TEST(ClassLocalSolver, CorrectionsChangeAConservedBlocksTotalAsTheExactMatrixWould) {
   Fixture f;
-  std::mt19937 rng(5);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
   auto a = f.a();
-  Eigen::MatrixXd exact(Fixture::n, Fixture::n);
+  const Eigen::MatrixXd exact = f.random(5);
   const std::vector<std::vector<int>> blocks{{0, 1, 3, 4}, {5, 6, 8, 9}};  // each unit's four classes
   std::vector<std::vector<double>> left(2, std::vector<double>(Fixture::n, 0.0));
   for (int j = 0; j < Fixture::n; ++j)
-    for (int i = 0; i < Fixture::n; ++i) {
-      exact(i, j) = u(rng) + (i == j ? 4.0 : 0.0);
-      a(i, j) = exact(i, j);
+    for (int i = 0; i < Fixture::n; ++i)
       if (f.between_classes(i, j) && (i + j) % 2 == 0) {  // left out by the unit, reported per block
         a(i, j) = 0.0;
         for (size_t g = 0; g < blocks.size(); ++g)
           for (int r : blocks[g]) left[g][j] += r == i ? exact(i, j) : 0.0;
       }
-    }
-  for (int i = 0; i < Fixture::n; ++i) f.bv()[i] = u(rng);
   const Eigen::VectorXd rhs = f.bv();
   SUNLinearSolver ls =
       detail::make_class_local_solver(f.ctx, {f.st, blocks, [&left](int g) { return left[g].data(); }});
