@@ -32,8 +32,11 @@ void Population::jacobian(Work& w, const State<double>& s, const Map& m, Jacobia
   w.D.assign(size_t(R) * C, 0.0);
   const bool ad = needs_.number || (sel_.kernel && sel_.kernel->state_dependent());
   // A class-local Newton matrix reads only the entries within one class: the analytic path then forms only those,
-  // where the aggregation scheme can say which births stay in a class and no row outside the grid is a state.
-  const bool local = sink.classes_local() && !ad && m.outside_row.empty() && (!agg_.kernel || local_births_known(w));
+  // where the aggregation scheme can say which births stay in a class, no row outside the grid is a state and what
+  // leaves the grid is folded back (then the pair terms conserve what they move, and what is left out of a column
+  // sums to minus what is kept: JacobianSink::left_out).
+  const bool local = sink.classes_local() && !ad && m.outside_row.empty() && outside_ == Outside::kFold &&
+                     (!agg_.kernel || local_births_known(w));
   if (ad)
     ad_jacobian(w, s, w.D);
   else
@@ -258,8 +261,7 @@ void Population::aggregation_local_jacobian(Work& w, const State<double>& s, con
   double* next = w.local_sums.data();
   auto take = [&next](size_t count) { return std::exchange(next, next + count); };
   double *dN = take(n), *rate = take(n), *bN = take(n), *bQN = take(per_p), *bQQ = take(per_p);
-  const bool fold = outside_ == Outside::kFold;
-  const double top = grid_->pivots()[n - 1];
+  const double top = grid_->pivots()[n - 1];  // what leaves the grid is folded into the top class (Outside::kFold)
   size_t pr = 0;
   for (int j = 0; j < n; ++j)
     for (int k = j; k < n; ++k, ++pr) {
@@ -272,7 +274,7 @@ void Population::aggregation_local_jacobian(Work& w, const State<double>& s, con
       }
       const AggregationScheme::LocalBirths& b = w.local_births[pr];
       double stay = b.stay, share = b.stay_share;
-      if (fold && k == n - 1) stay += b.out_volume / top, share += b.out_share;
+      if (k == n - 1) stay += b.out_volume / top, share += b.out_share;
       if (stay == 0.0 && share == 0.0) continue;
       const double dk = like ? beta * N[j] + beta * N[k] : beta * N[j];  // the event rate against class k's N
       const double twice = like ? 2.0 : 1.0;                             // partner k's per-particle terms

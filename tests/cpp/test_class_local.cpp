@@ -204,5 +204,10 @@ TEST(ClassLocalJacobian, ASchemeThatCannotSayWhereBirthsStayFormsTheWholeJacobia
   expect_local_jacobian_conserves("aggregation_scheme: cell_average, breakage: none", false);
 }
 
+TEST(ClassLocalJacobian, AggregatesRemovedAtTheGridsEndFormTheWholeJacobian) {
+  // what leaves the grid is lost: the pair terms do not conserve, and what is left out is not minus what is kept
+  expect_local_jacobian_conserves("outside: remove", false);
+}
+
 }  // namespace
 }  // namespace granuflow
