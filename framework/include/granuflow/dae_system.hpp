@@ -76,9 +76,12 @@ class DaeSystem {
   // unknowns), and per block what the units left out of the last class-local Jacobian, summed over the block's rows
   // (n values, one per column; JacobianSink::left_out).
   const std::vector<std::vector<int>>& conserved_blocks() const;
-  const double* left_out(int block) const { return left_out_.data() + size_t(block) * n_; }
+  // (null before the first class-local Jacobian)
+  const double* left_out(int block) const {
+    return left_out_.empty() ? nullptr : left_out_.data() + size_t(block) * n_;
+  }
   // The unknowns' values at that Jacobian (n values): where in a block what was left out goes.
-  const double* left_out_at() const { return left_out_y_.data(); }
+  const double* left_out_at() const { return left_out_y_.empty() ? nullptr : left_out_y_.data(); }
   void jacobian(double t, const double* y, const double* yp, double cj, double* dense, double* sparse_values);
   // The same Jacobian by plain forward AD over every local column of every unit (no analytic parts, no colouring,
   // no reductions): the reference the structured Jacobian is tested against. Dense, without inlined units.
