@@ -406,7 +406,9 @@ void IdaStepper::finish(SolverStats& stats) {
   }
   if (user_.local) {  // setups that factored the whole matrix (consistent initial values): say how many
     const ClassLocalStats c = class_local_stats(user_.local);
-    if (c.whole_setups > 0)
+    if (c.classes == 0 && c.setups > 0)  // asked for where nothing is per class: not silently another solver
+      stats.linear_solver += "; no state is per size class: every setup whole (dense LU)";
+    else if (c.whole_setups > 0)
       stats.linear_solver += "; " + std::to_string(c.whole_setups) + " of " + std::to_string(c.setups) +
                              " setups whole (dense LU, consistent initial values)";
   }

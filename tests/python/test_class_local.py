@@ -3,9 +3,11 @@ take it by default and give the dense run's answer within the integrator's toler
 round-off; the
 paper's coarse grids keep the exact matrix and their results to the bit; sensitivities are refused with it (their
 corrector shares the Newton matrix) and `auto` does not take it for them."""
+import os
+
 import numpy as np
 import pytest
-from conftest import SCENE, run_bad_scene, scene_with
+from conftest import ROOT, SCENE, run_bad_scene, scene_with
 
 import granuflow as gf
 
@@ -139,6 +141,12 @@ def test_the_class_local_matrix_can_be_asked_for_on_any_grid():
     assert local.stats["linear_solver"].startswith("class_local")
     assert abs(local.summary["d50_um"] / dense.summary["d50_um"] - 1) < 1e-5
     assert not np.array_equal(local.y, dense.y)  # another Newton matrix: the same answer, not the same bits
+
+
+def test_asked_for_where_nothing_is_per_class_it_says_it_factored_whole():
+    res = gf.load(os.path.join(ROOT, "flowsheets", "demo_tanks.yaml")).simulate(
+        linear_solver="class_local", method="ida", warn=False)
+    assert res.stats["linear_solver"].endswith("; no state is per size class: every setup whole (dense LU)")
 
 
 def test_sensitivities_keep_the_exact_matrix():
